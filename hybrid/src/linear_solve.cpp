@@ -1,0 +1,50 @@
+// The double-precision factorisations behind every linear solve of the hybrid module, compiled
+// once here for the bounds listed in linear_solve.hpp.
+#include <saltus/hybrid/linear_solve.hpp>
+
+namespace saltus {
+
+template <int MaxN>
+MinNormSolver<MaxN>::MinNormSolver() : cod_(MaxN, MaxN) {
+  cod_.setThreshold(delassus_rank_threshold);
+  A_.resize(MaxN, MaxN);
+  tmp_.resize(MaxN);
+}
+
+template <int MaxN>
+typename MinNormSolver<MaxN>::Matrix& MinNormSolver<MaxN>::matrix(int m) {
+  SALTUS_ASSERT(m <= MaxN);
+  A_.resize(m, m);
+  return A_;
+}
+
+template <int MaxN>
+void MinNormSolver<MaxN>::factorize() {
+  cod_.compute(A_);
+}
+
+template <int MaxN>
+void MinNormSolver<MaxN>::solve_in_place(Vector& b) const {
+  tmp_.resize(b.size());
+  tmp_ = cod_.solve(b);
+  b = tmp_;
+}
+
+template <int MaxN>
+int MinNormSolver<MaxN>::rank() const {
+  return static_cast<int>(cod_.rank());
+}
+
+template <int MaxN>
+void MinNormSolver<MaxN>::set_threshold(double relative) {
+  cod_.setThreshold(relative);
+}
+
+template class MinNormSolver<3>;
+template class MinNormSolver<6>;
+template class MinNormSolver<12>;
+template class MinNormSolver<24>;
+template class MinNormSolver<48>;
+template class MinNormSolver<96>;
+
+}  // namespace saltus

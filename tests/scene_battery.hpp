@@ -1,0 +1,254 @@
+// One battery for every scene of the factory: the AD contact Jacobians and curvature terms, the
+// flow, guard and jump-map derivatives against central differences; the Lagrangian structure of
+// M and h; the constraints each mode's flow must satisfy. Each scene instantiates the battery in
+// a test program of its own (test_battery_<scene>.cpp), so they compile in parallel.
+#pragma once
+
+#include "support.hpp"
+
+#include <saltus/hybrid/derivatives.hpp>
+#include <saltus/hybrid/flow.hpp>
+#include <saltus/hybrid/guards.hpp>
+#include <saltus/hybrid/jump_map.hpp>
+
+#include <Eigen/Eigenvalues>
+
+namespace saltus::testing {
+
+template <class S>
+class SceneBattery : public ::testing::Test {
+ protected:
+  static constexpr int nq = S::nq, nu = S::nu, nc = S::nc, nx = 2 * S::nq;
+  S scene{};
+  std::mt19937 rng{20261122};
+};
+
+TYPED_TEST_SUITE_P(SceneBattery);
+
+TYPED_TEST_P(SceneBattery, ContactJacobiansAndCurvatureMatchCentralDifferences) {
+  using S = TypeParam;
+  constexpr int nq = S::nq;
+  for (int trial = 0; trial < 20; ++trial) {
+    const Vec<nq> q = generic_configuration(this->scene, this->rng);
+    const Vec<nq> v = random_vector<nq>(this->rng, 1.5);
+    for (int i = 0; i < S::nc; ++i) {
+      ContactKinematics<S> c;
+      evaluate_contact(this->scene, i, q, v, c);
+      auto gap = [&](const Vec<nq>& p) { return Vec<1>(this->scene.template gap<double>(i, p)); };
+      const Mat<1, nq> wn_fd = central_jacobian<1, nq>(gap, q);
+      EXPECT_TRUE(matrices_near(c.wn.transpose(), wn_fd, 1e-8, 1e-9)) << "w_n of contact " << i;
+      EXPECT_NEAR(c.gap, this->scene.template gap<double>(i, q), 1e-15);
+      EXPECT_NEAR(c.zeta_n, c.wn.dot(v), 1e-13);
+      // kappa_n = d/ds (w_n(q + s v) . v) at s = 0.
+      auto wn_along = [&](const Vec<1>& s) {
+        ContactKinematics<S> cs;
+        evaluate_contact(this->scene, i, Vec<nq>(q + s[0] * v), v, cs);
+        return Vec<1>(cs.wn.dot(v));
+      };
+      const double kappa_fd = central_jacobian<1, 1>(wn_along, Vec<1>::Zero())(0, 0);
+      EXPECT_NEAR(c.kappa_n, kappa_fd, 1e-7 * (1 + std::abs(kappa_fd))) << "kappa_n of contact " << i;
+      const int nt = c.tangents;
+      if (nt == 0) continue;
+      auto tangent = [&](const Vec<nq>& p) { return Vec<2>(this->scene.template tangent_position<double>(i, p)); };
+      const Mat<2, nq> Wt_fd = central_jacobian<2, nq>(tangent, q);
+      for (int k = 0; k < nt; ++k)
+        EXPECT_TRUE(matrices_near(Vec<nq>(c.Wt.col(k)), Vec<nq>(Wt_fd.row(k).transpose()), 1e-8, 1e-9))
+            << "W_t column " << k << " of contact " << i;
+      auto wt_along = [&](const Vec<1>& s) {
+        ContactKinematics<S> cs;
+        evaluate_contact(this->scene, i, Vec<nq>(q + s[0] * v), v, cs);
+        return Vec<2>(cs.Wt.transpose() * v);
+      };
+      const Vec<2> kt_fd = central_jacobian<2, 1>(wt_along, Vec<1>::Zero());
+      for (int k = 0; k < nt; ++k)
+        EXPECT_NEAR(c.kappa_t[k], kt_fd[k], 1e-7 * (1 + std::abs(kt_fd[k]))) << "kappa_t " << k << " of contact " << i;
+    }
+  }
+}
+
+// M symmetric positive definite; h = coriolis_from_mass_matrix(M) + dV/dq (+ damping for the
+// plank's damper): the scene's M and h come from one Lagrangian.
+TYPED_TEST_P(SceneBattery, MassMatrixAndBiasComeFromOneLagrangian) {
+  using S = TypeParam;
+  constexpr int nq = S::nq;
+  for (int trial = 0; trial < 20; ++trial) {
+    const Vec<nq> q = generic_configuration(this->scene, this->rng);
+    const Vec<nq> v = random_vector<nq>(this->rng, 2.0);
+    const Mat<nq, nq> M = this->scene.template mass_matrix<double>(q);
+    EXPECT_TRUE(matrices_near(M, Mat<nq, nq>(M.transpose()), 0.0, 1e-15));
+    EXPECT_GT((Eigen::SelfAdjointEigenSolver<Mat<nq, nq>>(M).eigenvalues().minCoeff()), 0.0);
+    auto potential = [&](const Vec<nq>& p) { return Vec<1>(this->scene.template potential_energy<double>(p)); };
+    const Vec<nq> dV = central_jacobian<1, nq>(potential, q).transpose();
+    Vec<nq> expected = coriolis_from_mass_matrix(this->scene, q, v) + dV;
+    if constexpr (std::is_same_v<S, scenes::PlankBox>) expected[3] += this->scene.parameters().damper * v[3];
+    EXPECT_TRUE(matrices_near(this->scene.template bias<double>(q, v), expected, 1e-8, 1e-9));
+  }
+}
+
+// The flow's Jacobians against central differences, at states consistent with the mode. Where
+// the contacts are redundant (the Delassus matrix is singular) the least-squares flow is smooth
+// only along consistent directions: there the test differentiates along the flow itself, which
+// is what the variational equations need, and B = df/du in full.
+TYPED_TEST_P(SceneBattery, FlowJacobianMatchesCentralDifferences) {
+  using S = TypeParam;
+  constexpr int nx = 2 * S::nq, nu = S::nu;
+  FlowWorkspace<S> ws;
+  DerivativeWorkspace<S> dws;
+  int redundant = 0;
+  for (int trial = 0; trial < 16; ++trial) {
+    const Mode<S::nc> mode = random_mode(this->scene, this->rng);
+    const Vec<nx> x = consistent_with_mode(
+        this->scene, mode, stack(generic_configuration(this->scene, this->rng), random_vector<S::nq>(this->rng, 1.0)));
+    const Vec<nu> u = random_vector<nu>(this->rng, 2.0);
+    Vec<nx> f;
+    Mat<nx, nx> A;
+    Mat<nx, nu> B;
+    flow_jacobian(this->scene, mode, x, u, dws, f, A, B);
+    const Vec<nx> f0 = flow(this->scene, mode, x, u, ws);
+    EXPECT_TRUE(matrices_near(f, f0, 1e-13, 1e-13));
+    const bool full_rank = ws.rows == 0 || ws.delassus.rank() == ws.rows;
+    auto fx = [&](const Vec<nx>& y) { return Vec<nx>(flow(this->scene, mode, y, u, ws)); };
+    if (full_rank) {
+      EXPECT_TRUE(matrices_near(A, central_jacobian<nx, nx>(fx, x), 1e-6, 1e-7))
+          << "df/dx in mode " << describe(this->scene, mode);
+    } else {
+      ++redundant;
+      auto along = [&](const Vec<1>& s) { return fx(Vec<nx>(x + s[0] * f0)); };
+      EXPECT_TRUE(matrices_near(Vec<nx>(A * f0), Vec<nx>(central_jacobian<nx, 1>(along, Vec<1>::Zero(), 1e-5)), 1e-5, 1e-7))
+          << "df/dx along the flow in the redundant mode " << describe(this->scene, mode);
+    }
+    if constexpr (nu > 0) {
+      auto fu = [&](const Vec<nu>& w) { return Vec<nx>(flow(this->scene, mode, x, w, ws)); };
+      EXPECT_TRUE(matrices_near(B, central_jacobian<nx, nu>(fu, u), 1e-6, 1e-7))
+          << "df/du in mode " << describe(this->scene, mode);
+    }
+  }
+  ::testing::Test::RecordProperty("redundant_modes", redundant);
+}
+
+// Each mode's flow holds its closed contacts: zero normal acceleration, zero tangential
+// acceleration when sticking, friction -mu lambda_n d when slipping (thesis 2.41).
+TYPED_TEST_P(SceneBattery, FlowSatisfiesTheConstraintsOfItsMode) {
+  using S = TypeParam;
+  constexpr int nx = 2 * S::nq;
+  FlowWorkspace<S> ws;
+  for (int trial = 0; trial < 20; ++trial) {
+    const Mode<S::nc> mode = random_mode(this->scene, this->rng);
+    const Vec<nx> x = consistent_with_mode(
+        this->scene, mode, stack(generic_configuration(this->scene, this->rng), random_vector<S::nq>(this->rng, 1.0)));
+    const Vec<S::nu> u = random_vector<S::nu>(this->rng, 2.0);
+    evaluate_flow(this->scene, mode, x, u, ws);
+    const auto& a = ws.acceleration;
+    double scale = a.cwiseAbs().maxCoeff() + 1.0;
+    for (int i = 0; i < S::nc; ++i) {
+      const auto& c = ws.kin.contacts[i];
+      if (!mode[i].closed()) {
+        EXPECT_EQ(ws.force[i].normal, 0.0);
+        continue;
+      }
+      EXPECT_NEAR(c.wn.dot(a) + c.kappa_n, 0.0, 1e-9 * scale) << "normal acceleration, contact " << i;
+      const double mu = this->scene.contact(i).mu;
+      if (c.tangents > 0 && mode[i].mode == ContactMode::Stick) {
+        for (int k = 0; k < c.tangents; ++k)
+          EXPECT_NEAR(c.Wt.col(k).dot(a) + c.kappa_t[k], 0.0, 1e-9 * scale) << "tangential acceleration " << i;
+      }
+      if (c.tangents > 0 && mode[i].mode == ContactMode::Slip) {
+        const Vec<2> d = slip_direction_of<double>(mode[i], c.tangents, c.zeta_t);
+        EXPECT_TRUE(matrices_near(ws.force[i].tangent, Vec<2>(-mu * ws.force[i].normal * d), 1e-12, 1e-12));
+      }
+    }
+  }
+}
+
+TYPED_TEST_P(SceneBattery, GuardGradientsMatchCentralDifferences) {
+  using S = TypeParam;
+  constexpr int nx = 2 * S::nq, nu = S::nu;
+  FlowWorkspace<S> ws;
+  DerivativeWorkspace<S> dws;
+  for (int trial = 0; trial < 12; ++trial) {
+    const Mode<S::nc> mode = random_mode(this->scene, this->rng);
+    const Vec<nx> x = consistent_with_mode(
+        this->scene, mode, stack(generic_configuration(this->scene, this->rng), random_vector<S::nq>(this->rng, 1.0)));
+    const Vec<nu> u = random_vector<nu>(this->rng, 2.0);
+    const Vec<nx> f0 = flow(this->scene, mode, x, u, ws);
+    const bool full_rank = ws.rows == 0 || ws.delassus.rank() == ws.rows;
+    for (const Guard& g : active_guards(this->scene, mode)) {
+      Eigen::Matrix<double, 1, nx> dx;
+      Eigen::Matrix<double, 1, nu> du;
+      const double value = guard_gradient(this->scene, mode, g, x, u, dws, dx, du);
+      auto gx = [&](const Vec<nx>& y) {
+        evaluate_flow(this->scene, mode, y, u, ws);
+        return Vec<1>(guard_value(this->scene, mode, g, ws));
+      };
+      EXPECT_NEAR(value, gx(x)[0], 1e-12 * (1 + std::abs(value)));
+      if (full_rank) {
+        EXPECT_TRUE(matrices_near(dx, central_jacobian<1, nx>(gx, x), 1e-6, 1e-7))
+            << to_string(g.kind) << " guard of contact " << g.contact << " in " << describe(this->scene, mode);
+      } else {
+        auto along = [&](const Vec<1>& s) { return gx(Vec<nx>(x + s[0] * f0)); };
+        EXPECT_NEAR(dx.dot(f0), (central_jacobian<1, 1>(along, Vec<1>::Zero(), 1e-5)(0, 0)), 1e-5 * (1 + f0.norm()))
+            << to_string(g.kind) << " guard along the flow, contact " << g.contact << " in "
+            << describe(this->scene, mode);
+      }
+      if constexpr (nu > 0) {
+        auto gu = [&](const Vec<nu>& w) {
+          evaluate_flow(this->scene, mode, x, w, ws);
+          return Vec<1>(guard_value(this->scene, mode, g, ws));
+        };
+        EXPECT_TRUE(matrices_near(du, central_jacobian<1, nu>(gu, u), 1e-6, 1e-7))
+            << to_string(g.kind) << " guard input gradient, contact " << g.contact;
+        if (!g.depends_on_input()) {
+          EXPECT_EQ(du.cwiseAbs().maxCoeff(), 0.0);
+        }
+      }
+    }
+  }
+}
+
+// Jump maps in every role (none / stick / slip along a random sign or direction) at configurations
+// where the contacts touch, against central differences of the map in the same role.
+TYPED_TEST_P(SceneBattery, JumpMapJacobianMatchesCentralDifferences) {
+  using S = TypeParam;
+  constexpr int nx = 2 * S::nq;
+  JumpWorkspace<S> ws;
+  DerivativeWorkspace<S> dws;
+  for (int trial = 0; trial < 12; ++trial) {
+    ImpactMode<S::nc> mode;
+    const Vec<nx> x = stack(generic_configuration(this->scene, this->rng), random_vector<S::nq>(this->rng, 1.0));
+    for (int i = 0; i < S::nc; ++i) {
+      const int pick = std::uniform_int_distribution<int>(0, 2)(this->rng);
+      const int nt = this->scene.contact(i).tangents();
+      mode[i].role = pick == 0 ? ImpulseRole::None : (pick == 1 || nt == 0 ? ImpulseRole::Stick : ImpulseRole::Slip);
+      if (mode[i].role == ImpulseRole::Slip) {
+        // Spatial: start from the direction the stick solution would slide along.
+        mode[i].slip_direction = nt == 1 ? Vec<2>(uniform(this->rng, -1, 1) > 0 ? 1.0 : -1.0, 0.0)
+                                         : Vec<2>(std::cos(uniform(this->rng, -3, 3)), std::sin(uniform(this->rng, -3, 3)));
+        if (nt == 2) mode[i].slip_direction.normalize();
+      }
+    }
+    Vec<nx> xp, xp_dual;
+    Mat<nx, nx> G;
+    try {
+      apply_jump_map(this->scene, mode, x, ws, xp);
+      jump_map_jacobian(this->scene, mode, x, dws, xp_dual, G);
+    } catch (const NumericalFailure&) {
+      continue;  // a random spatial slip direction with no consistent post-impact slip
+    }
+    EXPECT_TRUE(matrices_near(xp_dual, xp, 1e-12, 1e-12));
+    auto g = [&](const Vec<nx>& y) {
+      Vec<nx> out;
+      apply_jump_map(this->scene, mode, y, ws, out);
+      return out;
+    };
+    std::ostringstream roles;
+    for (int i = 0; i < S::nc; ++i) roles << to_string(mode[i].role) << ' ';
+    EXPECT_TRUE(matrices_near(G, central_jacobian<nx, nx>(g, x), 2e-6, 1e-7)) << "jump map Jacobian, roles " << roles.str();
+  }
+}
+
+REGISTER_TYPED_TEST_SUITE_P(SceneBattery, ContactJacobiansAndCurvatureMatchCentralDifferences,
+                            MassMatrixAndBiasComeFromOneLagrangian, FlowJacobianMatchesCentralDifferences,
+                            FlowSatisfiesTheConstraintsOfItsMode, GuardGradientsMatchCentralDifferences,
+                            JumpMapJacobianMatchesCentralDifferences);
+
+}  // namespace saltus::testing

@@ -1,0 +1,142 @@
+// Shared test helpers: central differences, random states and modes, and matrix comparison
+// that prints both matrices and the tolerance on failure.
+#pragma once
+
+#include "scenes/all_scenes.hpp"
+
+#include <saltus/hybrid/kinematics.hpp>
+#include <saltus/hybrid/mode.hpp>
+#include <saltus/hybrid/scene.hpp>
+
+#include <Eigen/QR>
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+#include <sstream>
+#include <string>
+
+namespace saltus::testing {
+
+/// ||a - b||_inf <= abs_tol + rel_tol * ||b||_inf, reporting both matrices otherwise.
+template <class A, class B>
+::testing::AssertionResult matrices_near(const A& a, const B& b, double rel_tol, double abs_tol = 0.0) {
+  const double err = (a - b).cwiseAbs().maxCoeff();
+  const double scale = b.cwiseAbs().maxCoeff();
+  if (err <= abs_tol + rel_tol * scale) return ::testing::AssertionSuccess();
+  std::ostringstream os;
+  os.precision(12);
+  os << "max |a - b| = " << err << " > " << abs_tol << " + " << rel_tol << " * " << scale << "\n a =\n"
+     << a << "\n b =\n"
+     << b << "\n a - b =\n"
+     << (a - b);
+  return ::testing::AssertionFailure() << os.str();
+}
+
+/// Central-difference Jacobian of f: R^n -> R^m at x, with step h * max(1, |x_k|).
+template <int M, int N, class F>
+Mat<M, N> central_jacobian(F&& f, const Vec<N>& x, double h = 1e-6) {
+  Mat<M, N> J;
+  for (int k = 0; k < N; ++k) {
+    const double step = h * std::max(1.0, std::abs(x[k]));
+    Vec<N> xp = x, xm = x;
+    xp[k] += step;
+    xm[k] -= step;
+    const Vec<M> fp = f(xp);
+    const Vec<M> fm = f(xm);
+    J.col(k) = (fp - fm) / (2 * step);
+  }
+  return J;
+}
+
+template <class Rng>
+double uniform(Rng& rng, double lo, double hi) {
+  return std::uniform_real_distribution<double>(lo, hi)(rng);
+}
+
+template <int N, class Rng>
+Vec<N> random_vector(Rng& rng, double amplitude) {
+  Vec<N> v;
+  for (int k = 0; k < N; ++k) v[k] = uniform(rng, -amplitude, amplitude);
+  return v;
+}
+
+/// (a, b) stacked, e.g. x = (q, v).
+template <int N>
+Vec<2 * N> stack(const Vec<N>& a, const Vec<N>& b) {
+  Vec<2 * N> x;
+  for (int k = 0; k < N; ++k) {
+    x[k] = a[k];
+    x[N + k] = b[k];
+  }
+  return x;
+}
+
+/// A random mode: contacts open, sticking or slipping along a random direction, with at most
+/// nq - 1 constrained directions so that the mode leaves the scene some motion (seven closed
+/// corners of a box at a generic configuration would force it to rest, with no slip direction).
+template <Scene S, class Rng>
+Mode<S::nc> random_mode(const S& scene, Rng& rng) {
+  Mode<S::nc> mode;
+  int budget = std::max(S::nq - 1, 1);
+  for (int i = 0; i < S::nc; ++i) {
+    const int pick = std::uniform_int_distribution<int>(0, 2)(rng);
+    const int nt = scene.contact(i).tangents();
+    const int rows = pick == 0 ? 0 : (pick == 1 ? 1 + nt : 1);
+    if (rows > budget) continue;
+    budget -= rows;
+    if (pick == 1) mode[i] = ContactState::stick();
+    if (pick == 2) {
+      if (nt == 1)
+        mode[i] = ContactState::slip_planar(uniform(rng, -1, 1) > 0 ? 1 : -1);
+      else {
+        const double a = uniform(rng, -M_PI, M_PI);
+        mode[i] = ContactState::slip(Eigen::Vector2d(std::cos(a), std::sin(a)));
+      }
+    }
+  }
+  return mode;
+}
+
+/// x with its velocity projected (in the kinetic metric) onto the velocities a mode allows:
+/// zero normal velocity at closed contacts, zero tangential velocity at sticking ones. Flows are
+/// only consistent there: for a rigid pair of sticking contacts (a box stuck on the plank at both
+/// corners) the Delassus system has a solution only if the velocities respect the contacts.
+template <Scene S>
+Vec<2 * S::nq> consistent_with_mode(const S& scene, const Mode<S::nc>& mode, const Vec<2 * S::nq>& x) {
+  constexpr int nq = S::nq;
+  const Vec<nq> q = x.template head<nq>();
+  Vec<nq> v = x.template tail<nq>();
+  Kinematics<S> kin;
+  evaluate_kinematics(scene, q, v, kin);
+  Eigen::MatrixXd J(0, nq);
+  for (int i = 0; i < S::nc; ++i) {
+    if (!mode[i].closed()) continue;
+    const auto& c = kin.contacts[i];
+    J.conservativeResize(J.rows() + 1, nq);
+    J.row(J.rows() - 1) = c.wn.transpose();
+    if (mode[i].mode == ContactMode::Stick)
+      for (int k = 0; k < c.tangents; ++k) {
+        J.conservativeResize(J.rows() + 1, nq);
+        J.row(J.rows() - 1) = c.Wt.col(k).transpose();
+      }
+  }
+  if (J.rows() > 0) {
+    const Eigen::MatrixXd MinvJt = kin.llt.solve(J.transpose());
+    const Eigen::MatrixXd D = J * MinvJt;
+    v -= MinvJt * D.completeOrthogonalDecomposition().solve(J * v);
+  }
+  Vec<2 * nq> out = x;
+  out.template tail<nq>() = v;
+  return out;
+}
+
+/// A generic configuration: touching_configuration moved a little in every coordinate, so no
+/// contact rows are redundant.
+template <Scene S, class Rng>
+Vec<S::nq> generic_configuration(const S& scene, Rng& rng) {
+  return scene.touching_configuration(rng) + random_vector<S::nq>(rng, 0.05);
+}
+
+}  // namespace saltus::testing
