@@ -9,6 +9,7 @@ MinNormSolver<MaxN>::MinNormSolver() : cod_(MaxN, MaxN) {
   cod_.setThreshold(delassus_rank_threshold);
   A_.resize(MaxN, MaxN);
   tmp_.resize(MaxN);
+  work_.resize(MaxN);
 }
 
 template <int MaxN>
@@ -25,8 +26,7 @@ void MinNormSolver<MaxN>::factorize() {
 
 template <int MaxN>
 void MinNormSolver<MaxN>::solve_in_place(Vector& b) const {
-  tmp_.resize(b.size());
-  tmp_ = cod_.solve(b);
+  min_norm_solve(cod_, b, tmp_, work_);
   b = tmp_;
 }
 

@@ -32,6 +32,7 @@
 #pragma once
 
 #include <saltus/hybrid/contact_problem.hpp>
+#include <saltus/hybrid/linear_solve.hpp>
 #include <saltus/hybrid/errors.hpp>
 #include <saltus/hybrid/lemke.hpp>
 
@@ -48,6 +49,24 @@
 
 namespace saltus {
 
+/// Options of CoulombSolver (any MaxContacts).
+struct CoulombSolverOptions {
+  /// Target relative natural-map residual (natural_map_residual).
+  double tolerance = 1e-14;
+  /// Budget of Newton steps, Gauss-Seidel sweeps and LCP restarts (one each); past it the
+  /// solve ends with IterationLimit and the best point found.
+  int max_iterations = 300;
+  /// Gauss-Seidel sweeps before the first Newton step, and after each stalled one.
+  int warm_start_sweeps = 4;
+  int fallback_sweeps = 10;
+  /// Stalls of Newton's method in a row that do not halve the best residual before giving
+  /// up (the residual then sits at the round-off level of the problem, above the tolerance).
+  int max_stalls = 10;
+  /// Restart a stalled Newton method from solutions of LCPs in which polygons replace the
+  /// friction disks (up to 12 sides, fewer for MaxContacts > 4, none for MaxContacts > 21).
+  bool polyhedral_restarts = true;
+};
+
 template <int MaxContacts>
 class CoulombSolver {
  public:
@@ -56,22 +75,8 @@ class CoulombSolver {
   using Vector = typename Problem::Vector;
   using Matrix = typename Problem::Matrix;
 
-  struct Options {
-    /// Target relative natural-map residual (natural_map_residual).
-    double tolerance = 1e-14;
-    /// Budget of Newton steps, Gauss-Seidel sweeps and LCP restarts (one each); past it the
-    /// solve ends with IterationLimit and the best point found.
-    int max_iterations = 300;
-    /// Gauss-Seidel sweeps before the first Newton step, and after each stalled one.
-    int warm_start_sweeps = 4;
-    int fallback_sweeps = 10;
-    /// Stalls of Newton's method in a row that do not halve the best residual before giving
-    /// up (the residual then sits at the round-off level of the problem, above the tolerance).
-    int max_stalls = 10;
-    /// Restart a stalled Newton method from solutions of LCPs in which polygons replace the
-    /// friction disks (up to 12 sides, fewer for MaxContacts > 4, none for MaxContacts > 21).
-    bool polyhedral_restarts = true;
-  };
+  using Options = CoulombSolverOptions;
+
 
   CoulombSolver() = default;
   explicit CoulombSolver(const Options& o) : options(o) {}
@@ -331,30 +336,8 @@ class CoulombSolver {
     return -1.0;
   }
 
-  // dir_ = J^+ rhs_ from the complete orthogonal decomposition J P = Q [T 0; 0 0] Z. This is
-  // CompleteOrthogonalDecomposition::solve, whose Eigen 3.4 version allocates its workspace
-  // (a dynamic vector in applyZAdjointOnTheLeftInPlace): here it is a fixed-size member.
-  void min_norm_solve() {
-    const int n = static_cast<int>(jac_.cols());
-    const int rank = static_cast<int>(cod_.rank());
-    dir_.setZero(n);
-    if (rank == 0) return;
-    rhs_.applyOnTheLeft(cod_.householderQ().setLength(rank).adjoint());
-    dir_.head(rank) = cod_.matrixT()
-                          .topLeftCorner(rank, rank)
-                          .template triangularView<Eigen::Upper>()
-                          .solve(rhs_.head(rank));
-    work_.resize(n);
-    for (int k = 0; k < rank && rank < n; ++k) {  // Z = I at full rank (zCoeffs unset)
-      if (k != rank - 1) std::swap(dir_[k], dir_[rank - 1]);
-      dir_.segment(rank - 1, n - rank + 1)
-          .applyHouseholderOnTheLeft(cod_.matrixQTZ().row(k).tail(n - rank).adjoint(),
-                                     cod_.zCoeffs()(k), work_.data());
-      if (k != rank - 1) std::swap(dir_[k], dir_[rank - 1]);
-    }
-    work_ = cod_.colsPermutation() * dir_;
-    dir_ = work_;
-  }
+  // dir_ = J^+ rhs_, allocation-free (linear_solve.hpp).
+  void min_norm_solve() { saltus::min_norm_solve(cod_, rhs_, dir_, work_); }
 
   // One nonsmooth Gauss-Seidel sweep: each contact solves its own 1- to 3-dimensional problem
   // exactly with the others fixed (solve_contact), so that the fixed points of a sweep are

@@ -32,6 +32,7 @@
 #include <Eigen/QR>
 
 #include <type_traits>
+#include <utility>
 
 namespace saltus {
 
@@ -57,6 +58,29 @@ void value_into(const Eigen::MatrixBase<Derived>& m, Out& out) {
 /// largest count as zero, so contacts redundant up to integration drift count as redundant.
 inline constexpr double delassus_rank_threshold = 1e-10;
 
+/// x = A^+ rhs from a complete orthogonal decomposition A P = Q [T 0; 0 0] Z of A. This is
+/// CompleteOrthogonalDecomposition::solve, whose Eigen 3.4 version allocates its workspace (a
+/// dynamic vector in applyZAdjointOnTheLeftInPlace) when A is rank deficient; here the caller's
+/// `work` (at least cols(A) long) is used instead. rhs is overwritten.
+template <class Cod, class Rhs, class X, class Work>
+void min_norm_solve(const Cod& cod, Rhs& rhs, X& x, Work& work) {
+  const int n = static_cast<int>(cod.cols());
+  const int rank = static_cast<int>(cod.rank());
+  x.setZero(n);
+  if (rank == 0) return;
+  rhs.applyOnTheLeft(cod.householderQ().setLength(rank).adjoint());
+  x.head(rank) = cod.matrixT().topLeftCorner(rank, rank).template triangularView<Eigen::Upper>().solve(rhs.head(rank));
+  work.resize(n);
+  for (int k = 0; k < rank && rank < n; ++k) {  // Z = I at full rank (zCoeffs unset)
+    if (k != rank - 1) std::swap(x[k], x[rank - 1]);
+    x.segment(rank - 1, n - rank + 1)
+        .applyHouseholderOnTheLeft(cod.matrixQTZ().row(k).tail(n - rank).adjoint(), cod.zCoeffs()(k), work.data());
+    if (k != rank - 1) std::swap(x[k], x[rank - 1]);
+  }
+  work = cod.colsPermutation() * x;
+  x = work;
+}
+
 /// Minimum-norm solves with a complete orthogonal decomposition of an m x m matrix, m <= MaxN,
 /// without heap allocation after construction.
 template <int MaxN>
@@ -79,7 +103,7 @@ class MinNormSolver {
  private:
   Matrix A_;
   Eigen::CompleteOrthogonalDecomposition<Matrix> cod_;
-  mutable Vector tmp_;
+  mutable Vector tmp_, work_;
 };
 
 // Instantiated once in the library for these bounds (contact-problem rows of 1, 2, 4, 8, 16 and
