@@ -15,6 +15,21 @@
 // (1e-10 relative to the largest pivot) also treats contacts that are redundant up to drift of
 // the integrator as redundant. For a symmetric box this splits the load equally. Only the double
 // value of each matrix is factorised (linear_solve.hpp); derivatives reuse that factorisation.
+//
+// Friction split between redundant sticking contacts. The Euclidean minimum-norm split shares a
+// tangential load equally between contacts whose tangent rows coincide (the plank-box's two
+// corners, the spatial box's four), whatever their normal forces. The stick->slip guard
+// mu^2 lambda_n^2 - ||lambda_t||^2 of the less loaded contact would then fire although another
+// split holds both in their cones, and the acceleration-level mode selection (an LCP, which finds
+// that split) would put the contact back into stick at once: a cycle. So when the Delassus matrix
+// is rank deficient and some contact sticks, the tangential forces are chosen to minimise
+//     sum_i ||lambda_t,i||^2 / (mu_i lambda_n,i)    over all solutions of the Delassus system
+// (normal and slip rows keep unit weight), with lambda_n from the minimum-norm pass. For tangent
+// rows that coincide this gives each contact the same friction utilisation
+// ||lambda_t,i|| / (mu_i lambda_n,i), so the guards reach zero when the total tangential load
+// reaches mu sum lambda_n: slip starts when no split is left, as rigid-body Coulomb friction says.
+// A weighted minimum-norm solution is a column scaling: with lambda = diag(s) y, s_j = sqrt(mu
+// lambda_n) on tangent columns, y is the minimum-norm solution of (D diag(s)) y = rhs.
 #pragma once
 
 #include <saltus/hybrid/kinematics.hpp>
@@ -46,7 +61,8 @@ struct FlowWorkspace {
   RowsMatrix J;
   ColsMatrix F, MinvF;
   SquareMatrix A;
-  RowsVector rhs, lambda, work;
+  RowsVector rhs, lambda, work, split_scale;
+  SquareMatrix A_scaled;
   MinNormSolve<T, max_rows> delassus;  ///< J M^{-1} F, factorised by value
   int rows = 0;
   std::array<int, nc> normal_row{};  ///< row of each closed contact's normal force (-1 if open)
@@ -65,6 +81,8 @@ struct FlowWorkspace {
     rhs.resize(max_rows);
     lambda.resize(max_rows);
     work.resize(max_rows);
+    split_scale.resize(max_rows);
+    A_scaled.resize(max_rows, max_rows);
   }
 };
 
@@ -82,6 +100,39 @@ VecT<T, 2> slip_direction_of(const ContactState& state, int tangents, const VecT
     if (n > T(0)) d = zeta_t / n;
   }
   return d;
+}
+
+/// The weighted minimum-norm friction split of redundant sticking contacts (file comment):
+/// re-solves the Delassus system ws.A lambda = ws.rhs (m = ws.rows) with the tangent columns of
+/// every sticking contact scaled by sqrt(mu lambda_n), lambda_n from the current ws.lambda.
+template <Scene S, class T>
+void split_friction_by_utilisation(const S& scene, FlowWorkspace<S, T>& ws) {
+  const int m = ws.rows;
+  double largest_normal = 0.0;
+  bool any_stick_tangent = false;
+  for (int i = 0; i < S::nc; ++i) {
+    if (ws.normal_row[i] < 0) continue;
+    largest_normal = std::max(largest_normal, std::abs(ad::value_of(ws.lambda[ws.normal_row[i]])));
+    any_stick_tangent = any_stick_tangent || ws.tangent_row[i] >= 0;
+  }
+  if (!any_stick_tangent || !(largest_normal > 0.0)) return;
+  // A contact about to release (lambda_n -> 0) keeps a small positive weight, so the scaled
+  // matrix keeps the rank of the unscaled one.
+  const double floor = 1e-6 * largest_normal;
+  ws.split_scale.resize(m);
+  ws.split_scale.setConstant(T(1));
+  for (int i = 0; i < S::nc; ++i) {
+    if (ws.tangent_row[i] < 0) continue;
+    using std::sqrt;
+    T load = T(std::max(scene.contact(i).mu, 1e-12)) * ws.lambda[ws.normal_row[i]];
+    if (ad::value_of(load) < floor) load = T(floor);
+    const T s = sqrt(load);
+    for (int k = 0; k < scene.contact(i).tangents(); ++k) ws.split_scale[ws.tangent_row[i] + k] = s;
+  }
+  ws.A_scaled.resize(m, m);
+  ws.A_scaled = ws.A * ws.split_scale.asDiagonal();
+  ws.delassus.solve(ws.A_scaled, ws.rhs, ws.work);
+  ws.lambda = ws.split_scale.cwiseProduct(ws.work);
 }
 
 /// Evaluates the flow of `mode` at x = (q, v) under input u: fills ws.kin (all contacts),
@@ -144,6 +195,7 @@ void evaluate_flow(const S& scene, const Mode<S::nc>& mode, const VecT<T, 2 * S:
     ws.rhs.noalias() -= ws.J.topRows(m) * ws.a_free;
     ws.lambda.resize(m);
     ws.delassus.solve(ws.A, ws.rhs, ws.lambda);
+    if (ws.delassus.rank() < m) split_friction_by_utilisation(scene, ws);
     ws.rhs.resize(FlowWorkspace<S, T>::max_rows);
     ws.acceleration = ws.a_free;
     ws.acceleration.noalias() += ws.MinvF * ws.lambda;

@@ -87,6 +87,7 @@ class ImpactSolver {
   /// Impact at x- with the contacts whose gap is within gap_tolerance.
   const ImpactResult<S>& solve(const VecT<double, nx>& x_minus) {
     require_finite(x_minus, "pre-impact state x-");
+    for (int i = 0; i < nc; ++i) restitution_[i] = scene_.contact(i).restitution;
     evaluate_kinematics(scene_, VecT<double, nq>(x_minus.template head<nq>()),
                         VecT<double, nq>(x_minus.template tail<nq>()), jump_.kin);
     std::array<bool, nc> in_problem{};
@@ -94,15 +95,20 @@ class ImpactSolver {
     return solve_evaluated(x_minus, in_problem);
   }
 
-  /// Impact at x- with an explicit set of contacts taking part.
-  const ImpactResult<S>& solve(const VecT<double, nx>& x_minus, const std::array<bool, nc>& in_problem) {
+  /// Impact at x- with an explicit set of contacts taking part; `inelastic[i]` sets e_n = 0 for
+  /// contact i in this impact (the simulator's rest criterion).
+  const ImpactResult<S>& solve(const VecT<double, nx>& x_minus, const std::array<bool, nc>& in_problem,
+                               const std::array<bool, nc>& inelastic = {}) {
     require_finite(x_minus, "pre-impact state x-");
+    for (int i = 0; i < nc; ++i) restitution_[i] = inelastic[i] ? 0.0 : scene_.contact(i).restitution;
     evaluate_kinematics(scene_, VecT<double, nq>(x_minus.template head<nq>()),
                         VecT<double, nq>(x_minus.template tail<nq>()), jump_.kin);
     return solve_evaluated(x_minus, in_problem);
   }
 
   const ImpactResult<S>& result() const { return result_; }
+  /// Restitution used by the last solve (the scene's, or 0 where made inelastic).
+  const std::array<double, nc>& restitution() const { return restitution_; }
   const Problem& problem() const { return problem_; }
 
  private:
@@ -143,7 +149,7 @@ class ImpactSolver {
     for (int i = 0; i < nc; ++i) {
       if (index[i] < 0) continue;
       const double zn = kin.contacts[i].zeta_n;
-      problem_.b[problem_.row[index[i]]] += scene_.contact(i).restitution * std::min(zn, 0.0);
+      problem_.b[problem_.row[index[i]]] += restitution_[i] * std::min(zn, 0.0);
     }
     velocity_scale_ = std::max(velocity_scale_, 1e-300);
 
@@ -196,7 +202,7 @@ class ImpactSolver {
         else
           r.impulse_mode[i] = ImpulseMode{ImpulseRole::Slip, nt == 1 ? Eigen::Vector2d(dir[0] > 0 ? 1.0 : -1.0, 0.0) : dir};
       }
-      const double yn_plus = solution_.y[row] - scene_.contact(i).restitution * std::min(kin.contacts[i].zeta_n, 0.0);
+      const double yn_plus = solution_.y[row] - restitution_[i] * std::min(kin.contacts[i].zeta_n, 0.0);
       if (yn_plus > options_.velocity_tolerance * velocity_scale_) continue;  // separating: open
       if (nt == 0)
         r.post_mode[i] = ContactState::slip(Eigen::Vector2d::Zero());
@@ -212,6 +218,7 @@ class ImpactSolver {
     // solver's own impulse is returned.
     bool jump_map_ok = true;
     try {
+      jump_.restitution = &restitution_;
       apply_jump_map(scene_, r.impulse_mode, x_minus, jump_, x_jump_);
     } catch (const NumericalFailure&) {
       jump_map_ok = false;
@@ -281,7 +288,7 @@ class ImpactSolver {
       if (index[i] < 0) continue;
       const ContactSpec& spec = scene_.contact(i);
       const double ln = r.impulse[i].normal;
-      const double yn = r.normal_velocity_plus[i] + spec.restitution * std::min(c.zeta_n, 0.0);
+      const double yn = r.normal_velocity_plus[i] + restitution_[i] * std::min(c.zeta_n, 0.0);
       r.signorini_residual = std::max({r.signorini_residual, std::max(-ln, 0.0) / L, std::max(-yn, 0.0) / V,
                                        std::abs(ln * yn) / (L * V)});
       if (c.tangents == 0) continue;
@@ -303,6 +310,7 @@ class ImpactSolver {
   BoundedMatrix<double, Eigen::Dynamic, nq, std::max(1, 3 * nc), nq> W_;
   BoundedMatrix<double, nq, Eigen::Dynamic, nq, std::max(1, 3 * nc)> MinvWt_;
   VecT<double, nx> x_jump_;
+  std::array<double, nc> restitution_{};
   ImpactResult<S> result_;
   double velocity_scale_ = 1.0, impulse_scale_ = 1.0;
 };

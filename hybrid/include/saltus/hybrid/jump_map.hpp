@@ -80,6 +80,8 @@ struct JumpWorkspace {
   SquareMatrix A;
   RowsVector target, lambda, work;
   MinNormSolve<T, max_rows> delassus;  ///< J M^{-1} F, factorised by value
+  /// Restitution per contact overriding the scene's when set (an impact taken as inelastic).
+  const std::array<double, nc>* restitution = nullptr;
   int rows = 0;
   std::array<int, nc> normal_row{}, tangent_row{};
   std::array<VecT<T, 2>, nc> slip_direction{};
@@ -108,6 +110,7 @@ namespace detail {
 template <Scene S, class T>
 void solve_jump_system(const S& scene, const ImpactMode<S::nc>& mode, const VecT<T, S::nq>& v_minus,
                        JumpWorkspace<S, T>& ws) {
+  const auto restitution = [&](int i) { return ws.restitution ? (*ws.restitution)[i] : scene.contact(i).restitution; };
   constexpr int nc = S::nc;
   int m = 0;
   for (int i = 0; i < nc; ++i) {
@@ -119,7 +122,7 @@ void solve_jump_system(const S& scene, const ImpactMode<S::nc>& mode, const VecT
     const int nt = c.tangents;
     ws.normal_row[i] = m;
     ws.J.row(m) = c.wn.transpose();
-    ws.target[m] = c.zeta_n < T(0) ? T(-spec.restitution) * c.zeta_n : T(0);
+    ws.target[m] = c.zeta_n < T(0) ? T(-restitution(i)) * c.zeta_n : T(0);
     if (nt > 0 && mode[i].role == ImpulseRole::Slip) {
       ws.F.col(m) = c.wn - T(spec.mu) * (c.Wt.leftCols(nt) * ws.slip_direction[i].head(nt));
       ++m;

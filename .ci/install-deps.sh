@@ -1,0 +1,17 @@
+#!/usr/bin/env bash
+# Installs the Debian packages Saltus builds against, only those missing (no-op when all are
+# present). Used by tests/run.sh, examples/demo.sh and .ci/run.
+set -euo pipefail
+packages=(build-essential cmake pkg-config libeigen3-dev libboost-dev coinor-libipopt-dev
+          libsundials-dev libgtest-dev libgmock-dev libbenchmark-dev nlohmann-json3-dev python3-matplotlib)
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ ${#missing[@]} -gt 0 ]; then
+  echo "installing: ${missing[*]}"
+  sudo_cmd=""
+  [ "$(id -u)" -ne 0 ] && sudo_cmd="sudo"
+  $sudo_cmd apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $sudo_cmd apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+fi

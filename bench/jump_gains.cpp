@@ -1,0 +1,129 @@
+// jump_gains: analytic jump gains (thesis C.37-C.39, AD of guard, flow and jump map) against
+// their numerical twin (central differences through re-simulation), per scene and event kind:
+//   fd_rel_error       max |G_analytic - G_twin| / max |G| over G_z (on the admissible ante-event
+//                      deviations, numerical_jump_gain.hpp) and G_v
+//   slope              fitted log-log slope of the first-order prediction's remainder
+//                      |x_eps - x_k - eps z_k| over eps = 1e-2..1e-6, for a perturbed state at the
+//                      start, sampled in the segment after the event (2 means exact first order)
+//   gain_us            wall time of one analytic gain (JumpGainSolver::compute), microseconds
+//   numerical_twin_us  wall time of one numerical twin (numerical_jump_gain), microseconds
+// Both times are measured in the same run, so their ratio is the meaningful figure.
+// Plain main; `--json` prints one JSON object, otherwise a table.
+#include "prediction_check.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cstring>
+#include <iomanip>
+#include <iostream>
+#include <map>
+#include <sstream>
+
+namespace {
+
+using namespace saltus;
+using Clock = std::chrono::steady_clock;
+
+struct Row {
+  std::string scene, kind;
+  double fd_rel_error = 0, slope = 0, gain_us = 0, twin_us = 0;
+};
+
+template <class F>
+double microseconds_per_call(F&& f, double min_seconds) {
+  long n = 0;
+  const auto start = Clock::now();
+  double elapsed = 0;
+  do {
+    f();
+    ++n;
+    elapsed = std::chrono::duration<double>(Clock::now() - start).count();
+  } while (elapsed < min_seconds);
+  return 1e6 * elapsed / static_cast<double>(n);
+}
+
+template <Scene S>
+void measure(const references::Reference<S>& ref, const Vec<2 * S::nq>& z0, std::vector<Row>& rows) {
+  const auto& traj = ref.trajectory;
+  JumpGainSolver<S> solver(ref.scene);
+  NumericalJumpGainOptions twin;
+  twin.simulation = ref.options;
+  LinearisationOptions lo;
+  lo.variational.relative = lo.variational.absolute = 1e-13;
+  lo.spreading.before = lo.spreading.after = 0.1;
+  const LinearisedSystem<S> lin(ref.scene, traj, lo);
+  for (int e = 0; e < static_cast<int>(traj.events.size()); ++e) {
+    Row row;
+    row.scene = ref.name;
+    row.kind = references::event_kind(ref.scene, traj.events[e]);
+    const JumpGain<S> a = solver.compute(traj.events[e], traj.input);
+    const NumericalJumpGain<S> n = numerical_jump_gain(ref.scene, traj, e, twin);
+    // On the admissible ante-event deviations (numerical_jump_gain.hpp): G_z B against the twin's.
+    const Eigen::MatrixXd GzB = a.G_z * n.basis;
+    const double scale = std::max({GzB.cwiseAbs().maxCoeff(), n.G_z_basis.cwiseAbs().maxCoeff(),
+                                   a.G_v.cwiseAbs().maxCoeff()});
+    row.fd_rel_error =
+        std::max((GzB - n.G_z_basis).cwiseAbs().maxCoeff(), (a.G_v - n.G_v).cwiseAbs().maxCoeff()) / scale;
+    row.gain_us = microseconds_per_call([&] { solver.compute(traj.events[e], traj.input); }, 0.2);
+    row.twin_us = microseconds_per_call([&] { numerical_jump_gain(ref.scene, traj, e, twin); }, 0.5);
+    // Remainder sampled in the middle of the segment after the event.
+    const double t_next = e + 1 < static_cast<int>(traj.events.size()) ? traj.events[e + 1].t : traj.t_end();
+    const double t_sample = traj.events[e].t + 0.5 * (t_next - traj.events[e].t);
+    const auto fit = references::remainder_fit(ref, lin, z0, [](double) { return Vec<S::nu>::Zero().eval(); },
+                                               {t_sample});
+    row.slope = fit.structure_matched ? fit.slope : std::nan("");
+    rows.push_back(row);
+  }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const bool json = argc > 1 && std::strcmp(argv[1], "--json") == 0;
+  std::vector<Row> rows;
+  try {
+    measure(references::example3(), Vec<4>(0.3, -0.5, 0.7, 0.4), rows);
+    measure(references::point_mass_with_friction(), references::point_mass_with_friction_perturbation(), rows);
+    measure(references::hopper(), references::hopper_perturbation(), rows);
+    measure(references::plank_box(), references::plank_box_perturbation(), rows);
+  } catch (const std::exception& e) {
+    std::cerr << "jump_gains: " << e.what() << "\n";
+    return 1;
+  }
+  std::ostringstream os;
+  os << std::setprecision(4);
+  if (json) {
+    // {"<scene>": {"<event kind>": {...}}}; repeated kinds within a scene get "#2", "#3".
+    std::map<std::string, std::map<std::string, int>> seen;
+    os << "{";
+    std::string current;
+    bool first_scene = true, first_kind = true;
+    for (const Row& r : rows) {
+      if (r.scene != current) {
+        if (!first_scene) os << "}";
+        os << (first_scene ? "" : ", ") << "\"" << r.scene << "\": {";
+        current = r.scene;
+        first_scene = false;
+        first_kind = true;
+      }
+      const int k = ++seen[r.scene][r.kind];
+      os << (first_kind ? "" : ", ") << "\"" << r.kind << (k > 1 ? " #" + std::to_string(k) : "") << "\": {"
+         << "\"fd_rel_error\": " << r.fd_rel_error << ", \"slope\": ";
+      if (std::isfinite(r.slope))
+        os << r.slope;
+      else
+        os << "null";
+      os << ", \"gain_us\": " << r.gain_us << ", \"numerical_twin_us\": " << r.twin_us << "}";
+      first_kind = false;
+    }
+    os << (first_scene ? "" : "}") << "}\n";
+  } else {
+    os << std::left << std::setw(28) << "scene" << std::setw(44) << "event kind" << std::setw(14) << "fd_rel_error"
+       << std::setw(8) << "slope" << std::setw(12) << "gain_us" << "numerical_twin_us\n";
+    for (const Row& r : rows)
+      os << std::left << std::setw(28) << r.scene << std::setw(44) << r.kind << std::setw(14) << r.fd_rel_error
+         << std::setw(8) << r.slope << std::setw(12) << r.gain_us << r.twin_us << "\n";
+  }
+  std::cout << os.str();
+  return 0;
+}

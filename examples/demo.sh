@@ -1,0 +1,26 @@
+#!/usr/bin/env bash
+# The main job: installs the Debian packages (if missing), builds Saltus, runs every example scene
+# and the contact/simulation benchmarks, prints the results and writes the report files to
+# report/ (trajectories as JSON and CSV, benchmark figures as JSON).
+#   SALTUS_JOBS=N   parallel build jobs (default: nproc)
+set -euo pipefail
+here=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+build="$here/build"
+bash "$here/.ci/install-deps.sh"
+cmake -S "$here" -B "$build" -DCMAKE_BUILD_TYPE=Release
+cmake --build "$build" -j "${SALTUS_JOBS:-$(nproc)}"
+export SALTUS_REPORT_DIR="$here/report"
+mkdir -p "$SALTUS_REPORT_DIR"
+for example in bouncing_ball guiding_example plank_box hopper spatial_box; do
+  echo
+  "$build/examples/$example"
+done
+for bench in contact_properties simulation_accuracy jump_gains; do
+  if [ -x "$build/bench/$bench" ]; then
+    echo
+    echo "== $bench =="
+    "$build/bench/$bench"
+    "$build/bench/$bench" --json > "$SALTUS_REPORT_DIR/$bench.json"
+    echo "wrote $SALTUS_REPORT_DIR/$bench.json"
+  fi
+done

@@ -1,0 +1,271 @@
+// First-order jump gains of the events of a hybrid trajectory (thesis appendix C, C.29-C.42):
+//     z+ = G_z z- + G_v v-,
+// z- the state deviation from the (extended) ante-event reference at the nominal event time t*,
+// v- the input deviation there, z+ the deviation from the (extended) post-event reference at t*
+// (reference spreading: both are compared with the segment that has seen the same jumps).
+//
+// Derivation (written out again because the draft thesis carries typos, see below). A perturbed
+// motion x_eps = alpha- + eps z- (+ o(eps)) under u_eps = mu + eps v reaches the guard at
+// t_eps = t* + eps dt. Expanding gamma(x_eps(t_eps), u_eps(t_eps), t_eps) = 0 to first order
+// (C.17-C.21):
+//     Dgamma_x (z- + f- dt) + Dgamma_u (v + mu'- dt) + d_t gamma dt = 0
+//  => dt = -(Dgamma_x z- + Dgamma_u v) / gamma_dot,                                   (C.22)
+//     gamma_dot = Dgamma_x f- + Dgamma_u mu'- + d_t gamma,                            (C.24)
+// with f- the ante-event flow at (alpha-(t*), mu-(t*)) and mu'- the total time derivative of the
+// ante-event input law along the extended ante-event flow. Saltus' guards do not depend on t
+// explicitly (guards.hpp), so d_t gamma = 0; time enters through the input law only.
+// At t_eps the jump x+ = g(x-) is applied (g does not depend on u: impulses are not inputs), and
+// the post-event reference at t_eps is alpha+(t*) + eps f+ dt, so
+//     z+ = Dg (z- + f- dt) - f+ dt = Dg z- + (f+ - Dg f-) (Dgamma_x z- + Dgamma_u v) / gamma_dot,
+// where f+ is the post-event flow at (alpha+(t*), mu+(t*)) (the post-event mode's input). Hence
+//     G_z = Dg + (f+ - Dg f-) Dgamma_x / gamma_dot,                                   (C.37)
+//     G_v =      (f+ - Dg f-) Dgamma_u / gamma_dot.                                   (C.38)
+// Typos of the draft corrected here: C.38 adds D_2 g, which is zero (the thesis says so itself
+// under C.27); C.35 writes gdot with D_2 g mu' and D_3 g, both zero for Saltus' jump maps; C.41
+// writes G_z^{k+} v^k for G_v^{k+} v^k (C.42 has it right); C.51 uses f^{k-} where C.52 has
+// f^{k+} for the intermediate mode's flow f^k.
+//
+// Note on the state-input guards. At a release lambda_n = 0 (and a slipping contact's friction
+// mu lambda_n with it), and at a slip onset the stick force sits on the cone, equal to the slip
+// force: the contact forces are continuous, so with an input law that does not depend on the
+// mode f+ = f- and G_z = Dg = I, G_v = 0, whatever gamma_dot is. The saltation term, and with it
+// the input rate in gamma_dot, matters when the input changes with the mode (a flight torque
+// different from the stance torque: f+ - f- = (0, M^{-1} S (u+ - u-))).
+//
+// Chains at one instant (an impact into stick that slips at once, a release at the instant of
+// another event) are composed transition by transition (C.40-C.42) with the intermediate modes'
+// flows, keeping the first-order event-time shift dt_k of every transition:
+//     z_k = Dg_k (z_{k-1} + f_{k-1} dt_k) - f_k dt_k,
+// where f_{k-1}, f_k are the flows of the modes before and after transition k at its state.
+//  - A transition whose guard sits at zero (within the chain tolerance) and decreases has its own
+//    shift dt_k = -(Dgamma_x z_{k-1} + Dgamma_u v) / gamma_dot_k, with gamma_dot_k along the
+//    intermediate mode's flow f_{k-1}: the intermediate mode lasts eps (dt_k - dt_{k-1}) in the
+//    perturbed motion. This is C.40-C.42; it is the gain of the cone dt_k >= dt_{k-1}. The other
+//    order belongs to the conewise gains of simultaneous events, not computed here.
+//  - A transition whose guard is already clearly negative when the previous one ends (the
+//    intermediate mode has zero duration for every nearby motion too: e.g. an impact into stick
+//    where the stick forces leave the friction cone) happens at the same perturbed instant as the
+//    previous one: dt_k = dt_{k-1}. Then the flow of the zero-duration mode cancels out, and for a
+//    mode change without impulse (Dg_k = I) the composite gain is exactly that of one jump from
+//    the first mode to the last. Using C.37 with gamma_dot_k there would be wrong (the guard does
+//    not cross zero, it is below it).
+// An event without guards (the initial impact at t0 of a simulation started in contact) has a
+// fixed time: dt = 0, G_z = Dg, G_v = 0.
+#pragma once
+
+#include <saltus/hybrid/derivatives.hpp>
+#include <saltus/hybrid/trajectory.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace saltus {
+
+/// A guard crossing that is (nearly) tangential: |gamma_dot| <= threshold * rate scale, where the
+/// rate scale is |Dgamma_x| |f-| + |Dgamma_u| |mu'-|. The first-order gain would be huge or
+/// undefined (the event time is not differentiable), so none is returned.
+class GrazingEvent : public Error {
+ public:
+  GrazingEvent(const std::string& what, double t, Guard guard, double gamma_dot, double rate_scale)
+      : Error(what), t_(t), guard_(guard), gamma_dot_(gamma_dot), rate_scale_(rate_scale) {}
+  double t() const { return t_; }
+  const Guard& guard() const { return guard_; }
+  double gamma_dot() const { return gamma_dot_; }
+  double rate_scale() const { return rate_scale_; }
+
+ private:
+  double t_;
+  Guard guard_;
+  double gamma_dot_, rate_scale_;
+};
+
+/// A transition fired by several guards at once (e.g. both corners of a box landing flat): its
+/// first-order gain is conewise linear (one gain per activation order), not computed here.
+class SimultaneousActivation : public Error {
+ public:
+  using Error::Error;
+};
+
+struct JumpGainOptions {
+  /// GrazingEvent when |gamma_dot| <= grazing_threshold * (|Dgamma_x| |f-| + |Dgamma_u| |mu'-|).
+  double grazing_threshold = 1e-8;
+  /// Include Dgamma_u mu'- in gamma_dot (C.24). Only to show that it is needed (tests).
+  bool include_input_rate = true;
+  /// s, relative to max(1, |t|): central-difference step of the input law's total time
+  /// derivative along the ante-event flow, (u(t + h, x + h f) - u(t - h, x - h f)) / 2h. Its
+  /// error is O(h^2 u''') + O(eps |u| / h); 1e-5 gives ~1e-10 relative for smooth inputs. The
+  /// input law must be smooth within +-h of the event (no breakpoint there).
+  double input_rate_step = 1e-5;
+  /// s: a chained transition whose guard is below -chain_time_tolerance * (rate scale) when the
+  /// previous transition ends is immediate (dt_k = dt_{k-1}); otherwise it is at zero and crosses.
+  double chain_time_tolerance = 1e-8;
+};
+
+/// What is known about one transition of an event (diagnostics, and for the tests).
+struct TransitionGainInfo {
+  bool guarded = false;    ///< fired by a guard (false: initial impact)
+  bool immediate = false;  ///< its guard was already below zero: same instant as the previous one
+  double gamma = 0.0;      ///< guard value at the transition's state
+  double gamma_dot = 0.0;  ///< C.24 along the flow of the mode before
+  double rate_scale = 0.0;
+};
+
+/// The gain of one event: z+ = G_z z- + G_v v-, and the first-order shift of its (first) event
+/// time, dt = dt_dz z- + dt_dv v-.
+template <Scene S>
+struct JumpGain {
+  static constexpr int nx = 2 * S::nq, nu = S::nu;
+  Mat<nx, nx> G_z = Mat<nx, nx>::Identity();
+  Mat<nx, nu> G_v = Mat<nx, nu>::Zero();
+  Eigen::Matrix<double, 1, nx> dt_dz = Eigen::Matrix<double, 1, nx>::Zero();
+  Eigen::Matrix<double, 1, nu> dt_dv = Eigen::Matrix<double, 1, nu>::Zero();
+  Vec<nx> f_minus = Vec<nx>::Zero(), f_plus = Vec<nx>::Zero();  ///< flows before and after the event
+  /// max |g(x_before) - x_after| over the impact transitions: the jump map differentiated
+  /// against the impact solver's post-impact state (should be at round-off).
+  double jump_map_residual = 0.0;
+  int transitions = 0;
+  std::vector<TransitionGainInfo> info;  ///< one per transition (sized once per event)
+};
+
+/// Computes jump gains with preallocated workspaces; compute() allocates nothing for events with
+/// at most `reserved_transitions` transitions (the user's input law may allocate).
+template <Scene S>
+class JumpGainSolver {
+ public:
+  static constexpr int nq = S::nq, nx = 2 * S::nq, nu = S::nu, nc = S::nc;
+  using State = Vec<nx>;
+  using Input = Vec<nu>;
+
+  explicit JumpGainSolver(const S& scene, JumpGainOptions options = {}, int reserved_transitions = 8)
+      : scene_(scene), options_(options), ws_(std::make_unique<DerivativeWorkspace<S>>()) {
+    SALTUS_DEMAND(options.grazing_threshold >= 0 && options.input_rate_step > 0 && options.chain_time_tolerance >= 0,
+                  InvalidArgument, "JumpGainOptions: grazing_threshold >= 0, input_rate_step > 0 and ",
+                  "chain_time_tolerance >= 0 are required");
+    gain_.info.reserve(reserved_transitions);
+  }
+
+  const JumpGainOptions& options() const { return options_; }
+
+  /// The gain of `event` under the input law that drove the trajectory.
+  /// @throws GrazingEvent, SimultaneousActivation, InvalidArgument (an event without transitions)
+  const JumpGain<S>& compute(const Event<S>& event, const InputLaw<S>& law) {
+    SALTUS_DEMAND(!event.transitions.empty(), InvalidArgument, "jump gain: the event at t = ", event.t,
+                  " has no transitions");
+    SALTUS_DEMAND(static_cast<bool>(law), InvalidArgument, "jump gain: the input law is empty");
+    const double t = event.t;
+    auto& g = gain_;
+    g.transitions = static_cast<int>(event.transitions.size());
+    g.info.resize(event.transitions.size());
+    g.jump_map_residual = 0.0;
+    // Z_z, Z_v: z_k = Z_z z- + Z_v v;  d_z, d_v: dt_k = d_z z- + d_v v (C.40-C.42 recursion).
+    Zz_.setIdentity();
+    Zv_.setZero();
+    dz_.setZero();
+    dv_.setZero();
+    bool first_guarded = true;
+    for (std::size_t k = 0; k < event.transitions.size(); ++k) {
+      const Transition<S>& tr = event.transitions[k];
+      TransitionGainInfo& info = g.info[k];
+      info = TransitionGainInfo{};
+      // Flow of the mode before at the transition's state (f_{k-1}), with its own input.
+      u_before_ = law(t, tr.x_before, tr.mode_before);
+      flow_jacobian(scene_, tr.mode_before, tr.x_before, u_before_, *ws_, f_before_, A_, B_);
+      if (k == 0) g.f_minus = f_before_;
+
+      if (!tr.guards.empty()) {
+        SALTUS_DEMAND(tr.guards.size() == 1, SimultaneousActivation, "jump gain: transition ", k,
+                      " of the event at t = ", t, " is fired by ", tr.guards.size(),
+                      " guards at once; its first-order gain is conewise (one per activation order) and is "
+                      "not computed by JumpGainSolver");
+        const Guard& guard = tr.guards.front();
+        info.guarded = true;
+        info.gamma = guard_gradient(scene_, tr.mode_before, guard, tr.x_before, u_before_, *ws_, dgx_, dgu_);
+        // mu'-: total derivative of the input law along the flow of the mode before (C.24).
+        const double h = options_.input_rate_step * std::max(1.0, std::abs(t));
+        x_probe_ = tr.x_before + h * f_before_;
+        u_dot_ = law(t + h, x_probe_, tr.mode_before);
+        x_probe_ = tr.x_before - h * f_before_;
+        u_dot_ -= law(t - h, x_probe_, tr.mode_before);
+        u_dot_ /= 2 * h;
+        const double state_rate = dgx_.dot(f_before_);
+        const double input_rate = nu > 0 ? dgu_.dot(u_dot_) : 0.0;
+        info.gamma_dot = state_rate + (options_.include_input_rate ? input_rate : 0.0);
+        info.rate_scale = dgx_.norm() * f_before_.norm() + (nu > 0 ? dgu_.norm() * u_dot_.norm() : 0.0);
+        info.immediate = !first_guarded && info.gamma < -options_.chain_time_tolerance * info.rate_scale;
+        if (!info.immediate) {
+          if (!(std::abs(info.gamma_dot) > options_.grazing_threshold * info.rate_scale) ||
+              !std::isfinite(info.gamma_dot)) {
+            throw GrazingEvent(detail::concat("jump gain: near-grazing ", to_string(guard.kind), " of contact '",
+                                              scene_.contact(guard.contact).name, "' at t = ", t, " (transition ",
+                                              k, "): |gamma_dot| = ", std::abs(info.gamma_dot), " <= ",
+                                              options_.grazing_threshold, " * rate scale ", info.rate_scale,
+                                              " (Dgamma_x f = ", state_rate, ", Dgamma_u u' = ", input_rate,
+                                              options_.include_input_rate ? "" : ", left out", ")"),
+                               t, guard, info.gamma_dot, info.rate_scale);
+          }
+          // dt_k = -(Dgamma_x z_{k-1} + Dgamma_u v) / gamma_dot_k   (C.22, C.29)
+          dz_.noalias() = -(dgx_ * Zz_) / info.gamma_dot;
+          dv_.noalias() = -(dgx_ * Zv_) / info.gamma_dot;
+          if constexpr (nu > 0) dv_ -= dgu_ / info.gamma_dot;
+          if (first_guarded) {
+            g.dt_dz = dz_;
+            g.dt_dv = dv_;
+          }
+        }
+        first_guarded = false;
+      }
+
+      // The jump map: the impulse of an impact, the identity for a mode change (A.34-A.49).
+      if (tr.impact) {
+        jump_map_jacobian(scene_, tr.impulse_mode, tr.x_before, *ws_, x_jump_, Dg_);
+        g.jump_map_residual = std::max(g.jump_map_residual, (x_jump_ - tr.x_after).cwiseAbs().maxCoeff());
+      } else {
+        Dg_.setIdentity();
+      }
+      // Flow of the mode after at the transition's state (f_k), with its own input.
+      u_after_ = law(t, tr.x_after, tr.mode_after);
+      evaluate_flow(scene_, tr.mode_after, tr.x_after, u_after_, flow_);
+      f_after_ = flow_.xdot;
+      if (k + 1 == event.transitions.size()) g.f_plus = f_after_;
+
+      // z_k = Dg (z_{k-1} + f_{k-1} dt_k) - f_k dt_k.
+      jump_f_.noalias() = Dg_ * f_before_;
+      jump_f_ -= f_after_;
+      Zz_ = (Dg_ * Zz_).eval();
+      Zz_.noalias() += jump_f_ * dz_;
+      Zv_ = (Dg_ * Zv_).eval();
+      if constexpr (nu > 0) Zv_.noalias() += jump_f_ * dv_;
+    }
+    g.G_z = Zz_;
+    g.G_v = Zv_;
+    return g;
+  }
+
+ private:
+  const S& scene_;
+  JumpGainOptions options_;
+  std::unique_ptr<DerivativeWorkspace<S>> ws_;  // dual-number matrices: large, made once
+  FlowWorkspace<S> flow_;
+  JumpGain<S> gain_;
+  Mat<nx, nx> Zz_, A_, Dg_;
+  Mat<nx, nu> Zv_, B_;
+  Eigen::Matrix<double, 1, nx> dz_, dgx_;
+  Eigen::Matrix<double, 1, nu> dv_, dgu_;
+  State f_before_, f_after_, x_probe_, x_jump_, jump_f_;
+  Input u_before_, u_after_, u_dot_;
+};
+
+/// The gains of every event of `traj`, in order, under the trajectory's own input law.
+template <Scene S>
+std::vector<JumpGain<S>> jump_gains(const S& scene, const HybridTrajectory<S>& traj, const JumpGainOptions& options = {}) {
+  JumpGainSolver<S> solver(scene, options);
+  std::vector<JumpGain<S>> gains;
+  gains.reserve(traj.events.size());
+  for (const auto& ev : traj.events) gains.push_back(solver.compute(ev, traj.input));
+  return gains;
+}
+
+}  // namespace saltus

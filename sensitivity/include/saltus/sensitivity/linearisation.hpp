@@ -1,0 +1,217 @@
+// The linearised time-triggered hybrid system along a reference (thesis appendix C; DESIGN.md,
+// "Reference spreading", hybrid/reference_spreading.hpp): on each extended segment i
+//     z' = A_i(t) z + B_i(t) v(t),   A_i = df_i/dx, B_i = df_i/du at (x_i(t), u_i(t)),
+// where x_i is segment i continued past its events with its own mode's flow and its own input
+// u_i(t) = law(t, x_i(t), mode_i), and at the nominal event time t_i (the end of segment i)
+//     z_{i+1}(t_i) = G_z^i z_i(t_i) + G_v^i v(t_i)                     (C.39, jump_gain.hpp).
+// A perturbed motion x_eps(t) that has seen k jumps is approximated by x_k(t) + eps z_k(t), at any
+// t of the extended segment k, also between the nominal and the perturbed event times.
+//
+// Inputs are taken as signals: the reference's input along extended segment i is
+// u_i(t) = ExtendedReference::input(i, t), the perturbed input is u_i(t) + v(t). For an open-loop
+// law (u depends on t only) and InputExtension::Evaluate this is exactly the system that the
+// Simulator integrates under law + v; a feedback law's dependence on x is not linearised here
+// (A would need + df/du du/dx).
+//
+// State-transition matrices come from the variational equations Phi' = A Phi integrated with the
+// reference state itself (x' = f, so A is evaluated on the accurate state, not on an interpolant),
+// by an adaptive Dormand-Prince loop on fixed-size Eigen matrices (detail/ode.hpp). A and B come
+// from automatic differentiation of the flow (flow_jacobian, derivatives.hpp).
+//
+// Not thread-safe: one LinearisedSystem owns one derivative workspace.
+#pragma once
+
+#include <saltus/hybrid/reference_spreading.hpp>
+#include <saltus/sensitivity/detail/ode.hpp>
+#include <saltus/sensitivity/jump_gain.hpp>
+
+#include <functional>
+#include <memory>
+#include <vector>
+
+namespace saltus {
+
+struct LinearisationOptions {
+  JumpGainOptions gains;
+  /// Reference spreading: extension lengths (s), input extension and the extensions' tolerances.
+  ExtensionOptions spreading;
+  /// Tolerances of the variational integrations.
+  detail::OdeTolerances variational;
+};
+
+template <Scene S>
+class LinearisedSystem;
+
+/// The first-order prediction z of one perturbation (z(t0), v(t)): z(i, t) on extended segment i.
+template <Scene S>
+class Prediction {
+ public:
+  static constexpr int nx = 2 * S::nq, nu = S::nu;
+  using State = Vec<nx>;
+
+  /// z on extended segment i at t (the deviation from extended segment i).
+  State z(int i, double t) const { return system_->propagate(i, z_begin_[i], *v_, t); }
+  /// z at the nominal segment containing t (after the event at an event time).
+  State at(double t) const { return z(system_->reference().reference().segment_at(t), t); }
+  /// z just after the start and just before the end of nominal segment i.
+  const State& z_begin(int i) const { return z_begin_.at(i); }
+  const State& z_end(int i) const { return z_end_.at(i); }
+
+ private:
+  friend class LinearisedSystem<S>;
+  const LinearisedSystem<S>* system_ = nullptr;
+  std::shared_ptr<const std::function<Vec<nu>(double)>> v_;
+  std::vector<State> z_begin_, z_end_;
+};
+
+template <Scene S>
+class LinearisedSystem {
+ public:
+  static constexpr int nq = S::nq, nx = 2 * S::nq, nu = S::nu, nc = S::nc;
+  using State = Vec<nx>;
+  using Input = Vec<nu>;
+  using InputPerturbation = std::function<Input(double)>;
+  using Reference = ExtendedReference<S>;
+
+  /// Extends the segments of `traj` and computes the gains of all its events. `traj` and `scene`
+  /// must outlive this object. @throws GrazingEvent, SimultaneousActivation (from the gains), InvalidArgument
+  LinearisedSystem(const S& scene, const HybridTrajectory<S>& traj, LinearisationOptions options = {})
+      : scene_(scene),
+        options_(options),
+        reference_(scene, traj, options.spreading),
+        gains_(jump_gains(scene, traj, options.gains)),
+        ws_(std::make_unique<DerivativeWorkspace<S>>()) {}
+
+  const Reference& reference() const { return reference_; }
+  const std::vector<JumpGain<S>>& gains() const { return gains_; }
+  int segment_count() const { return reference_.segment_count(); }
+
+  const Mode<nc>& mode(int i) const { return reference_.reference().segments.at(i).mode; }
+  double t_begin(int i) const { return reference_.reference().segments.at(i).t_begin; }  ///< nominal
+  double t_end(int i) const { return reference_.reference().segments.at(i).t_end; }      ///< nominal
+  /// The state segment i starts from: x+ of the event before it, or the initial state.
+  State begin_state(int i) const {
+    const auto& traj = reference_.reference();
+    return i > 0 ? traj.events.at(i - 1).x_plus : traj.state(0, t_begin(0));
+  }
+
+  /// A = df/dx and B = df/du of segment i's mode at (t, x) with the segment's input u_i(t).
+  void jacobians(int i, double t, const State& x, Mat<nx, nx>& A, Mat<nx, nu>& B) const {
+    const Input u = reference_.input(i, t);
+    State f;
+    flow_jacobian(scene_, mode(i), x, u, *ws_, f, A, B);
+  }
+  /// A, B on the extended reference of segment i at t.
+  void jacobians(int i, double t, Mat<nx, nx>& A, Mat<nx, nu>& B) const { jacobians(i, t, reference_.state(i, t), A, B); }
+
+  /// Phi_i(t1, t0) on extended segment i (t0, t1 in its extended interval, either order).
+  Mat<nx, nx> transition_matrix(int i, double t1, double t0) const {
+    // [x, Phi] stacked column-wise in one vector (odeint's vector-space algebra wants vectors).
+    using Aug = Eigen::Matrix<double, nx * (nx + 1), 1>;
+    using AugMap = Eigen::Map<Eigen::Matrix<double, nx, nx + 1>>;
+    using ConstAugMap = Eigen::Map<const Eigen::Matrix<double, nx, nx + 1>>;
+    const State x0 = start_state(i, t0);
+    Aug y;
+    AugMap Y(y.data());
+    Y.col(0) = x0;
+    Y.template rightCols<nx>().setIdentity();
+    Mat<nx, nx> A;
+    Mat<nx, nu> B;
+    State f;
+    auto rhs = [&](double t, const Aug& a, Aug& dadt) {
+      const ConstAugMap Av(a.data());
+      AugMap D(dadt.data());
+      const State x = Av.col(0);
+      const Input u = reference_.input(i, t);
+      flow_jacobian(scene_, mode(i), x, u, *ws_, f, A, B);
+      D.col(0) = f;
+      D.template rightCols<nx>().noalias() = A * Av.template rightCols<nx>();
+    };
+    detail::integrate_adaptive(rhs, y, t0, t1, options_.variational);
+    return Y.template rightCols<nx>();
+  }
+
+  /// The state-transition matrix of the time-triggered hybrid system from t0 to t1 >= t0 along
+  /// the nominal segments, with the jump gains G_z at the nominal event times in between.
+  Mat<nx, nx> state_transition(double t1, double t0) const {
+    const auto& traj = reference_.reference();
+    SALTUS_DEMAND(t1 >= t0, InvalidArgument, "state_transition: t1 = ", t1, " < t0 = ", t0);
+    int i = traj.segment_at(t0);
+    const int last = traj.segment_at(t1);
+    Mat<nx, nx> Phi = Mat<nx, nx>::Identity();
+    double t = t0;
+    for (; i < last; ++i) {
+      Phi = (gains_[i].G_z * transition_matrix(i, t_end(i), t) * Phi).eval();
+      t = t_end(i);
+    }
+    return transition_matrix(last, t1, t) * Phi;
+  }
+
+  /// The first-order prediction of the motion from x(t0) + eps z0 under u + eps v(t), t0 the
+  /// reference's start.
+  Prediction<S> predict(const State& z0, InputPerturbation v) const {
+    SALTUS_DEMAND(static_cast<bool>(v), InvalidArgument, "predict: the input perturbation is empty");
+    Prediction<S> p;
+    p.system_ = this;
+    p.v_ = std::make_shared<const InputPerturbation>(std::move(v));
+    const int n = segment_count();
+    p.z_begin_.resize(n);
+    p.z_end_.resize(n);
+    State z = z0;
+    for (int i = 0; i < n; ++i) {
+      p.z_begin_[i] = z;
+      z = propagate(i, z, *p.v_, t_end(i));
+      p.z_end_[i] = z;
+      if (i + 1 < n) {
+        const double te = t_end(i);
+        z = gains_[i].G_z * z;
+        if constexpr (nu > 0) z += gains_[i].G_v * (*p.v_)(te);
+      }
+    }
+    return p;
+  }
+
+  /// z(t) on extended segment i from z(t_begin(i)) = z_begin under v.
+  State propagate(int i, const State& z_begin, const InputPerturbation& v, double t) const {
+    using Aug = Eigen::Matrix<double, 2 * nx, 1>;  // [x; z]
+    const double t0 = t_begin(i);
+    Aug y;
+    y.template head<nx>() = begin_state(i);
+    y.template tail<nx>() = z_begin;
+    Mat<nx, nx> A;
+    Mat<nx, nu> B;
+    State f;
+    auto rhs = [&](double s, const Aug& a, Aug& dadt) {
+      const State x = a.template head<nx>();
+      const Input u = reference_.input(i, s);
+      flow_jacobian(scene_, mode(i), x, u, *ws_, f, A, B);
+      dadt.template head<nx>() = f;
+      dadt.template tail<nx>().noalias() = A * a.template tail<nx>();
+      if constexpr (nu > 0) dadt.template tail<nx>().noalias() += B * v(s);
+    };
+    detail::integrate_adaptive(rhs, y, t0, t, options_.variational);
+    return y.template tail<nx>();
+  }
+
+ private:
+  // x on extended segment i at t0, integrated from the segment's start with the variational tolerances.
+  State start_state(int i, double t0) const {
+    State x = begin_state(i);
+    auto rhs = [&](double t, const State& y, State& dydt) {
+      const Input u = reference_.input(i, t);
+      evaluate_flow(scene_, mode(i), y, u, flow_);
+      dydt = flow_.xdot;
+    };
+    detail::integrate_adaptive(rhs, x, t_begin(i), t0, options_.variational);
+    return x;
+  }
+
+  const S& scene_;
+  LinearisationOptions options_;
+  Reference reference_;
+  std::vector<JumpGain<S>> gains_;
+  std::unique_ptr<DerivativeWorkspace<S>> ws_;
+  mutable FlowWorkspace<S> flow_;
+};
+
+}  // namespace saltus

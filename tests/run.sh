@@ -1,0 +1,13 @@
+#!/usr/bin/env bash
+# The test command: installs the Debian packages Saltus needs (if missing), configures, builds
+# and runs every GoogleTest suite with ctest. Usage: bash tests/run.sh [build-dir] [extra cmake args...]
+#   SALTUS_JOBS=N      parallel build and test jobs (default: nproc)
+set -euo pipefail
+here=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+build=${1:-"$here/build"}
+shift || true
+bash "$here/.ci/install-deps.sh"
+jobs=${SALTUS_JOBS:-$(nproc)}
+cmake -S "$here" -B "$build" -DCMAKE_BUILD_TYPE=Release "$@"
+cmake --build "$build" -j "$jobs"
+ctest --test-dir "$build" --output-on-failure -j "$jobs"

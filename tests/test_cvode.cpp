@@ -1,0 +1,296 @@
+// The CVODE backend (BDF and Adams) on the analytic cases of test_simulation.cpp, its projection
+// onto the closed contacts, and its failures: every CVODE error becomes an exception naming the
+// flag, every exception thrown inside a callback reaches the caller.
+#include "support.hpp"
+
+#include "scenes/instances.hpp"
+
+#include <saltus/hybrid/integrator_cvode.hpp>
+
+namespace saltus::testing {
+namespace {
+
+constexpr double g = 9.81;
+
+class Cvode : public ::testing::TestWithParam<IntegratorKind> {
+ protected:
+  SimulationOptions tight() const {
+    SimulationOptions o;
+    o.integrator.kind = GetParam();
+    o.integrator.relative_tolerance = 1e-12;
+    o.integrator.absolute_tolerance = 1e-13;
+    return o;
+  }
+};
+
+TEST_P(Cvode, InelasticBallFallsAndRests) {
+  scenes::BouncingBallParameters p;
+  p.restitution = 0.0;
+  scenes::BouncingBall ball(p);
+  Simulator<scenes::BouncingBall> sim(ball, tight());
+  const auto traj = sim.run(Vec<2>(1.0, 0.0), 0.0, 2.0, zero_input<scenes::BouncingBall>());
+  ASSERT_EQ(traj.events.size(), 1u);
+  EXPECT_NEAR(traj.events[0].t, std::sqrt(2.0 / g), 1e-12);
+  EXPECT_NEAR(traj.events[0].x_minus[1], -std::sqrt(2.0 * g), 1e-10);
+  EXPECT_TRUE(traj.events[0].mode_after[0].closed());
+  EXPECT_TRUE(matrices_near(traj.final_state(), Vec<2>(0.0, 0.0), 0.0, 1e-9));
+  // The dense output is CVODE's interpolant: the free fall before the impact.
+  for (double t : {0.1, 0.25, 0.4})
+    EXPECT_TRUE(matrices_near(traj.state(0, t), Vec<2>(1 - 0.5 * g * t * t, -g * t), 0.0, 1e-10)) << "t = " << t;
+}
+
+TEST_P(Cvode, ElasticBallBouncesUntilItsZenoTime) {
+  scenes::BouncingBall ball;  // e_n = 0.5
+  const double e = ball.parameters().restitution, h0 = 1.0;
+  Simulator<scenes::BouncingBall> sim(ball, tight());
+  const auto traj = sim.run(Vec<2>(h0, 0.0), 0.0, 10.0, zero_input<scenes::BouncingBall>());
+  ASSERT_EQ(traj.status, SimulationStatus::Zeno);
+  const double t1 = std::sqrt(2 * h0 / g), v1 = std::sqrt(2 * g * h0);
+  double t = t1, v = v1, time_tolerance = 0.0;
+  // A height error dz shifts a touchdown at speed v by dz / v: the late, slow bounces amplify the
+  // integrator's position error (about 1e-12 at these tolerances; BDF, restarting at order 1 after
+  // every bounce, accumulates the most), so the time tolerance grows with 1 / v.
+  for (std::size_t k = 0; k < traj.events.size(); ++k) {
+    time_tolerance = 1e-11 * (k + 1) + 2e-12 / v;
+    EXPECT_NEAR(traj.events[k].t, t, time_tolerance) << "bounce " << k;
+    EXPECT_NEAR(traj.events[k].x_plus[1], e * v, 1e-9 + e * g * time_tolerance) << "bounce " << k;
+    v *= e;
+    t += 2 * v / g;
+  }
+  EXPECT_NEAR(traj.zeno_time, t1 + 2 * v1 * e / (g * (1 - e)), 1e-9 + 3 * time_tolerance);
+}
+
+Vec<4> example3_closed_form(double t) {
+  const double q1 = 3.5 * t * t, v1 = 7 * t;
+  if (t < 1.5) return Vec<4>(q1, 0.0, v1, 0.0);
+  const double s = t - 1.5;
+  return Vec<4>(q1, g * s * s * s / 3, v1, g * s * s);
+}
+
+TEST_P(Cvode, PointMassOfExampleThreeImpactsSlidesAndLiftsOff) {
+  scenes::PointMass mass;
+  auto input = open_loop<scenes::PointMass>([](double t) { return Vec<2>(7.0, t < 1.0 ? 0.0 : 2 * g * (t - 1.0)); });
+  SimulationOptions o = tight();
+  o.breakpoints = {1.0};
+  Simulator<scenes::PointMass> sim(mass, o);
+  const auto traj = sim.run(Vec<4>(0.0, 1.0, 0.0, 0.0), 0.0, 2.0, input);
+  ASSERT_EQ(traj.events.size(), 2u);
+  EXPECT_NEAR(traj.events[0].t, std::sqrt(2.0 / g), 1e-12);
+  EXPECT_TRUE(traj.events[0].impact());
+  EXPECT_EQ(traj.events[1].guards().at(0).kind, GuardKind::Release);
+  EXPECT_NEAR(traj.events[1].t, 1.5, 1e-12);
+  EXPECT_TRUE(matrices_near(traj.final_state(), example3_closed_form(2.0), 0.0, 1e-9));
+  for (double t : {0.1, 0.3, 0.45})  // free fall before the impact
+    EXPECT_TRUE(matrices_near(traj.state_at(t), Vec<4>(3.5 * t * t, 1 - 0.5 * g * t * t, 7 * t, -g * t), 0.0, 1e-9))
+        << "t = " << t;
+  for (double t : {0.9, 1.2, 1.7})
+    EXPECT_TRUE(matrices_near(traj.state_at(t), example3_closed_form(t), 0.0, 1e-8)) << "t = " << t;
+}
+
+TEST_P(Cvode, BoxSlidesToAStopAtTheAnalyticTime) {
+  scenes::SpatialBox box;
+  const double mu = box.parameters().mu, v0 = 1.2;
+  Vec<12> x0 = Vec<12>::Zero();
+  x0[2] = 0.5 * box.parameters().size[2];
+  x0[6] = v0;
+  Simulator<scenes::SpatialBox> sim(box, tight());
+  const auto traj = sim.run(x0, 0.0, 0.5, zero_input<scenes::SpatialBox>());
+  ASSERT_GE(traj.events.size(), 1u);
+  const auto& stop = traj.events.front();
+  EXPECT_NEAR(stop.t, v0 / (mu * g), 1e-10);
+  for (int i = 0; i < 4; ++i) EXPECT_EQ(stop.mode_after[i].mode, ContactMode::Stick) << "corner " << i;
+  EXPECT_NEAR(traj.final_state()[0], v0 * v0 / (2 * mu * g), 1e-9);
+  EXPECT_NEAR(traj.final_state().tail<6>().norm(), 0.0, 1e-9);
+}
+
+TEST_P(Cvode, PlankBoxLandsFlatOnBothCornersAtOnce) {
+  scenes::PlankBox plank_box;
+  const auto& p = plank_box.parameters();
+  Vec<8> x0 = Vec<8>::Zero();
+  x0[0] = 0.6;
+  x0[1] = 0.5 * p.box_height + 0.5 * p.plank_thickness + 0.05;
+  auto input = open_loop<scenes::PlankBox>([&](double) { return Vec<3>(0.0, p.box_mass * g - 2.0, 0.0); });
+  Simulator<scenes::PlankBox> sim(plank_box, tight());
+  const auto traj = sim.run(x0, 0.0, 0.5, input);
+  ASSERT_GE(traj.events.size(), 1u);
+  const auto& landing = traj.events.front();
+  EXPECT_NEAR(landing.t, std::sqrt(2 * 0.05 / 2.0), 1e-11);
+  EXPECT_EQ(landing.guards().size(), 2u) << "a simultaneous touchdown of C_L and C_R";
+  EXPECT_TRUE(landing.impact());
+  EXPECT_EQ(landing.mode_after[0].mode, ContactMode::Stick);
+  EXPECT_EQ(landing.mode_after[1].mode, ContactMode::Stick);
+}
+
+TEST_P(Cvode, SpatialBoxLandsOnFourCornersAndSlidesToRest) {
+  scenes::SpatialBox box;
+  const double mu = box.parameters().mu, h = 0.1, vx = 2.0;
+  Vec<12> x0 = Vec<12>::Zero();
+  x0[2] = 0.5 * box.parameters().size[2] + h;
+  x0[6] = vx;
+  Simulator<scenes::SpatialBox> sim(box, tight());
+  const auto traj = sim.run(x0, 0.0, 1.0, zero_input<scenes::SpatialBox>());
+  ASSERT_GE(traj.events.size(), 2u);
+  const auto& landing = traj.events[0];
+  const double vn = std::sqrt(2 * g * h);
+  EXPECT_NEAR(landing.t, std::sqrt(2 * h / g), 1e-11);
+  EXPECT_EQ(landing.guards().size(), 4u);
+  EXPECT_NEAR(landing.x_plus[6], vx - mu * vn, 1e-9);
+  const double t_stop = landing.t + (vx - mu * vn) / (mu * g);
+  EXPECT_NEAR(traj.events[1].t, t_stop, 1e-9);
+}
+
+// Both CVODE variants agree with Dormand-Prince on a case without a closed form (the plank-box
+// after landing: spring, damper and two sticking corners), up to t = 0.5: the landing and the
+// sticking phase (both corners start slipping at t = 0.564).
+TEST_P(Cvode, AgreesWithDormandPrinceOnThePlankBox) {
+  scenes::PlankBox plank_box;
+  const auto& p = plank_box.parameters();
+  Vec<8> x0 = Vec<8>::Zero();
+  x0[0] = 0.6;
+  x0[1] = 0.5 * p.box_height + 0.5 * p.plank_thickness + 0.05;
+  auto input = open_loop<scenes::PlankBox>([&](double) { return Vec<3>(0.0, p.box_mass * g - 2.0, 0.0); });
+  SimulationOptions dopri_options = tight();
+  dopri_options.integrator.kind = IntegratorKind::DormandPrince;
+  Simulator<scenes::PlankBox> dopri(plank_box, dopri_options), cvode(plank_box, tight());
+  const auto a = dopri.run(x0, 0.0, 0.5, input), b = cvode.run(x0, 0.0, 0.5, input);
+  ASSERT_EQ(a.events.size(), b.events.size());
+  for (std::size_t k = 0; k < a.events.size(); ++k) EXPECT_NEAR(a.events[k].t, b.events[k].t, 1e-9) << "event " << k;
+  EXPECT_TRUE(matrices_near(b.final_state(), a.final_state(), 0.0, 1e-8));
+}
+
+INSTANTIATE_TEST_SUITE_P(Backends, Cvode, ::testing::Values(IntegratorKind::CvodeBdf, IntegratorKind::CvodeAdams),
+                         [](const auto& info) { return std::string(info.param == IntegratorKind::CvodeBdf ? "Bdf" : "Adams"); });
+
+// ---- projection ----------------------------------------------------------------------------
+
+// The largest |gap|, |normal velocity| and (sticking) |tangential velocity| over the closed
+// contacts of `mode` at x.
+template <Scene S>
+double constraint_violation(const S& scene, const Mode<S::nc>& mode, const VecT<double, 2 * S::nq>& x) {
+  Kinematics<S> kin;
+  evaluate_kinematics(scene, VecT<double, S::nq>(x.template head<S::nq>()), VecT<double, S::nq>(x.template tail<S::nq>()),
+                      kin);
+  double worst = 0.0;
+  for (int i = 0; i < S::nc; ++i) {
+    if (!mode[i].closed()) continue;
+    const auto& c = kin.contacts[i];
+    worst = std::max({worst, std::abs(c.gap), std::abs(c.zeta_n)});
+    if (mode[i].mode == ContactMode::Stick)
+      for (int k = 0; k < c.tangents; ++k) worst = std::max(worst, std::abs(c.zeta_t[k]));
+  }
+  return worst;
+}
+
+// The plank-box after landing: the box sticks on a plank that swings on its spring, so the
+// contact constraints are curved (the gaps depend on the plank and box angles) and an
+// integrator at a loose tolerance drifts off them. With projection (BDF: after every step) the
+// gap and the constrained velocities stay zero to round-off at every step end and at the end.
+TEST(CvodeProjection, KeepsTheClosedContactsOfTheSwingingPlankOnTheirConstraints) {
+  scenes::PlankBox plank_box;
+  const auto& p = plank_box.parameters();
+  Vec<8> x0 = Vec<8>::Zero();
+  x0[0] = 0.6;
+  x0[1] = 0.5 * p.box_height + 0.5 * p.plank_thickness + 0.05;
+  auto input = open_loop<scenes::PlankBox>([&](double) { return Vec<3>(0.0, p.box_mass * g - 2.0, 0.0); });
+  auto worst_violation = [&](bool project) {
+    SimulationOptions o;
+    o.integrator.kind = IntegratorKind::CvodeBdf;
+    o.integrator.relative_tolerance = 1e-5;
+    o.integrator.absolute_tolerance = 1e-7;
+    o.integrator.project_constraints = project;
+    Simulator<scenes::PlankBox> sim(plank_box, o);
+    const auto traj = sim.run(x0, 0.0, 0.5, input);
+    EXPECT_GE(traj.events.size(), 1u);
+    const auto& last = traj.segments.back();
+    EXPECT_TRUE(last.mode[0].closed() && last.mode[1].closed()) << describe(plank_box, last.mode);
+    double worst = constraint_violation(plank_box, last.mode, traj.final_state());
+    for (const auto& piece : last.x.pieces())
+      worst = std::max(worst, constraint_violation(plank_box, last.mode, piece.value(piece.t1)));
+    return worst;
+  };
+  EXPECT_LE(worst_violation(true), 1e-12);
+  // Without projection the same run drifts: the check above can fail.
+  EXPECT_GT(worst_violation(false), 1e-10);
+}
+
+// A sliding point mass (Example 3's sliding phase): the gap stays 0 to 1e-12 with both variants
+// (Adams projects the state handed back at the end of the segment).
+TEST(CvodeProjection, KeepsTheSlidingPointMassOnTheTable) {
+  scenes::PointMass mass;
+  for (IntegratorKind kind : {IntegratorKind::CvodeBdf, IntegratorKind::CvodeAdams}) {
+    SimulationOptions o;
+    o.integrator.kind = kind;
+    o.integrator.relative_tolerance = 1e-4;
+    o.integrator.absolute_tolerance = 1e-6;
+    Simulator<scenes::PointMass> sim(mass, o);
+    auto input = open_loop<scenes::PointMass>([](double t) { return Vec<2>(7.0 * std::cos(3 * t), 0.0); });
+    const auto traj = sim.run(Vec<4>(0.0, 0.0, 0.3, 0.0), 0.0, 1.0, input);
+    ASSERT_TRUE(traj.segments.back().mode[0].closed()) << to_string(kind);
+    EXPECT_LE(std::abs(traj.final_state()[1]), 1e-12) << to_string(kind);
+    EXPECT_LE(std::abs(traj.final_state()[3]), 1e-12) << to_string(kind);
+  }
+}
+
+// ---- failures ------------------------------------------------------------------------------
+
+TEST(CvodeFailures, BadOptionsAreRejected) {
+  IntegratorOptions o;
+  o.kind = IntegratorKind::CvodeBdf;
+  o.relative_tolerance = -1e-6;
+  EXPECT_THROW(CvodeIntegrator<scenes::BouncingBall>{o}, InvalidArgument);
+  o.relative_tolerance = 1e-6;
+  o.absolute_tolerance = 0.0;
+  EXPECT_THROW(CvodeIntegrator<scenes::BouncingBall>{o}, InvalidArgument);
+  o.absolute_tolerance = 1e-8;
+  o.kind = IntegratorKind::DormandPrince;
+  EXPECT_THROW(CvodeIntegrator<scenes::BouncingBall>{o}, InvalidArgument);
+  scenes::BouncingBall ball;
+  SimulationOptions so;
+  so.integrator.kind = IntegratorKind::CvodeAdams;
+  so.integrator.absolute_tolerance = -1.0;
+  EXPECT_THROW(Simulator<scenes::BouncingBall>(ball, so), InvalidArgument);
+}
+
+// Tolerances below round-off: CVODE stops with CV_TOO_MUCH_ACC, surfaced with its name.
+TEST(CvodeFailures, ACvodeErrorBecomesANumericalFailureNamingTheFlag) {
+  scenes::BouncingBall ball;
+  SimulationOptions o;
+  o.integrator.kind = IntegratorKind::CvodeBdf;
+  o.integrator.relative_tolerance = 1e-22;
+  o.integrator.absolute_tolerance = 1e-30;
+  Simulator<scenes::BouncingBall> sim(ball, o);
+  try {
+    sim.run(Vec<2>(1.0, 0.0), 0.0, 1.0, zero_input<scenes::BouncingBall>());
+    FAIL() << "expected a NumericalFailure";
+  } catch (const NumericalFailure& e) {
+    EXPECT_NE(std::string(e.what()).find("CV_TOO_MUCH_ACC"), std::string::npos) << e.what();
+  }
+}
+
+TEST(CvodeFailures, AnExceptionInsideTheFlowReachesTheCaller) {
+  scenes::PointMass mass;
+  for (IntegratorKind kind : {IntegratorKind::CvodeBdf, IntegratorKind::CvodeAdams}) {
+    SimulationOptions o;
+    o.integrator.kind = kind;
+    Simulator<scenes::PointMass> sim(mass, o);
+    auto input = open_loop<scenes::PointMass>([](double t) {
+      if (t > 0.2) throw std::domain_error("input law undefined after t = 0.2");
+      return Vec<2>(0.0, 0.0);
+    });
+    EXPECT_THROW(sim.run(Vec<4>(0.0, 1.0, 0.0, 0.0), 0.0, 1.0, input), std::domain_error) << to_string(kind);
+    auto nan_input = open_loop<scenes::PointMass>([](double t) { return Vec<2>(t > 0.1 ? std::nan("") : 0.0, 0.0); });
+    EXPECT_THROW(sim.run(Vec<4>(0.0, 1.0, 0.0, 0.0), 0.0, 1.0, nan_input), NumericalFailure) << to_string(kind);
+  }
+}
+
+TEST(CvodeFailures, TheStepLimitIsEnforced) {
+  scenes::BouncingBall ball;
+  SimulationOptions o;
+  o.integrator.kind = IntegratorKind::CvodeAdams;
+  o.integrator.max_steps = 3;
+  Simulator<scenes::BouncingBall> sim(ball, o);
+  EXPECT_THROW(sim.run(Vec<2>(1.0, 0.0), 0.0, 1.0, zero_input<scenes::BouncingBall>()), NumericalFailure);
+}
+
+}  // namespace
+}  // namespace saltus::testing

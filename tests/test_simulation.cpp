@@ -1,0 +1,167 @@
+// The event-driven simulator against closed forms: the bouncing ball (inelastic, and elastic up
+// to its Zeno accumulation), the point mass of the time-freezing paper's Example 3 (impact,
+// frictionless sliding, lift-off through the state-input release guard), a box sliding to a
+// stop on four redundant corners, the plank-box landing flat (simultaneous impact) and the
+// spatial box landing on four corners.
+#include "support.hpp"
+
+#include "scenes/instances.hpp"
+
+namespace saltus::testing {
+namespace {
+
+constexpr double g = 9.81;
+
+SimulationOptions tight() {
+  SimulationOptions o;
+  o.integrator.relative_tolerance = 1e-12;
+  o.integrator.absolute_tolerance = 1e-13;
+  return o;
+}
+
+TEST(Simulation, InelasticBallFallsAndRests) {
+  scenes::BouncingBallParameters p;
+  p.restitution = 0.0;
+  scenes::BouncingBall ball(p);
+  Simulator<scenes::BouncingBall> sim(ball, tight());
+  const auto traj = sim.run(Vec<2>(1.0, 0.0), 0.0, 2.0, zero_input<scenes::BouncingBall>());
+  ASSERT_EQ(traj.events.size(), 1u);
+  EXPECT_NEAR(traj.events[0].t, std::sqrt(2.0 / g), 1e-12);
+  EXPECT_NEAR(traj.events[0].x_minus[1], -std::sqrt(2.0 * g), 1e-10);
+  EXPECT_EQ(traj.events[0].mode_after[0].mode, ContactMode::Slip);  // closed (frictionless)
+  EXPECT_TRUE(matrices_near(traj.final_state(), Vec<2>(0.0, 0.0), 0.0, 1e-10));
+  EXPECT_EQ(traj.status, SimulationStatus::Completed);
+}
+
+TEST(Simulation, ElasticBallBouncesUntilItsZenoTime) {
+  scenes::BouncingBall ball;  // e_n = 0.5
+  const double e = ball.parameters().restitution, h0 = 1.0;
+  Simulator<scenes::BouncingBall> sim(ball, tight());
+  const auto traj = sim.run(Vec<2>(h0, 0.0), 0.0, 10.0, zero_input<scenes::BouncingBall>());
+  ASSERT_EQ(traj.status, SimulationStatus::Zeno);
+  const double t1 = std::sqrt(2 * h0 / g), v1 = std::sqrt(2 * g * h0);
+  double t = t1, v = v1;
+  for (std::size_t k = 0; k < traj.events.size(); ++k) {
+    EXPECT_NEAR(traj.events[k].t, t, 1e-11 * (k + 1)) << "bounce " << k;
+    EXPECT_NEAR(traj.events[k].x_plus[1], e * v, 1e-9) << "bounce " << k;
+    v *= e;
+    t += 2 * v / g;
+  }
+  const double t_accumulation = t1 + 2 * v1 * e / (g * (1 - e));
+  EXPECT_NEAR(traj.zeno_time, t_accumulation, 1e-9);
+}
+
+TEST(Simulation, ElasticBallComesToRestWithTheRestCriterion) {
+  scenes::BouncingBall ball;
+  SimulationOptions o = tight();
+  o.rest_velocity = 1e-3;
+  Simulator<scenes::BouncingBall> sim(ball, o);
+  const auto traj = sim.run(Vec<2>(1.0, 0.0), 0.0, 3.0, zero_input<scenes::BouncingBall>());
+  EXPECT_EQ(traj.status, SimulationStatus::Completed);
+  EXPECT_TRUE(traj.segments.back().mode[0].closed());
+  EXPECT_TRUE(matrices_near(traj.final_state(), Vec<2>(0.0, 0.0), 0.0, 1e-9));
+  // v_k = e^k v1 < 1e-3 first at k = ceil(log(1e-3 / v1) / log(e)).
+  const int bounces = static_cast<int>(std::ceil(std::log(1e-3 / std::sqrt(2 * g)) / std::log(0.5)));
+  EXPECT_EQ(static_cast<int>(traj.events.size()), bounces + 1);
+}
+
+// Time-freezing paper, Example 3: u = (7, 0) for t < 1, (7, 2 g (t - 1)) after; from height 1 at
+// rest. Impact at sqrt(2/g), frictionless sliding under the horizontal thrust, lift-off when the
+// release guard lambda_n = m g - u2 reaches zero at t = 1.5, free flight with
+// q2 = g (t - 1.5)^3 / 3 after.
+Vec<4> example3_closed_form(double t) {
+  const double q1 = 3.5 * t * t, v1 = 7 * t;
+  if (t < std::sqrt(2.0 / g)) return Vec<4>(q1, 1.0 - 0.5 * g * t * t, v1, -g * t);  // free fall
+  if (t < 1.5) return Vec<4>(q1, 0.0, v1, 0.0);
+  const double s = t - 1.5;
+  return Vec<4>(q1, g * s * s * s / 3, v1, g * s * s);
+}
+
+TEST(Simulation, PointMassOfExampleThreeImpactsSlidesAndLiftsOff) {
+  scenes::PointMass mass;
+  auto input = open_loop<scenes::PointMass>([](double t) { return Vec<2>(7.0, t < 1.0 ? 0.0 : 2 * g * (t - 1.0)); });
+  SimulationOptions o = tight();
+  o.breakpoints = {1.0};
+  Simulator<scenes::PointMass> sim(mass, o);
+  const auto traj = sim.run(Vec<4>(0.0, 1.0, 0.0, 0.0), 0.0, 2.0, input);
+  ASSERT_EQ(traj.events.size(), 2u);
+  EXPECT_NEAR(traj.events[0].t, std::sqrt(2.0 / g), 1e-12);
+  EXPECT_TRUE(traj.events[0].impact());
+  EXPECT_EQ(traj.events[1].guards().at(0).kind, GuardKind::Release);
+  EXPECT_NEAR(traj.events[1].t, 1.5, 1e-12);
+  EXPECT_TRUE(matrices_near(traj.final_state(), example3_closed_form(2.0), 0.0, 1e-9));
+  for (double t : {0.2, 0.9, 1.2, 1.7})
+    EXPECT_TRUE(matrices_near(traj.state_at(t), example3_closed_form(t), 0.0, 1e-8)) << "t = " << t;
+}
+
+// The spatial box flat on the ground, sliding along x: all four bottom corners slip (their normal
+// forces are statically indeterminate; the minimum-norm split is equal), the box decelerates at
+// mu g and stops at v0 / (mu g) after v0^2 / (2 mu g).
+TEST(Simulation, BoxSlidesToAStopAtTheAnalyticTime) {
+  scenes::SpatialBox box;
+  const double mu = box.parameters().mu, v0 = 1.2;
+  Vec<12> x0 = Vec<12>::Zero();
+  x0[2] = 0.5 * box.parameters().size[2];
+  x0[6] = v0;
+  Simulator<scenes::SpatialBox> sim(box, tight());
+  const auto traj = sim.run(x0, 0.0, 0.5, zero_input<scenes::SpatialBox>());
+  ASSERT_GE(traj.events.size(), 1u);
+  const auto& stop = traj.events.front();
+  EXPECT_NEAR(stop.t, v0 / (mu * g), 1e-10);
+  for (int i = 0; i < 4; ++i) EXPECT_EQ(stop.mode_after[i].mode, ContactMode::Stick) << "corner " << i;
+  EXPECT_NEAR(traj.final_state()[0], v0 * v0 / (2 * mu * g), 1e-9);
+  EXPECT_NEAR(traj.final_state().tail<6>().norm(), 0.0, 1e-9);
+}
+
+// The plank-box landing flat: both corners touch at once (one event, two touchdown guards, one
+// impact problem with a singular Delassus matrix), then stick.
+TEST(Simulation, PlankBoxLandsFlatOnBothCornersAtOnce) {
+  scenes::PlankBox plank_box;
+  const auto& p = plank_box.parameters();
+  Vec<8> x0 = Vec<8>::Zero();
+  x0[0] = 0.6;
+  x0[1] = 0.5 * p.box_height + 0.5 * p.plank_thickness + 0.05;
+  // The actuated box holds its weight and pushes down: u = (0, m g - 2, 0).
+  auto input = open_loop<scenes::PlankBox>([&](double) { return Vec<3>(0.0, p.box_mass * g - 2.0, 0.0); });
+  Simulator<scenes::PlankBox> sim(plank_box, tight());
+  const auto traj = sim.run(x0, 0.0, 0.6, input);
+  ASSERT_GE(traj.events.size(), 1u);
+  const auto& landing = traj.events.front();
+  EXPECT_NEAR(landing.t, std::sqrt(2 * 0.05 / 2.0), 1e-11);  // a = 2 N / 1 kg
+  EXPECT_EQ(landing.guards().size(), 2u) << "a simultaneous touchdown of C_L and C_R";
+  EXPECT_TRUE(landing.impact());
+  EXPECT_EQ(landing.mode_after[0].mode, ContactMode::Stick);
+  EXPECT_EQ(landing.mode_after[1].mode, ContactMode::Stick);
+}
+
+// The spatial box dropped flat with a horizontal velocity: four corners hit at once, the impact
+// takes mu times the normal impulse off the sliding speed, the box slides and stops.
+TEST(Simulation, SpatialBoxLandsOnFourCornersAndSlidesToRest) {
+  scenes::SpatialBox box;
+  const double mu = box.parameters().mu, h = 0.1, vx = 2.0;
+  Vec<12> x0 = Vec<12>::Zero();
+  x0[2] = 0.5 * box.parameters().size[2] + h;
+  x0[6] = vx;
+  Simulator<scenes::SpatialBox> sim(box, tight());
+  const auto traj = sim.run(x0, 0.0, 1.0, zero_input<scenes::SpatialBox>());
+  ASSERT_GE(traj.events.size(), 2u);
+  const auto& landing = traj.events[0];
+  const double vn = std::sqrt(2 * g * h);
+  EXPECT_NEAR(landing.t, std::sqrt(2 * h / g), 1e-11);
+  EXPECT_EQ(landing.guards().size(), 4u);
+  EXPECT_NEAR(landing.x_plus[6], vx - mu * vn, 1e-9);
+  EXPECT_NEAR(landing.x_plus[8], 0.0, 1e-12);
+  const double t_stop = landing.t + (vx - mu * vn) / (mu * g);
+  EXPECT_NEAR(traj.events[1].t, t_stop, 1e-9);
+}
+
+TEST(Simulation, BadInputIsRejected) {
+  scenes::BouncingBall ball;
+  Simulator<scenes::BouncingBall> sim(ball);
+  EXPECT_THROW(sim.run(Vec<2>(-0.1, 0.0), 0.0, 1.0, zero_input<scenes::BouncingBall>()), InvalidArgument);
+  EXPECT_THROW(sim.run(Vec<2>(std::nan(""), 0.0), 0.0, 1.0, zero_input<scenes::BouncingBall>()), InvalidArgument);
+  EXPECT_THROW(sim.run(Vec<2>(1.0, 0.0), 1.0, 0.5, zero_input<scenes::BouncingBall>()), InvalidArgument);
+}
+
+}  // namespace
+}  // namespace saltus::testing
