@@ -2,8 +2,9 @@
 # Installs the Debian packages Saltus builds against, only those missing (no-op when all are
 # present). Used by tests/run.sh, examples/demo.sh and .ci/run.
 set -euo pipefail
-packages=(build-essential cmake pkg-config libeigen3-dev libboost-dev coinor-libipopt-dev
-          libsundials-dev libgtest-dev libgmock-dev libbenchmark-dev nlohmann-json3-dev python3-matplotlib)
+# Only what the build uses today (Ipopt arrives with timefreezing/).
+packages=(build-essential cmake pkg-config libeigen3-dev libboost-dev libsundials-dev libgtest-dev
+          libgmock-dev libbenchmark-dev)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
