@@ -7,6 +7,7 @@
 #include "support.hpp"
 
 #include <algorithm>
+#include <cstdio>
 
 namespace saltus::testing {
 namespace {
@@ -81,6 +82,59 @@ TEST(Prediction, HopperPerturbedInitialState) {
   const auto fit = references::remainder_fit(ref, lin, references::hopper_perturbation(),
                                              [](double) { return Vec<2>::Zero().eval(); }, {0.2, 0.3, 0.37});
   EXPECT_TRUE(slope_at_least(fit, 1.9));
+}
+
+// The input-rate term of gamma_dot (thesis C.37: the guard's total derivative includes
+// Dgamma_u u') is needed, and this test can tell: the hopper of references::hopper(), but with a
+// knee torque that changes with the mode (+3 N m while the foot is in the air after the first
+// touchdown at t = 0.2618 s, lift-off at 0.2671 s; before it the torque is unchanged so the foot still lands), so the flows
+// before and after the lift-off differ (f+ != f-) and the lift-off's time shift enters the gain.
+// The lift-off guard lambda_n(x, u) depends on the ramping knee torque (u' = (0, -10) N m/s).
+// Left out, the time shift is wrong at first order: the remainder is O(eps), slope about 1.
+references::Reference<scenes::Hopper> hopper_with_flight_torque() {
+  references::Reference<scenes::Hopper> r{"hopper, flight torque", scenes::Hopper{}, references::tight(), {}};
+  Vec<4> q(0.0, 0.0, 0.4, -0.8);
+  q[1] = -r.scene.foot(q)[1] + 0.05;
+  Vec<8> x0 = Vec<8>::Zero();
+  x0.head<4>() = q;
+  x0[4] = 2.0;
+  InputLaw<scenes::Hopper> input = [](double t, const Vec<8>&, const Mode<1>& mode) {
+    return Vec<2>(0.0, -10.0 * t + (!mode[0].closed() && t > 0.264 ? 3.0 : 0.0));
+  };
+  Simulator<scenes::Hopper> sim(r.scene, r.options);
+  r.trajectory = sim.run(x0, 0.0, 0.30, input);
+  return r;
+}
+
+TEST(Prediction, InputRateTermOfTheLiftOffGuardIsNeeded) {
+  const auto ref = hopper_with_flight_torque();
+  std::ostringstream events;
+  ASSERT_GE(ref.trajectory.events.size(), 2u) << events.str();
+  for (const auto& ev : ref.trajectory.events)
+    events << " t=" << ev.t << " " << to_string(ev.guards().at(0).kind) << " -> " << to_string(ev.mode_after[0].mode);
+  ASSERT_EQ(ref.trajectory.events[1].guards().at(0).kind, GuardKind::Release) << "a lift-off;" << events.str();
+  const double t_sample = ref.trajectory.events[1].t + 0.015;
+  ASSERT_TRUE(ref.trajectory.events.size() == 2u || ref.trajectory.events[2].t > t_sample);
+  const auto no_input = [](double) { return Vec<2>::Zero().eval(); };
+  // Above the integration floor (about 1e-11 here): the perturbation is already 1e-3 in size.
+  const std::vector<double> eps = {1e-1, 3e-2, 1e-2, 3e-3, 1e-3};
+
+  LinearisationOptions with = tight_linearisation();
+  const LinearisedSystem<scenes::Hopper> lin(ref.scene, ref.trajectory, with);
+  const auto good = references::remainder_fit(ref, lin, references::hopper_perturbation(), no_input, {t_sample}, eps);
+  EXPECT_TRUE(slope_at_least(good, 1.9));
+
+  LinearisationOptions without = tight_linearisation();
+  without.gains.include_input_rate = false;
+  const LinearisedSystem<scenes::Hopper> lin_without(ref.scene, ref.trajectory, without);
+  const auto bad = references::remainder_fit(ref, lin_without, references::hopper_perturbation(), no_input, {t_sample}, eps);
+  ASSERT_TRUE(bad.structure_matched);
+  EXPECT_GT(bad.slope, 0.8) << slope_at_least(bad, 0.0).message();
+  EXPECT_LT(bad.slope, 1.3) << slope_at_least(bad, 0.0).message();
+  std::printf("with the input-rate term: %s\nwithout it: %s\n", slope_at_least(good, 0.0).message(),
+              slope_at_least(bad, 0.0).message());
+  // At the smallest eps the first-order error dominates the second-order remainder by far.
+  EXPECT_GT(bad.remainder.back(), 100.0 * good.remainder.back()) << slope_at_least(bad, 0.0).message();
 }
 
 TEST(Prediction, PlankBoxPerturbedStateAndInput) {
