@@ -6,7 +6,7 @@ set -euo pipefail
 here=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 build=${1:-"$here/build"}
 shift || true
-bash "$here/.ci/install-deps.sh"
+bash "$here/.ci/install-deps.sh"  # apt-get update + apt-get install of the missing packages
 jobs=${SALTUS_JOBS:-$(nproc)}
 # Benchmarks are built and run by the main job (examples/demo.sh), not here: they add minutes of
 # compile time to every CI run and test nothing the suites do not.
