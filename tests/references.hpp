@@ -1,7 +1,7 @@
 // Reference trajectories shared by the sensitivity tests and the jump-gain benchmark: every event
 // kind (impact into slip, impact into stick, release, stick->slip, slip->stick) on the point
-// mass, the hopper and the plank-box, all under open-loop inputs (the linearisation treats the
-// input as a signal, see sensitivity/linearisation.hpp).
+// mass, the hopper and the plank-box, under open-loop inputs and, for the hopper's push-off, a
+// PD feedback law (closed-loop gains and linearisation, sensitivity/linearisation.hpp).
 #pragma once
 
 #include "sensitivity_instances.hpp"
@@ -105,6 +105,28 @@ inline Reference<scenes::Hopper> hopper() {
 /// Small: the 5 ms stance makes the hopper's second-order terms large (|remainder| / eps^2 ~ 1e6),
 /// so at eps = 1e-2 a perturbation of size 1 would change the event structure.
 inline Vec<8> hopper_perturbation() { return 1e-3 * (Vec<8>() << 0.1, 0.2, -0.3, 0.2, 0.5, -0.4, 1.0, -0.5).finished(); }
+
+/// The hopper under a joint-space PD controller (a feedback law, u depends on x): dropped from
+/// 5 cm crouched (hip 0.4, knee -0.8 rad; kp 40 N m/rad, kd 2 N m s/rad) at 0.3 m/s forwards, it
+/// lands into stick; around t = 0.3 s the targets and gains blend smoothly (tanh, 10 ms) to a
+/// stiff push towards a stretched leg (hip 0.15, knee -0.3; kp 150, kd 3): the foot starts to
+/// slip (stick->slip), then lifts off (release). Both state-input guards see the feedback.
+inline Reference<scenes::Hopper> hopper_push_off() {
+  Reference<scenes::Hopper> r{"hopper push-off (PD feedback)", scenes::Hopper{}, tight(), {}};
+  Vec<8> x0;
+  x0 << 0.0, 0.0, 0.4, -0.8, 0.3, 0.0, 0.0, 0.0;
+  x0[1] = 0.05 - r.scene.foot(Vec<4>(x0.head<4>()))[1];
+  const InputLaw<scenes::Hopper> controller = [](double t, const Vec<8>& x, const Mode<1>&) {
+    const double s = 0.5 * (1.0 + std::tanh((t - 0.3) / 0.01));  // 0: crouch, 1: push
+    const auto blend = [s](double a, double b) { return a + s * (b - a); };
+    const double hip = blend(0.4, 0.15), knee = blend(-0.8, -0.3), kp = blend(40.0, 150.0), kd = blend(2.0, 3.0);
+    return Vec<2>(kp * (hip - x[2]) - kd * x[6], kp * (knee - x[3]) - kd * x[7]);
+  };
+  Simulator<scenes::Hopper> sim(r.scene, r.options);
+  r.trajectory = sim.run(x0, 0.0, 0.45, controller);
+  return r;
+}
+inline Vec<8> hopper_push_off_perturbation() { return 1e-3 * (Vec<8>() << 0.2, 0.1, -0.3, 0.2, 0.5, -0.4, 1.0, -0.5).finished(); }
 
 /// The plank-box: the box tilted by -0.15 rad, 3 cm above the plank, lifted by the vertical force
 /// 5 t^2 N (less than its weight until t = 1.4 s): its right corner lands and slips, then its left

@@ -141,5 +141,43 @@ TEST(SlipOnset, HopperPushOffSlipsThenLiftsOffWithoutCycling) {
   EXPECT_GT(kin.contacts[0].zeta_t[0] * traj.events[1].mode_after[0].slip_direction[0], 0.0);
 }
 
+// A release whose contact has drifted below the gap tolerance during the stance (integration
+// error; dopri5 does not project) must open the contact and not close it again at the same
+// instant: the point mass slides with friction at gap -2e-9 (tolerance 1e-9) under a rising
+// thrust u2 = 2 g t, so lambda_n = m g - u2 reaches zero at t = 0.5; afterwards it rises with
+// y'' = 2 g (t - 0.5): y(1) = -2e-9 + g / 24, and it keeps sliding: x'' = 0 in flight.
+// Before the release guard was exempted, the chain cycled open <-> slip and threw.
+TEST(Release, ContactBelowTheGapToleranceOpensWithoutCycling) {
+  scenes::PointMassParameters p;
+  p.friction = Friction::Planar;
+  p.mu = 0.3;
+  const scenes::PointMass mass(p);
+  constexpr double g = 9.81;
+  SimulationOptions o;
+  o.integrator.relative_tolerance = 1e-12;
+  o.integrator.absolute_tolerance = 1e-13;
+  o.breakpoints = {0.5};
+  Simulator<scenes::PointMass> sim(mass, o);
+  Mode<1> slip;
+  slip[0] = ContactState::slip_planar(+1);  // sliding to the right (the slip direction)
+  const Vec<4> x0(0.0, -2e-9, 1.0, 0.0);
+  const auto law = open_loop<scenes::PointMass>([](double t) { return Vec<2>(0.0, 2 * g * t); });
+  const auto traj = sim.run(x0, slip, 0.0, 1.0, law);
+  ASSERT_EQ(traj.events.size(), 1u);
+  const auto& ev = traj.events[0];
+  EXPECT_EQ(ev.guards().at(0).kind, GuardKind::Release);
+  EXPECT_EQ(ev.transitions.size(), 1u) << "the released contact was closed again";
+  EXPECT_NEAR(ev.t, 0.5, 1e-9);
+  EXPECT_FALSE(traj.segments.back().mode[0].closed());
+  // Friction mu m g (1 - 2t) decelerates the slide until the release: v(0.5) = 1 - mu g / 4.
+  const double vx = 1.0 - p.mu * g * 0.25;
+  const double x_release = 0.5 - p.mu * g * (0.125 - 1.0 / 24.0);
+  const Vec<4> x1 = traj.final_state();
+  EXPECT_NEAR(x1[1], -2e-9 + g / 24.0, 1e-9);
+  EXPECT_NEAR(x1[3], g / 4.0, 1e-9);
+  EXPECT_NEAR(x1[2], vx, 1e-9);
+  EXPECT_NEAR(x1[0], x_release + 0.5 * vx, 1e-9);
+}
+
 }  // namespace
 }  // namespace saltus::testing

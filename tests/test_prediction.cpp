@@ -137,6 +137,36 @@ TEST(Prediction, InputRateTermOfTheLiftOffGuardIsNeeded) {
   EXPECT_GT(bad.remainder.back(), 100.0 * good.remainder.back()) << slope_at_least(bad, 0.0).message();
 }
 
+// The hopper's push-off under PD feedback (touchdown into stick, stick->slip, lift-off; see
+// references::hopper_push_off): in closed loop (the default) the remainder shrinks like eps^2 at
+// samples in stance, in the slip phase and in flight. With FeedbackTreatment::Signal the
+// linearisation drives the perturbed motion with the reference's input signal instead of the
+// law, which is wrong at first order: the slope drops to about 1, and the test can tell.
+TEST(Prediction, HopperPushOffUnderFeedbackInClosedLoop) {
+  const auto ref = references::hopper_push_off();
+  ASSERT_EQ(ref.trajectory.events.size(), 3u);
+  const auto& ev = ref.trajectory.events;
+  const std::vector<double> samples = {0.5 * (ev[0].t + ev[1].t), 0.5 * (ev[1].t + ev[2].t), ev[2].t + 0.02};
+  const auto v = [](double t) { return Vec<2>(0.3 * std::sin(10 * t), -0.2).eval(); };
+  const std::vector<double> eps = {1e-1, 3e-2, 1e-2, 3e-3, 1e-3};
+  // Extensions of 20 ms cover the perturbed event shifts (|eps dt| < 1 ms here). Longer ones
+  // backwards in time grow like exp(kd / I t) (the damping runs backwards) and stop early.
+  LinearisationOptions closed_loop = tight_linearisation();
+  closed_loop.spreading.before = closed_loop.spreading.after = 0.02;
+  const LinearisedSystem<scenes::Hopper> lin(ref.scene, ref.trajectory, closed_loop);
+  const auto closed = references::remainder_fit(ref, lin, references::hopper_push_off_perturbation(), v, samples, eps);
+  EXPECT_TRUE(slope_at_least(closed, 1.9));
+
+  LinearisationOptions signal = closed_loop;
+  signal.gains.feedback = FeedbackTreatment::Signal;
+  const LinearisedSystem<scenes::Hopper> lin_signal(ref.scene, ref.trajectory, signal);
+  const auto open = references::remainder_fit(ref, lin_signal, references::hopper_push_off_perturbation(), v, samples, eps);
+  ASSERT_TRUE(open.structure_matched);
+  EXPECT_LT(open.slope, 1.3) << slope_at_least(open, 0.0).message();
+  EXPECT_GT(open.remainder.back(), 100.0 * closed.remainder.back()) << slope_at_least(open, 0.0).message();
+  std::printf("closed loop: %s\nsignal: %s\n", slope_at_least(closed, 0.0).message(), slope_at_least(open, 0.0).message());
+}
+
 TEST(Prediction, PlankBoxPerturbedStateAndInput) {
   const auto ref = references::plank_box();
   const LinearisedSystem<scenes::PlankBox> lin(ref.scene, ref.trajectory, tight_linearisation());

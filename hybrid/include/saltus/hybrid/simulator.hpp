@@ -210,18 +210,30 @@ class Simulator {
     // either sign, and the acceleration-level selection at that state still finds stick
     // admissible (the state is on the cone's border): re-firing it would cycle stick <-> slip.
     // Likewise a stop resolved into stick by the selection is not re-tested for slip onset.
-    std::array<bool, nc> settled_friction{};
+    // Likewise a contact released at this instant (lambda_n crossed zero downwards) is not closed
+    // again at this instant by its touchdown guard unless it approaches: its normal velocity is
+    // that of a closed contact (zero up to the tolerance) and its normal acceleration grows from
+    // zero after the release. What can still make the touchdown guard look due is the gap's drift
+    // during the stance (integration error, no projection with dopri5): a gap of -1.05e-9 against
+    // the 1e-9 gap tolerance made every perturbed hopper lift-off cycle open <-> slip. The
+    // integrator detects a touchdown as a crossing from >= 0 to < 0, so a released contact that
+    // starts slightly below zero and rises is not re-fired later either.
+    std::array<bool, nc> settled_friction{}, released{};
+    const double v_tol = velocity_tolerance(x_minus);
     for (int round = 0;; ++round) {
       if (pending.empty()) {
         sys.set_mode(mode);
         pending = guards_due(sys, t, x);
         std::erase_if(pending, [&](const Guard& g) {
+          if (g.kind == GuardKind::Touchdown) return released[g.contact] && !(sys.guard_rate(t, x, g) < -v_tol);
           return settled_friction[g.contact] && (g.kind == GuardKind::Stop || g.kind == GuardKind::SlipOnset);
         });
         if (pending.empty()) break;
       }
-      for (const Guard& g : pending)
+      for (const Guard& g : pending) {
         if (g.kind == GuardKind::Stop || g.kind == GuardKind::SlipOnset) settled_friction[g.contact] = true;
+        if (g.kind == GuardKind::Release) released[g.contact] = true;
+      }
       SALTUS_DEMAND(round < options_.max_chain, NumericalFailure, "the chain of transitions at t = ", t,
                     " did not settle after ", options_.max_chain, " transitions (last mode ",
                     describe(scene_, mode), ")");

@@ -51,6 +51,19 @@
 //    not cross zero, it is below it).
 // An event without guards (the initial impact at t0 of a simulation started in contact) has a
 // fixed time: dt = 0, G_z = Dg, G_v = 0.
+//
+// Feedback. When the input law depends on the state, u = kappa(t, x, mode) (a tracking
+// controller), a state deviation z- also moves the input by K z-, K = d kappa / dx at
+// (t*, alpha-(t*), mode-), and the guard sees it: in C.22 Dgamma_x becomes the closed-loop
+// gradient Dgamma_x + Dgamma_u K (FeedbackTreatment::ClosedLoop, the default). gamma_dot is
+// unchanged: mu'- is already the total derivative of kappa along the ante-event flow. The flows
+// f-, f+ are those of the closed loop (the law evaluated at the event state). With
+// FeedbackTreatment::Signal the input is treated as the signal mu(t) = kappa(t, alpha(t), mode)
+// fixed along the reference: right for open-loop laws (K = 0 then anyway), and for a feedback law
+// only if the perturbed system is driven by that signal and not by the law.
+// K is a central difference of the law in x (feedback_gain below): the law is a user's function
+// on doubles, not a templated one, so automatic differentiation cannot reach it. For an affine
+// law (PD tracking) the difference is exact up to round-off, O(eps |u| / h); otherwise O(h^2).
 #pragma once
 
 #include <saltus/hybrid/derivatives.hpp>
@@ -89,20 +102,47 @@ class SimultaneousActivation : public Error {
   using Error::Error;
 };
 
+/// How the input law's dependence on the state enters the gains and the linearisation.
+enum class FeedbackTreatment {
+  ClosedLoop,  ///< u = kappa(t, x, mode) acts on the perturbed state: d kappa / dx is included
+  Signal       ///< u is the signal kappa(t, x_ref(t), mode) of the reference: d kappa / dx left out
+};
+
 struct JumpGainOptions {
+  FeedbackTreatment feedback = FeedbackTreatment::ClosedLoop;
+  /// Central-difference step of d kappa / dx, relative to max(1, |x_j|).
+  double feedback_step = 1e-6;
   /// GrazingEvent when |gamma_dot| <= grazing_threshold * (|Dgamma_x| |f-| + |Dgamma_u| |mu'-|).
   double grazing_threshold = 1e-8;
   /// Include Dgamma_u mu'- in gamma_dot (C.24). Only to show that it is needed (tests).
   bool include_input_rate = true;
   /// s, relative to max(1, |t|): central-difference step of the input law's total time
-  /// derivative along the ante-event flow, (u(t + h, x + h f) - u(t - h, x - h f)) / 2h. Its
-  /// error is O(h^2 u''') + O(eps |u| / h); 1e-5 gives ~1e-10 relative for smooth inputs. The
-  /// input law must be smooth within +-h of the event (no breakpoint there).
+  /// derivative along the ante-event flow, (u(t + h, x + h f) - u(t - h, x - h f)) / 2h,
+  /// Richardson-extrapolated with h/2. Its error is O(h^4 u^(5)) + O(eps |u| / h). The input
+  /// law must be smooth within +-h of the event (no breakpoint there).
   double input_rate_step = 1e-5;
   /// s: a chained transition whose guard is below -chain_time_tolerance * (rate scale) when the
   /// previous transition ends is immediate (dt_k = dt_{k-1}); otherwise it is at zero and crosses.
   double chain_time_tolerance = 1e-8;
 };
+
+/// K = d kappa / dx of an input law at (t, x, mode) by central differences with steps
+/// h_j = step * max(1, |x_j|); `probe` is scratch. Exactly zero for a law that ignores x.
+template <Scene S>
+void feedback_gain(const InputLaw<S>& law, double t, const Vec<2 * S::nq>& x, const Mode<S::nc>& mode, double step,
+                   Vec<2 * S::nq>& probe, Mat<S::nu, 2 * S::nq>& K) {
+  constexpr int nx = 2 * S::nq;
+  probe = x;
+  for (int j = 0; j < nx; ++j) {
+    const double h = step * std::max(1.0, std::abs(x[j]));
+    probe[j] = x[j] + h;
+    K.col(j) = law(t, probe, mode);
+    probe[j] = x[j] - h;
+    K.col(j) -= law(t, probe, mode);
+    K.col(j) /= 2 * h;
+    probe[j] = x[j];
+  }
+}
 
 /// What is known about one transition of an event (diagnostics, and for the tests).
 struct TransitionGainInfo {
@@ -141,9 +181,10 @@ class JumpGainSolver {
 
   explicit JumpGainSolver(const S& scene, JumpGainOptions options = {}, int reserved_transitions = 8)
       : scene_(scene), options_(options), ws_(std::make_unique<DerivativeWorkspace<S>>()) {
-    SALTUS_DEMAND(options.grazing_threshold >= 0 && options.input_rate_step > 0 && options.chain_time_tolerance >= 0,
-                  InvalidArgument, "JumpGainOptions: grazing_threshold >= 0, input_rate_step > 0 and ",
-                  "chain_time_tolerance >= 0 are required");
+    SALTUS_DEMAND(options.grazing_threshold >= 0 && options.input_rate_step > 0 && options.chain_time_tolerance >= 0 &&
+                      options.feedback_step > 0,
+                  InvalidArgument, "JumpGainOptions: grazing_threshold >= 0, input_rate_step > 0, ",
+                  "chain_time_tolerance >= 0 and feedback_step > 0 are required");
     gain_.info.reserve(reserved_transitions);
   }
 
@@ -183,13 +224,14 @@ class JumpGainSolver {
         const Guard& guard = tr.guards.front();
         info.guarded = true;
         info.gamma = guard_gradient(scene_, tr.mode_before, guard, tr.x_before, u_before_, *ws_, dgx_, dgu_);
-        // mu'-: total derivative of the input law along the flow of the mode before (C.24).
+        // mu'-: total derivative of the input law along the flow of the mode before (C.24), a
+        // Richardson-extrapolated central difference (4 D(h/2) - D(h)) / 3, O(h^4): laws that
+        // blend gains over a few ms (references::hopper_push_off) have large third derivatives,
+        // and the plain O(h^2) difference cost 1e-5 relative in the event time there.
         const double h = options_.input_rate_step * std::max(1.0, std::abs(t));
-        x_probe_ = tr.x_before + h * f_before_;
-        u_dot_ = law(t + h, x_probe_, tr.mode_before);
-        x_probe_ = tr.x_before - h * f_before_;
-        u_dot_ -= law(t - h, x_probe_, tr.mode_before);
-        u_dot_ /= 2 * h;
+        input_rate(law, t, tr.x_before, tr.mode_before, h, u_dot_);
+        input_rate(law, t, tr.x_before, tr.mode_before, 0.5 * h, u_rate_half_);
+        u_dot_ = (4.0 * u_rate_half_ - u_dot_) / 3.0;
         const double state_rate = dgx_.dot(f_before_);
         const double input_rate = nu > 0 ? dgu_.dot(u_dot_) : 0.0;
         info.gamma_dot = state_rate + (options_.include_input_rate ? input_rate : 0.0);
@@ -205,6 +247,14 @@ class JumpGainSolver {
                                               " (Dgamma_x f = ", state_rate, ", Dgamma_u u' = ", input_rate,
                                               options_.include_input_rate ? "" : ", left out", ")"),
                                t, guard, info.gamma_dot, info.rate_scale);
+          }
+          // Closed loop: the input moves with the state deviation (see "Feedback" above). Only
+          // here: gamma_dot and the rate scale use the open-loop Dgamma_x (mu'- holds K f).
+          if constexpr (nu > 0) {
+            if (options_.feedback == FeedbackTreatment::ClosedLoop) {
+              feedback_gain<S>(law, t, tr.x_before, tr.mode_before, options_.feedback_step, x_probe_, K_);
+              dgx_.noalias() += dgu_ * K_;
+            }
           }
           // dt_k = -(Dgamma_x z_{k-1} + Dgamma_u v) / gamma_dot_k   (C.22, C.29)
           dz_.noalias() = -(dgx_ * Zz_) / info.gamma_dot;
@@ -245,6 +295,15 @@ class JumpGainSolver {
   }
 
  private:
+  // (u(t + h, x + h f) - u(t - h, x - h f)) / 2h along the flow f_before_ of the mode before.
+  void input_rate(const InputLaw<S>& law, double t, const State& x, const Mode<nc>& mode, double h, Input& out) {
+    x_probe_ = x + h * f_before_;
+    out = law(t + h, x_probe_, mode);
+    x_probe_ = x - h * f_before_;
+    out -= law(t - h, x_probe_, mode);
+    out /= 2 * h;
+  }
+
   const S& scene_;
   JumpGainOptions options_;
   std::unique_ptr<DerivativeWorkspace<S>> ws_;  // dual-number matrices: large, made once
@@ -252,10 +311,11 @@ class JumpGainSolver {
   JumpGain<S> gain_;
   Mat<nx, nx> Zz_, A_, Dg_;
   Mat<nx, nu> Zv_, B_;
+  Mat<nu, nx> K_;
   Eigen::Matrix<double, 1, nx> dz_, dgx_;
   Eigen::Matrix<double, 1, nu> dv_, dgu_;
   State f_before_, f_after_, x_probe_, x_jump_, jump_f_;
-  Input u_before_, u_after_, u_dot_;
+  Input u_before_, u_after_, u_dot_, u_rate_half_;
 };
 
 /// The gains of every event of `traj`, in order, under the trajectory's own input law.

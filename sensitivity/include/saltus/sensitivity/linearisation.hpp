@@ -7,11 +7,14 @@
 // A perturbed motion x_eps(t) that has seen k jumps is approximated by x_k(t) + eps z_k(t), at any
 // t of the extended segment k, also between the nominal and the perturbed event times.
 //
-// Inputs are taken as signals: the reference's input along extended segment i is
-// u_i(t) = ExtendedReference::input(i, t), the perturbed input is u_i(t) + v(t). For an open-loop
-// law (u depends on t only) and InputExtension::Evaluate this is exactly the system that the
-// Simulator integrates under law + v; a feedback law's dependence on x is not linearised here
-// (A would need + df/du du/dx).
+// Inputs: the reference's input along extended segment i is u_i(t) = ExtendedReference::input(i, t)
+// and the perturbed system is driven by law(t, x, mode) + v(t), as the Simulator integrates it.
+// With FeedbackTreatment::ClosedLoop (options.gains.feedback, the default) the law's dependence
+// on the state is linearised too: A_i = df/dx + df/du K_i(t), K_i = d law / dx at
+// (t, x_i(t), mode_i) by central differences (feedback_gain, jump_gain.hpp); with
+// InputExtension::Hold the extensions hold the input, so K_i = 0 outside the nominal interval.
+// With FeedbackTreatment::Signal, A_i = df/dx: the input is the reference's signal u_i(t).
+// For an open-loop law (u depends on t only) both are the same system.
 //
 // State-transition matrices come from the variational equations Phi' = A Phi integrated with the
 // reference state itself (x' = f, so A is evaluated on the accurate state, not on an interpolant),
@@ -95,11 +98,23 @@ class LinearisedSystem {
     return i > 0 ? traj.events.at(i - 1).x_plus : traj.state(0, t_begin(0));
   }
 
-  /// A = df/dx and B = df/du of segment i's mode at (t, x) with the segment's input u_i(t).
+  /// A and B of segment i's mode at (t, x) with the segment's input u_i(t): A = df/dx + df/du K
+  /// in closed loop (see the header), df/dx otherwise; B = df/du.
   void jacobians(int i, double t, const State& x, Mat<nx, nx>& A, Mat<nx, nu>& B) const {
     const Input u = reference_.input(i, t);
     State f;
     flow_jacobian(scene_, mode(i), x, u, *ws_, f, A, B);
+    close_loop(i, t, x, A, B);
+  }
+  /// K_i(t) = d law / dx along extended segment i at (t, x): zero with FeedbackTreatment::Signal,
+  /// and outside the nominal interval with InputExtension::Hold.
+  Mat<nu, nx> feedback(int i, double t, const State& x) const {
+    Mat<nu, nx> K = Mat<nu, nx>::Zero();
+    if (closed_loop_at(i, t)) {
+      State probe;
+      feedback_gain<S>(reference_.reference().input, t, x, mode(i), options_.gains.feedback_step, probe, K);
+    }
+    return K;
   }
   /// A, B on the extended reference of segment i at t.
   void jacobians(int i, double t, Mat<nx, nx>& A, Mat<nx, nu>& B) const { jacobians(i, t, reference_.state(i, t), A, B); }
@@ -124,6 +139,7 @@ class LinearisedSystem {
       const State x = Av.col(0);
       const Input u = reference_.input(i, t);
       flow_jacobian(scene_, mode(i), x, u, *ws_, f, A, B);
+      close_loop(i, t, x, A, B);
       D.col(0) = f;
       D.template rightCols<nx>().noalias() = A * Av.template rightCols<nx>();
     };
@@ -185,6 +201,7 @@ class LinearisedSystem {
       const State x = a.template head<nx>();
       const Input u = reference_.input(i, s);
       flow_jacobian(scene_, mode(i), x, u, *ws_, f, A, B);
+      close_loop(i, s, x, A, B);
       dadt.template head<nx>() = f;
       dadt.template tail<nx>().noalias() = A * a.template tail<nx>();
       if constexpr (nu > 0) dadt.template tail<nx>().noalias() += B * v(s);
@@ -194,6 +211,18 @@ class LinearisedSystem {
   }
 
  private:
+  bool closed_loop_at(int i, double t) const {
+    if constexpr (nu == 0) return false;
+    if (options_.gains.feedback != FeedbackTreatment::ClosedLoop) return false;
+    return options_.spreading.input == InputExtension::Evaluate || (t >= t_begin(i) && t <= t_end(i));
+  }
+  // A += B K_i(t) in closed loop (K by central differences of the law in x).
+  void close_loop(int i, double t, const State& x, Mat<nx, nx>& A, const Mat<nx, nu>& B) const {
+    if (!closed_loop_at(i, t)) return;
+    feedback_gain<S>(reference_.reference().input, t, x, mode(i), options_.gains.feedback_step, probe_, K_);
+    A.noalias() += B * K_;
+  }
+
   // x on extended segment i at t0, integrated from the segment's start with the variational tolerances.
   State start_state(int i, double t0) const {
     State x = begin_state(i);
@@ -212,6 +241,8 @@ class LinearisedSystem {
   std::vector<JumpGain<S>> gains_;
   std::unique_ptr<DerivativeWorkspace<S>> ws_;
   mutable FlowWorkspace<S> flow_;
+  mutable State probe_;
+  mutable Mat<nu, nx> K_;
 };
 
 }  // namespace saltus

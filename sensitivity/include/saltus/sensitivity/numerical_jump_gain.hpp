@@ -8,7 +8,8 @@
 //         breakpoints) run from x_a +- h e_j in the ante-event mode through the event;
 //   Phi- = d x(t*) / d x(t* - w) of the ante-event mode's smooth flow, Phi+ = d x(t* + w) / d x(t*)
 //         of the post-event mode's (DormandPrinceIntegrator with detect_events = false).
-// To first order P = Phi+ G_z Phi-, so G_z = Phi+^{-1} P Phi-^{-1}. For G_v the input is perturbed
+// To first order P = Phi+ G_z Phi-, so G_z = Phi+^{-1} P Phi-^{-1}. The same runs' event times
+// give the event-time shift dt_dz Phi- (and dt_dv below). For G_v the input is perturbed
 // by a constant v over the window: with Psi- = d x(t*) / dv and Psi+ = d x(t* + w) / dv of the
 // smooth flows and P_v = d x(t* + w) / dv of the simulation,
 //     P_v = Phi+ (G_z Psi- + G_v) + Psi+   =>   G_v = Phi+^{-1} (P_v - Psi+) - G_z Psi-.
@@ -75,6 +76,10 @@ struct NumericalJumpGain {
   Mat<nx, nx> G_z = Mat<nx, nx>::Constant(std::numeric_limits<double>::quiet_NaN());
   Basis basis, G_z_basis;
   Mat<nx, nu> G_v = Mat<nx, nu>::Zero();
+  /// The first-order event-time shift: dt = dt_basis c for z- = basis c, and dt_dv (the
+  /// analytic gain's dt_dz basis and dt_dv), from the perturbed runs' (first) event times.
+  Eigen::Matrix<double, 1, Eigen::Dynamic, Eigen::RowMajor, 1, nx> dt_basis;
+  Eigen::Matrix<double, 1, nu> dt_dv = Eigen::Matrix<double, 1, nu>::Zero();
   double window = 0.0;  ///< the half-width w used
   int replays = 0;      ///< perturbed runs that needed the replay (Simulator failures)
 };
@@ -139,8 +144,10 @@ NumericalJumpGain<S> numerical_jump_gain(const S& scene, const HybridTrajectory<
   // Simulator's own run fails: its chain check can cycle stick -> slip -> stick at a slip onset,
   // where the new slip's stop guard starts at zero with a rate of round-off size.
   JumpWorkspace<S> jump_ws;
+  double event_time = ts;  // of the last run through the event (its first transition)
   auto replay = [&](State x, const InputLaw<S>& law) {
     double t = ta;
+    event_time = std::numeric_limits<double>::quiet_NaN();
     ModeSystem<S> sys(scene, law);
     std::array<double, 2 * S::nc + 1> gv{};
     for (std::size_t k = 0; k < ev.transitions.size(); ++k) {
@@ -162,6 +169,7 @@ NumericalJumpGain<S> numerical_jump_gain(const S& scene, const HybridTrajectory<
                       "reach the ", to_string(tr.guards.front().kind), " guard of the event at t = ", ts,
                       " within the window (reduce the steps or enlarge the window)");
         t = end.t;
+        if (k == 0) event_time = t;
       }
       if (tr.impact) {
         State xp;
@@ -182,12 +190,22 @@ NumericalJumpGain<S> numerical_jump_gain(const S& scene, const HybridTrajectory<
                     NumericalFailure, "numerical jump gain: a perturbed run through the event at t = ", ts,
                     " ended in mode '", describe(scene, run.segments.back().mode), "' after ", events,
                     " events, not in '", describe(scene, ev.mode_after), "' after one");
+      event_time = run.events.front().t;
       return run.final_state();
     } catch (const NumericalFailure&) {
       if (!options.replay_on_failure) throw;
       ++replays;
       return replay(x0, law);
     }
+  };
+
+  // The end state and the event time of a run through the event, stacked.
+  using Augmented = Vec<nx + 1>;
+  auto through_timed = [&](const State& x0, const InputLaw<S>& law) {
+    Augmented y;
+    y.template head<nx>() = through(x0, law);
+    y[nx] = event_time;
+    return y;
   };
 
   // Central difference of f(s) at s = 0 with step h, Richardson-extrapolated if asked.
@@ -231,8 +249,9 @@ NumericalJumpGain<S> numerical_jump_gain(const S& scene, const HybridTrajectory<
   auto project = [&](State x) {
     if (m == 0) return x;
     for (int it = 0; it < 4; ++it) {
-      detail::mode_constraints(scene, ev.mode_before, x, kin, cp);
+      // The Jacobian first: constraint_jacobian overwrites cp with its probes.
       constraint_jacobian(x);
+      detail::mode_constraints(scene, ev.mode_before, x, kin, cp);
       x -= C.completeOrthogonalDecomposition().solve(Eigen::VectorXd(cp.head(m) - c0.head(m)));
     }
     return x;
@@ -240,11 +259,14 @@ NumericalJumpGain<S> numerical_jump_gain(const S& scene, const HybridTrajectory<
 
   const int r = static_cast<int>(T.cols());
   Basis P(nx, r), B(nx, r);
+  Eigen::Matrix<double, 1, Eigen::Dynamic, Eigen::RowMajor, 1, nx> dt_basis(1, r);
   Mat<nx, nx> Phi_plus;
   for (int j = 0; j < r; ++j) {
     const double h = options.state_step * std::max(1.0, x_a.cwiseAbs().maxCoeff());
     const auto start = [&](double k) { return project(State(x_a + k * T.col(j))); };
-    P.col(j) = difference([&](double k) { return through(start(k), traj.input); }, h);
+    const Augmented d = difference([&](double k) { return through_timed(start(k), traj.input); }, h);
+    P.col(j) = d.template head<nx>();
+    dt_basis[j] = d[nx];
     B.col(j) = difference([&](double k) { return smooth(ev.mode_before, traj.input, ta, start(k), ts); }, h);
   }
   for (int j = 0; j < nx; ++j) {
@@ -262,12 +284,14 @@ NumericalJumpGain<S> numerical_jump_gain(const S& scene, const HybridTrajectory<
   g.window = w;
   g.basis = B;
   g.G_z_basis = plus_lu.solve(P);
+  g.dt_basis = dt_basis;
   g.full = r == nx;
   if (g.full) g.G_z = g.G_z_basis * Mat<nx, nx>(B).inverse();
 
   if constexpr (nu > 0) {
     const Vec<nu> u_star = traj.input(ts, ev.x_minus, ev.mode_before);
     Mat<nx, nu> P_v, Psi_minus, Psi_plus;
+    Eigen::Matrix<double, 1, nu> dt_v;
     for (int j = 0; j < nu; ++j) {
       const double h = options.input_step * std::max(1.0, std::abs(u_star[j]));
       auto shifted = [&](double s) -> InputLaw<S> {
@@ -278,13 +302,17 @@ NumericalJumpGain<S> numerical_jump_gain(const S& scene, const HybridTrajectory<
           return u;
         };
       };
-      P_v.col(j) = difference([&](double k) { return through(x_a, shifted(k)); }, h);
+      const Augmented d = difference([&](double k) { return through_timed(x_a, shifted(k)); }, h);
+      P_v.col(j) = d.template head<nx>();
+      dt_v[j] = d[nx];
       Psi_minus.col(j) = difference([&](double k) { return smooth(ev.mode_before, shifted(k), ta, x_a, ts); }, h);
       Psi_plus.col(j) = difference([&](double k) { return smooth(ev.mode_after, shifted(k), ts, ev.x_plus, tb); }, h);
     }
     // G_z Psi- = (G_z B) c with B c = Psi- (least squares; exact when Psi- is admissible).
     const Eigen::MatrixXd c = Eigen::MatrixXd(B).completeOrthogonalDecomposition().solve(Eigen::MatrixXd(Psi_minus));
     g.G_v = plus_lu.solve(P_v - Psi_plus) - g.G_z_basis * c;
+    // The run's event time moves by dt_dz Psi- v + dt_dv v = dt_basis c v + dt_dv v.
+    g.dt_dv = dt_v - g.dt_basis * c;
   }
   g.replays = replays;
   return g;
