@@ -2,9 +2,15 @@
 // their numerical twin (central differences through re-simulation), per scene and event kind:
 //   fd_rel_error       max |G_analytic - G_twin| / max |G| over G_z (on the admissible ante-event
 //                      deviations, numerical_jump_gain.hpp) and G_v
+//   dt_rel_error       the same for the first-order event-time shift [dt_dz B, dt_dv] against the
+//                      twin's perturbed event times
 //   slope              fitted log-log slope of the first-order prediction's remainder
 //                      |x_eps - x_k - eps z_k| over eps = 1e-2..1e-6, for a perturbed state at the
-//                      start, sampled in the segment after the event (2 means exact first order)
+//                      start, sampled in the segment after the event (2 means exact first order),
+//                      fitted on the points before the integration floor: from the largest eps
+//                      down, while each decade of eps shrinks the remainder by more than 3x
+//                      (slope > 0.48; the floor is a plateau, a wrong first order still has slope 1);
+//   slope_points       how many of the 5 eps values that fit used (5: the whole range)
 //   gain_us            wall time of one analytic gain (JumpGainSolver::compute), microseconds
 //   numerical_twin_us  wall time of one numerical twin (numerical_jump_gain), microseconds
 // Both times are measured in the same run, so their ratio is the meaningful figure.
@@ -26,7 +32,8 @@ using Clock = std::chrono::steady_clock;
 
 struct Row {
   std::string scene, kind;
-  double fd_rel_error = 0, slope = 0, gain_us = 0, twin_us = 0;
+  double fd_rel_error = 0, dt_rel_error = 0, slope = 0, gain_us = 0, twin_us = 0;
+  int slope_points = 0;
 };
 
 template <class F>
@@ -43,14 +50,16 @@ double microseconds_per_call(F&& f, double min_seconds) {
 }
 
 template <Scene S>
-void measure(const references::Reference<S>& ref, const Vec<2 * S::nq>& z0, std::vector<Row>& rows) {
+void measure(const references::Reference<S>& ref, const Vec<2 * S::nq>& z0, std::vector<Row>& rows,
+             double twin_step = 3e-5, double extension = 0.1) {
   const auto& traj = ref.trajectory;
   JumpGainSolver<S> solver(ref.scene);
   NumericalJumpGainOptions twin;
   twin.simulation = ref.options;
+  twin.state_step = twin.input_step = twin_step;
   LinearisationOptions lo;
   lo.variational.relative = lo.variational.absolute = 1e-13;
-  lo.spreading.before = lo.spreading.after = 0.1;
+  lo.spreading.before = lo.spreading.after = extension;
   const LinearisedSystem<S> lin(ref.scene, traj, lo);
   for (int e = 0; e < static_cast<int>(traj.events.size()); ++e) {
     Row row;
@@ -64,6 +73,12 @@ void measure(const references::Reference<S>& ref, const Vec<2 * S::nq>& z0, std:
                                    a.G_v.cwiseAbs().maxCoeff()});
     row.fd_rel_error =
         std::max((GzB - n.G_z_basis).cwiseAbs().maxCoeff(), (a.G_v - n.G_v).cwiseAbs().maxCoeff()) / scale;
+    if (a.info.front().guarded) {
+      const Eigen::RowVectorXd dtB = a.dt_dz * n.basis;
+      const double dt_scale = std::max({dtB.cwiseAbs().maxCoeff(), a.dt_dv.cwiseAbs().maxCoeff()});
+      row.dt_rel_error = std::max((dtB - n.dt_basis).cwiseAbs().maxCoeff(), (a.dt_dv - n.dt_dv).cwiseAbs().maxCoeff()) /
+                         dt_scale;
+    }
     row.gain_us = microseconds_per_call([&] { solver.compute(traj.events[e], traj.input); }, 0.2);
     row.twin_us = microseconds_per_call([&] { numerical_jump_gain(ref.scene, traj, e, twin); }, 0.5);
     // Remainder sampled in the middle of the segment after the event.
@@ -71,7 +86,13 @@ void measure(const references::Reference<S>& ref, const Vec<2 * S::nq>& z0, std:
     const double t_sample = traj.events[e].t + 0.5 * (t_next - traj.events[e].t);
     const auto fit = references::remainder_fit(ref, lin, z0, [](double) { return Vec<S::nu>::Zero().eval(); },
                                                {t_sample});
-    row.slope = fit.structure_matched ? fit.slope : std::nan("");
+    std::vector<double> e_above{fit.eps.front()}, r_above{fit.remainder.front()};
+    for (std::size_t k = 1; k < fit.eps.size() && fit.remainder[k] < fit.remainder[k - 1] / 3.0; ++k) {
+      e_above.push_back(fit.eps[k]);
+      r_above.push_back(fit.remainder[k]);
+    }
+    row.slope_points = static_cast<int>(e_above.size());
+    row.slope = fit.structure_matched && e_above.size() >= 2 ? references::fitted_slope(e_above, r_above) : std::nan("");
     rows.push_back(row);
   }
 }
@@ -86,6 +107,8 @@ int main(int argc, char** argv) {
     measure(references::point_mass_with_friction(), references::point_mass_with_friction_perturbation(), rows);
     measure(references::hopper(), references::hopper_perturbation(), rows);
     measure(references::plank_box(), references::plank_box_perturbation(), rows);
+    // PD feedback (closed-loop gains); twin steps 3e-6 and 20 ms extensions, as in the tests.
+    measure(references::hopper_push_off(), Vec<8>(3000.0 * references::hopper_push_off_perturbation()), rows, 3e-6, 0.02);
   } catch (const std::exception& e) {
     std::cerr << "jump_gains: " << e.what() << "\n";
     return 1;
@@ -108,21 +131,22 @@ int main(int argc, char** argv) {
       }
       const int k = ++seen[r.scene][r.kind];
       os << (first_kind ? "" : ", ") << "\"" << r.kind << (k > 1 ? " #" + std::to_string(k) : "") << "\": {"
-         << "\"fd_rel_error\": " << r.fd_rel_error << ", \"slope\": ";
+         << "\"fd_rel_error\": " << r.fd_rel_error << ", \"dt_rel_error\": " << r.dt_rel_error << ", \"slope\": ";
       if (std::isfinite(r.slope))
         os << r.slope;
       else
         os << "null";
-      os << ", \"gain_us\": " << r.gain_us << ", \"numerical_twin_us\": " << r.twin_us << "}";
+      os << ", \"slope_points\": " << r.slope_points << ", \"gain_us\": " << r.gain_us << ", \"numerical_twin_us\": " << r.twin_us << "}";
       first_kind = false;
     }
     os << (first_scene ? "" : "}") << "}\n";
   } else {
-    os << std::left << std::setw(28) << "scene" << std::setw(44) << "event kind" << std::setw(14) << "fd_rel_error"
-       << std::setw(8) << "slope" << std::setw(12) << "gain_us" << "numerical_twin_us\n";
+    os << std::left << std::setw(32) << "scene" << std::setw(36) << "event kind" << std::setw(14) << "fd_rel_error"
+       << std::setw(14) << "dt_rel_error" << std::setw(8) << "slope" << std::setw(8) << "points" << std::setw(12) << "gain_us" << "numerical_twin_us\n";
     for (const Row& r : rows)
-      os << std::left << std::setw(28) << r.scene << std::setw(44) << r.kind << std::setw(14) << r.fd_rel_error
-         << std::setw(8) << r.slope << std::setw(12) << r.gain_us << r.twin_us << "\n";
+      os << std::left << std::setw(32) << r.scene << std::setw(36) << r.kind << std::setw(14) << r.fd_rel_error
+         << std::setw(14) << r.dt_rel_error << std::setw(8) << std::setprecision(3) << r.slope << std::setw(8) << r.slope_points << std::setw(12) << r.gain_us
+         << r.twin_us << std::setprecision(4) << "\n";
   }
   std::cout << os.str();
   return 0;
