@@ -1,12 +1,21 @@
-// The one-legged hopper (Capler) landing and hopping once under a simple joint-space controller:
-// PD control of the hip and knee angles to a crouched posture while it falls and lands, then,
-// from t_push, a stiffer PD towards a stretched leg, which pushes the body up until the foot's
+// The one-legged hopper (Capler) landing and hopping once under a simple joint-space controller,
+// then the analysis of that motion as a reference: its jump gains and the first-order prediction
+// of a perturbed hop.
+//
+// Motion: PD control of the hip and knee angles to a crouched posture while it falls and lands,
+// then around t_push a stiffer PD towards a stretched leg (targets and gains blend over 10 ms, so
+// the law is smooth in t), which makes the foot slip and then pushes the body up until the foot's
 // normal force reaches zero and the foot lifts off (the state-input release guard).
-// The controller is a feedback law u(t, x, mode); the simulator evaluates it inside the flow.
+// The controller is a feedback law u(t, x, mode); the simulator evaluates it inside the flow, and
+// the gains and the linearisation are closed-loop: d u / dx enters them (jump_gain.hpp).
 #include "report.hpp"
 #include "scenes/instances.hpp"
 
+#include <saltus/sensitivity/sensitivity.hpp>
+
+#include <cmath>
 #include <cstdio>
+#include <fstream>
 
 int main() {
   using namespace saltus;
@@ -16,10 +25,13 @@ int main() {
   // Controller parameters (units: rad, N m/rad, N m s/rad, s).
   struct Gains { double hip, knee, kp, kd; };
   const Gains crouch{0.4, -0.8, 40.0, 2.0}, stretch{0.15, -0.3, 150.0, 3.0};
-  const double t_push = 0.3;
+  const double t_push = 0.3, blend_time = 0.01;
   InputLaw<H> controller = [=](double t, const Vec<8>& x, const Mode<1>&) {
-    const Gains& c = t < t_push ? crouch : stretch;
-    return Vec<2>(c.kp * (c.hip - x[2]) - c.kd * x[6], c.kp * (c.knee - x[3]) - c.kd * x[7]);
+    const double s = 0.5 * (1.0 + std::tanh((t - t_push) / blend_time));  // 0: crouch, 1: stretch
+    const auto mix = [s](double a, double b) { return a + s * (b - a); };
+    const double hip = mix(crouch.hip, stretch.hip), knee = mix(crouch.knee, stretch.knee);
+    const double kp = mix(crouch.kp, stretch.kp), kd = mix(crouch.kd, stretch.kd);
+    return Vec<2>(kp * (hip - x[2]) - kd * x[6], kp * (knee - x[3]) - kd * x[7]);
   };
 
   Vec<8> x0 = Vec<8>::Zero();
@@ -27,11 +39,11 @@ int main() {
   x0[1] = 0.05 - hopper.foot(Vec<4>(x0.head<4>()))[1];          // foot 5 cm above the ground
 
   SimulationOptions options;
-  options.integrator.relative_tolerance = 1e-11;
-  options.integrator.absolute_tolerance = 1e-12;
-  options.breakpoints = {t_push};
+  options.integrator.relative_tolerance = 1e-12;
+  options.integrator.absolute_tolerance = 1e-13;
   Simulator<H> simulator(hopper, options);
-  const auto traj = simulator.run(x0, 0.0, 0.7, controller);
+  const double t_end = 0.45;
+  const auto traj = simulator.run(x0, 0.0, t_end, controller);
 
   std::printf("hopper: landing and one hop under a joint PD controller\n");
   examples::print_events(hopper, traj);
@@ -39,5 +51,53 @@ int main() {
   bool lift_off = false;
   for (const auto& ev : traj.events)
     for (const Guard& g : ev.guards()) lift_off = lift_off || g.kind == GuardKind::Release;
-  return lift_off ? 0 : 1;
+  if (!lift_off) return 1;
+
+  // ---- analysis: jump gains (closed loop) and the first-order prediction ---------------------
+  LinearisationOptions lo;
+  lo.spreading.before = lo.spreading.after = 0.02;  // covers the perturbed event shifts below
+  const LinearisedSystem<H> lin(hopper, traj, lo);
+  std::printf("\njump gains z+ = G_z z- + G_v v- (closed loop), event-time shift dt = dt_dz z- + dt_dv v-:\n");
+  std::ofstream json(examples::report_dir() / "hopper_gains.json");
+  json << "{\"events\": [";
+  for (std::size_t e = 0; e < lin.gains().size(); ++e) {
+    const auto& g = lin.gains()[e];
+    const auto& ev = traj.events[e];
+    const double off_identity = (g.G_z - Mat<8, 8>::Identity()).cwiseAbs().maxCoeff();
+    std::printf("  t = %.6f %-10s |G_z - I|max = %-10.3g |G_v|max = %-10.3g |dt_dz| = %.3g\n", ev.t,
+                to_string(ev.guards().at(0).kind), off_identity, g.G_v.cwiseAbs().maxCoeff(), g.dt_dz.norm());
+    json << (e ? ", " : "") << "{\"t\": " << ev.t << ", \"guard\": \"" << to_string(ev.guards().at(0).kind)
+         << "\", \"G_z_minus_identity_max\": " << off_identity << ", \"G_v_max\": " << g.G_v.cwiseAbs().maxCoeff()
+         << ", \"dt_dz_norm\": " << g.dt_dz.norm() << "}";
+  }
+  json << "]}\n";
+
+  // A perturbed hop: initial state x0 + eps z0, torques + eps v(t). The reference-spreading
+  // remainder |x_eps(t_end) - x_k(t_end) - eps z_k(t_end)| must shrink like eps^2.
+  Vec<8> z0;
+  z0 << 0.6, 0.3, -0.9, 0.6, 1.5, -1.2, 3.0, -1.5;
+  const auto v = [](double t) { return Vec<2>(0.3 * std::sin(10 * t), -0.2); };
+  const auto prediction = lin.predict(z0, v);
+  const int last = lin.segment_count() - 1;
+  DormandPrinceIntegrator<H> integrator(options.integrator);
+  std::printf("\nfirst-order prediction of a perturbed hop at t = %.2f s:\n", t_end);
+  double previous = 0.0;
+  bool second_order = true;
+  for (double eps : {1e-3, 1e-4, 1e-5}) {
+    const InputLaw<H> perturbed = [&, eps](double t, const Vec<8>& x, const Mode<1>& m) {
+      return Vec<2>(controller(t, x, m) + eps * v(t));
+    };
+    const auto run = simulator.run(Vec<8>(x0 + eps * z0), 0.0, t_end, perturbed);
+    if (static_cast<int>(run.events.size()) != last) return 1;  // the same events as the reference
+    ModeSystem<H> sys(hopper, controller);
+    sys.set_mode(lin.mode(last));
+    Vec<8> x_ref = lin.begin_state(last);
+    integrator.integrate(sys, lin.t_begin(last), x_ref, t_end, 0.0, nullptr, false);
+    const double remainder = (run.final_state() - x_ref - eps * prediction.z(last, t_end)).cwiseAbs().maxCoeff();
+    std::printf("  eps = %.0e   |deviation| = %.3e   remainder = %.3e%s\n", eps, (run.final_state() - x_ref).cwiseAbs().maxCoeff(),
+                remainder, previous > 0 ? (" (x " + std::to_string(remainder / previous) + ")").c_str() : "");
+    if (previous > 0) second_order = second_order && remainder < 0.03 * previous;
+    previous = remainder;
+  }
+  return second_order ? 0 : 1;
 }
