@@ -1,11 +1,12 @@
 // First derivatives of the flow, the guards and the jump maps with respect to the state x and
 // the input u, by forward-mode automatic differentiation: the same templated code that computes
-// the value runs on dual numbers seeded along the nx + nu directions of (x, u). The scene's
-// contact functions are then differentiated to third order (nested duals), with no derivative
+// the value runs on dual numbers (ad::Dual, Eigen's AutoDiffScalar) seeded along the nx + nu
+// directions of (x, u). The scene's contact functions are then differentiated to third order
+// (three nested levels, ad::Dual<ad::Dual<ad::Dual<double, nx + nu>, nq>, 1>), with no derivative
 // written by hand anywhere.
 #pragma once
 
-#include <saltus/ad/dual.hpp>
+#include <saltus/ad/autodiff.hpp>
 #include <saltus/hybrid/guards.hpp>
 #include <saltus/hybrid/jump_map.hpp>
 
@@ -29,8 +30,8 @@ void seed(const VecT<double, 2 * S::nq>& x, const VecT<double, S::nu>& u, VecT<S
           VecT<StateInputDual<S>, S::nu>& ud) {
   using D = StateInputDual<S>;
   constexpr int nx = 2 * S::nq;
-  for (int k = 0; k < nx; ++k) xd[k] = D(x[k], k);
-  for (int k = 0; k < S::nu; ++k) ud[k] = D(u[k], nx + k);
+  for (int k = 0; k < nx; ++k) xd[k] = ad::seed<D::directions>(x[k], k);
+  for (int k = 0; k < S::nu; ++k) ud[k] = ad::seed<D::directions>(u[k], nx + k);
 }
 }  // namespace detail
 
@@ -47,9 +48,9 @@ void flow_jacobian(const S& scene, const Mode<S::nc>& mode, const VecT<double, 2
   evaluate_flow(scene, mode, xd, ud, ws.flow);
   for (int i = 0; i < nx; ++i) {
     const D& fi = ws.flow.xdot[i];
-    f[i] = fi.a;
-    for (int k = 0; k < nx; ++k) A(i, k) = fi.v[k];
-    for (int k = 0; k < S::nu; ++k) B(i, k) = fi.v[nx + k];
+    f[i] = fi.value();
+    for (int k = 0; k < nx; ++k) A(i, k) = fi.derivatives()[k];
+    for (int k = 0; k < S::nu; ++k) B(i, k) = fi.derivatives()[nx + k];
   }
 }
 
@@ -65,9 +66,9 @@ double guard_gradient(const S& scene, const Mode<S::nc>& mode, const Guard& guar
   detail::seed<S>(x, u, xd, ud);
   evaluate_flow(scene, mode, xd, ud, ws.flow);
   const D g = guard_value(scene, mode, guard, ws.flow);
-  for (int k = 0; k < nx; ++k) d_dx[k] = g.v[k];
-  for (int k = 0; k < S::nu; ++k) d_du[k] = g.v[nx + k];
-  return g.a;
+  for (int k = 0; k < nx; ++k) d_dx[k] = g.derivatives()[k];
+  for (int k = 0; k < S::nu; ++k) d_du[k] = g.derivatives()[nx + k];
+  return g.value();
 }
 
 /// x+ and Dg = dx+/dx- of the jump map of `impact_mode` at x-.
@@ -78,11 +79,11 @@ void jump_map_jacobian(const S& scene, const ImpactMode<S::nc>& impact_mode, con
   constexpr int nx = 2 * S::nq;
   using D = StateInputDual<S>;
   VecT<D, nx> xd, xp;
-  for (int k = 0; k < nx; ++k) xd[k] = D(x_minus[k], k);
+  for (int k = 0; k < nx; ++k) xd[k] = ad::seed<D::directions>(x_minus[k], k);
   apply_jump_map(scene, impact_mode, xd, ws.jump, xp);
   for (int i = 0; i < nx; ++i) {
-    x_plus[i] = xp[i].a;
-    for (int k = 0; k < nx; ++k) G(i, k) = xp[i].v[k];
+    x_plus[i] = xp[i].value();
+    for (int k = 0; k < nx; ++k) G(i, k) = xp[i].derivatives()[k];
   }
 }
 

@@ -8,9 +8,11 @@
 // is seeded along the nq coordinate directions (inner level) and moved along the velocity
 // (outer level, q(s) = q + s v), so the value gives h_n, the inner gradient w_n, the outer
 // derivative zeta_n, and the inner gradient of the outer derivative H v, whence kappa_n = v^T H v.
+// When T is itself a dual number (derivatives.hpp) the scene code runs three levels deep,
+// ad::Dual<ad::Dual<T, nq>, 1> (saltus/ad/autodiff.hpp says why that needs its constructors).
 #pragma once
 
-#include <saltus/ad/dual.hpp>
+#include <saltus/ad/autodiff.hpp>
 #include <saltus/hybrid/linear_solve.hpp>
 #include <saltus/hybrid/scene.hpp>
 
@@ -48,22 +50,22 @@ void evaluate_contact(const S& scene, int i, const VecT<T, S::nq>& q, const VecT
   using Inner = ad::Dual<T, nq>;
   using Outer = ad::Dual<Inner, 1>;
   VecT<Outer, nq> qs;
-  for (int k = 0; k < nq; ++k) qs[k] = Outer(Inner(q[k], k), typename Outer::Gradient(Inner(v[k])));
+  for (int k = 0; k < nq; ++k) qs[k] = Outer(ad::seed<nq>(q[k], k), typename Outer::Gradient(Inner(v[k])));
 
   const Outer g = scene.template gap<Outer>(i, qs);
-  out.gap = g.a.a;
-  out.wn = g.a.v;
-  out.zeta_n = g.v[0].a;
-  out.kappa_n = g.v[0].v.dot(v);
+  out.gap = g.value().value();
+  out.wn = g.value().derivatives();
+  out.zeta_n = g.derivatives()[0].value();
+  out.kappa_n = g.derivatives()[0].derivatives().dot(v);
 
   const int nt = scene.contact(i).tangents();
   out.tangents = nt;
   if (nt > 0) {
     const VecT<Outer, 2> tp = scene.template tangent_position<Outer>(i, qs);
     for (int k = 0; k < nt; ++k) {
-      out.Wt.col(k) = tp[k].a.v;
-      out.zeta_t[k] = tp[k].v[0].a;
-      out.kappa_t[k] = tp[k].v[0].v.dot(v);
+      out.Wt.col(k) = tp[k].value().derivatives();
+      out.zeta_t[k] = tp[k].derivatives()[0].value();
+      out.kappa_t[k] = tp[k].derivatives()[0].derivatives().dot(v);
     }
   }
 }
@@ -134,14 +136,14 @@ VecT<T, S::nq> coriolis_from_mass_matrix(const S& scene, const VecT<T, S::nq>& q
   constexpr int nq = S::nq;
   using D = ad::Dual<T, nq>;
   VecT<D, nq> qd;
-  for (int k = 0; k < nq; ++k) qd[k] = D(q[k], k);
+  for (int k = 0; k < nq; ++k) qd[k] = ad::seed<nq>(q[k], k);
   const MatT<D, nq, nq> Md = scene.template mass_matrix<D>(qd);
   VecT<T, nq> c = VecT<T, nq>::Zero();
   for (int i = 0; i < nq; ++i)
     for (int j = 0; j < nq; ++j)
       for (int k = 0; k < nq; ++k) {
         // (dM_ij/dq_k v_k) v_j - 1/2 (dM_jk/dq_i) v_j v_k
-        c[i] += Md(i, j).v[k] * v[k] * v[j] - T(0.5) * Md(j, k).v[i] * v[j] * v[k];
+        c[i] += Md(i, j).derivatives()[k] * v[k] * v[j] - T(0.5) * Md(j, k).derivatives()[i] * v[j] * v[k];
       }
   return c;
 }

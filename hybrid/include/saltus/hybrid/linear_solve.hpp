@@ -25,7 +25,7 @@
 // for the derivative parts).
 #pragma once
 
-#include <saltus/ad/dual.hpp>
+#include <saltus/ad/autodiff.hpp>
 #include <saltus/hybrid/scene.hpp>
 
 #include <Eigen/Cholesky>
@@ -37,14 +37,6 @@
 namespace saltus {
 
 namespace ad {
-/// Nesting depth of a scalar type: 0 for double, 1 + depth of the inner type for Dual.
-template <class T>
-struct order : std::integral_constant<int, 0> {};
-template <class T, int N>
-struct order<Dual<T, N>> : std::integral_constant<int, 1 + order<T>::value> {};
-template <class T>
-inline constexpr int order_v = order<T>::value;
-
 /// Real part of a matrix of possibly dual entries.
 template <class Derived, class Out>
 void value_into(const Eigen::MatrixBase<Derived>& m, Out& out) {
@@ -131,13 +123,13 @@ void apply_inverse(const Solve& solve_double, Vec& x) {
     using Inner = Eigen::Matrix<U, Vec::RowsAtCompileTime, Vec::ColsAtCompileTime, Vec::Options,
                                 Vec::MaxRowsAtCompileTime, Vec::MaxColsAtCompileTime>;
     Inner part(x.rows(), x.cols());
-    for (Eigen::Index i = 0; i < x.size(); ++i) part[i] = x[i].a;
+    for (Eigen::Index i = 0; i < x.size(); ++i) part[i] = x[i].value();
     apply_inverse(solve_double, part);
-    for (Eigen::Index i = 0; i < x.size(); ++i) x[i].a = part[i];
+    for (Eigen::Index i = 0; i < x.size(); ++i) x[i].value() = part[i];
     for (int k = 0; k < T::directions; ++k) {
-      for (Eigen::Index i = 0; i < x.size(); ++i) part[i] = x[i].v[k];
+      for (Eigen::Index i = 0; i < x.size(); ++i) part[i] = x[i].derivatives()[k];
       apply_inverse(solve_double, part);
-      for (Eigen::Index i = 0; i < x.size(); ++i) x[i].v[k] = part[i];
+      for (Eigen::Index i = 0; i < x.size(); ++i) x[i].derivatives()[k] = part[i];
     }
   }
 }
@@ -163,15 +155,6 @@ void solve_with_value_factorization(const MatA& A, const VecB& b, const Solve& s
     detail::apply_inverse(solve_double, x);
   }
 }
-
-namespace ad {
-/// Sets the innermost real value of a possibly nested dual number.
-inline void set_value(double& x, double v) { x = v; }
-template <class T, int N>
-void set_value(Dual<T, N>& x, double v) {
-  set_value(x.a, v);
-}
-}  // namespace ad
 
 /// Minimum-norm solution of A x = b (m x m, m <= MaxN) for scalars T, factorising values only;
 /// exact derivatives also where A is rank deficient (see the file comment). Allocation-free.
