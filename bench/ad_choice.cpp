@@ -15,7 +15,7 @@
 // ceres/jet.h is installed (libceres-dev, header only, SALTUS_HAVE_CERES_JET), ceres::Jet<double, N>.
 //
 // Second order (curvature_*): h_n, w_n = dh_n/dq, zeta_n = w_n^T v and kappa_n = v^T (d^2 h_n/dq^2) v
-// in one pass, seeded as saltus::evaluate_contact does (hybrid/include/saltus/hybrid/kinematics.hpp):
+// in one pass, seeded as saltus::evaluate_contact does (hybrid/include/saltus/hybrid/dynamics/kinematics.hpp):
 // inner level along the nq coordinates, outer level along q(s) = q + s v.
 //   - former::Dual<former::Dual<double, nq>, 1> and saltus::ad::Dual<saltus::ad::Dual<double, nq>, 1>.
 //   - Eigen::AutoDiffScalar nests (AutoDiffScalar<Matrix<AutoDiffScalar<...>, 1, 1>>, fixed or
@@ -44,7 +44,7 @@
 #include "scenes/spatial_box.hpp"
 
 #include <saltus/ad/autodiff.hpp>
-#include <saltus/hybrid/kinematics.hpp>
+#include <saltus/hybrid/dynamics/kinematics.hpp>
 
 #include <benchmark/benchmark.h>
 #include <unsupported/Eigen/AutoDiff>

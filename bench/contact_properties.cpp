@@ -18,7 +18,7 @@
 #include "scenes/all_scenes.hpp"
 #include "scenes/sampling.hpp"
 
-#include <saltus/hybrid/impact.hpp>
+#include <saltus/hybrid/dynamics/impact.hpp>
 
 #include <algorithm>
 #include <chrono>

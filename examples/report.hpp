@@ -2,7 +2,7 @@
 // files under report/ (JSON: segments and events; CSV: samples of t, mode, x, u).
 #pragma once
 
-#include <saltus/hybrid/trajectory.hpp>
+#include <saltus/hybrid/vocabulary/trajectory.hpp>
 
 #include <cstdio>
 #include <filesystem>

@@ -6,10 +6,10 @@
 
 #include "support.hpp"
 
-#include <saltus/hybrid/derivatives.hpp>
-#include <saltus/hybrid/flow.hpp>
-#include <saltus/hybrid/guards.hpp>
-#include <saltus/hybrid/jump_map.hpp>
+#include <saltus/hybrid/dynamics/derivatives.hpp>
+#include <saltus/hybrid/dynamics/flow.hpp>
+#include <saltus/hybrid/dynamics/guards.hpp>
+#include <saltus/hybrid/dynamics/jump_map.hpp>
 
 #include <Eigen/Eigenvalues>
 

@@ -4,9 +4,9 @@
 
 #include "scenes/all_scenes.hpp"
 
-#include <saltus/hybrid/kinematics.hpp>
-#include <saltus/hybrid/mode.hpp>
-#include <saltus/hybrid/scene.hpp>
+#include <saltus/hybrid/dynamics/kinematics.hpp>
+#include <saltus/hybrid/vocabulary/mode.hpp>
+#include <saltus/hybrid/vocabulary/scene.hpp>
 
 #include <Eigen/QR>
 

@@ -17,8 +17,8 @@ namespace saltus_test {
 #define eigen_assert(x) \
   ((x) ? static_cast<void>(0) : ::saltus_test::eigen_assert_failed(#x, __FILE__, __LINE__))
 
-#include <saltus/hybrid/coulomb_solver.hpp>
-#include <saltus/hybrid/lemke.hpp>
+#include <saltus/hybrid/contact/coulomb_solver.hpp>
+#include <saltus/hybrid/contact/lemke.hpp>
 
 #include <Eigen/Dense>
 #include <gtest/gtest.h>

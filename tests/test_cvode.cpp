@@ -5,7 +5,7 @@
 
 #include "scenes/instances.hpp"
 
-#include <saltus/hybrid/integrator_cvode.hpp>
+#include <saltus/hybrid/simulation/integrator_cvode.hpp>
 
 namespace saltus::testing {
 namespace {

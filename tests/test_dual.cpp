@@ -9,7 +9,7 @@
 // through two user-defined conversions. PlainAutoDiffScalarDoesNotNestConstants checks the part
 // of this that is detectable at compile time, so that a future Eigen which fixes it is noticed.
 #include <saltus/ad/autodiff.hpp>
-#include <saltus/hybrid/linear_solve.hpp>
+#include <saltus/hybrid/contact/linear_solve.hpp>
 
 #include <Eigen/Dense>
 #include <gtest/gtest.h>

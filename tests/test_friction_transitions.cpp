@@ -8,7 +8,7 @@
 
 #include "scenes/instances.hpp"
 
-#include <saltus/hybrid/derivatives.hpp>
+#include <saltus/hybrid/dynamics/derivatives.hpp>
 
 namespace saltus::testing {
 namespace {

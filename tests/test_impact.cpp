@@ -5,7 +5,7 @@
 #include "scenes/sampling.hpp"
 #include "support.hpp"
 
-#include <saltus/hybrid/impact.hpp>
+#include <saltus/hybrid/dynamics/impact.hpp>
 
 namespace saltus::testing {
 namespace {

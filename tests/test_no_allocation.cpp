@@ -5,8 +5,8 @@
 #include "scenes/sampling.hpp"
 #include "support.hpp"
 
-#include <saltus/hybrid/derivatives.hpp>
-#include <saltus/hybrid/impact.hpp>
+#include <saltus/hybrid/dynamics/derivatives.hpp>
+#include <saltus/hybrid/dynamics/impact.hpp>
 
 #include <atomic>
 #include <cstdlib>

@@ -4,7 +4,7 @@
 //   q'+ = -e_n q'- at each impact.
 #pragma once
 
-#include <saltus/hybrid/scene.hpp>
+#include <saltus/hybrid/vocabulary/scene.hpp>
 
 #include <random>
 

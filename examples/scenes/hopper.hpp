@@ -32,7 +32,7 @@
 //   knee torque on phi_knee.
 #pragma once
 
-#include <saltus/hybrid/scene.hpp>
+#include <saltus/hybrid/vocabulary/scene.hpp>
 
 #include <cmath>
 #include <random>

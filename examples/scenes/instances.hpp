@@ -5,8 +5,8 @@
 
 #include "scenes/all_scenes.hpp"
 
-#include <saltus/hybrid/reference_spreading.hpp>
-#include <saltus/hybrid/simulator.hpp>
+#include <saltus/hybrid/reference/reference_spreading.hpp>
+#include <saltus/hybrid/simulation/simulator.hpp>
 
 #define SALTUS_SCENE_INSTANCES(prefix, Scene)                  \
   prefix template class saltus::Simulator<Scene>;              \

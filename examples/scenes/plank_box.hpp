@@ -22,7 +22,7 @@
 // (a 1 kg box at 0.6 m tilts it by about 0.03 rad); mu = 0.4 on both corners; e_n = 0.
 #pragma once
 
-#include <saltus/hybrid/scene.hpp>
+#include <saltus/hybrid/vocabulary/scene.hpp>
 
 #include <array>
 #include <cmath>

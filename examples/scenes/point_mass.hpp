@@ -5,7 +5,7 @@
 // Example 1 is frictionless; planar Coulomb friction can be switched on for tests.
 #pragma once
 
-#include <saltus/hybrid/scene.hpp>
+#include <saltus/hybrid/vocabulary/scene.hpp>
 
 #include <array>
 #include <random>

@@ -4,7 +4,7 @@
 // contact approaches.
 #pragma once
 
-#include <saltus/hybrid/kinematics.hpp>
+#include <saltus/hybrid/dynamics/kinematics.hpp>
 
 #include <random>
 

@@ -14,8 +14,8 @@
 // The box is unactuated (nu = 0): it is the impact and friction stress case, not a control one.
 #pragma once
 
-#include <saltus/hybrid/kinematics.hpp>
-#include <saltus/hybrid/scene.hpp>
+#include <saltus/hybrid/dynamics/kinematics.hpp>
+#include <saltus/hybrid/vocabulary/scene.hpp>
 
 #include <array>
 #include <cmath>

@@ -1,6 +1,6 @@
 // The double-precision factorisations behind every linear solve of the hybrid module, compiled
 // once here for the bounds listed in linear_solve.hpp.
-#include <saltus/hybrid/linear_solve.hpp>
+#include <saltus/hybrid/contact/linear_solve.hpp>
 
 namespace saltus {
 

@@ -1,6 +1,6 @@
 // A user's scene, written only from positions and energies: a unit point mass falling onto the
 // ground. Prints the impact time, which must be sqrt(2 h / g).
-#include <saltus/hybrid/simulator.hpp>
+#include <saltus/hybrid/simulation/simulator.hpp>
 
 #include <cmath>
 #include <cstdio>

@@ -66,8 +66,8 @@
 // law (PD tracking) the difference is exact up to round-off, O(eps |u| / h); otherwise O(h^2).
 #pragma once
 
-#include <saltus/hybrid/derivatives.hpp>
-#include <saltus/hybrid/trajectory.hpp>
+#include <saltus/hybrid/dynamics/derivatives.hpp>
+#include <saltus/hybrid/vocabulary/trajectory.hpp>
 
 #include <algorithm>
 #include <cmath>

@@ -24,7 +24,7 @@
 // Not thread-safe: one LinearisedSystem owns one derivative workspace.
 #pragma once
 
-#include <saltus/hybrid/reference_spreading.hpp>
+#include <saltus/hybrid/reference/reference_spreading.hpp>
 #include <saltus/sensitivity/detail/ode.hpp>
 #include <saltus/sensitivity/jump_gain.hpp>
 

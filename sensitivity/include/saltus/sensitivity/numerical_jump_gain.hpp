@@ -35,7 +35,7 @@
 // side (half without Richardson).
 #pragma once
 
-#include <saltus/hybrid/simulator.hpp>
+#include <saltus/hybrid/simulation/simulator.hpp>
 #include <saltus/sensitivity/jump_gain.hpp>
 
 #include <Eigen/LU>

@@ -5,7 +5,7 @@
 // forwards (t1 > t0) or backwards (t1 < t0); allocation-free.
 #pragma once
 
-#include <saltus/hybrid/errors.hpp>
+#include <saltus/hybrid/vocabulary/errors.hpp>
 
 #include <boost/numeric/odeint.hpp>
 #include <boost/numeric/odeint/external/eigen/eigen.hpp>
