@@ -32,6 +32,7 @@
 // lambda_n) on tangent columns, y is the minimum-norm solution of (D diag(s)) y = rhs.
 #pragma once
 
+#include <saltus/hybrid/dynamics/delassus.hpp>
 #include <saltus/hybrid/dynamics/kinematics.hpp>
 #include <saltus/hybrid/contact/linear_solve.hpp>
 #include <saltus/hybrid/vocabulary/contact_force.hpp>
@@ -46,22 +47,18 @@ namespace saltus {
 template <Scene S, class T = double>
 struct FlowWorkspace {
   static constexpr int nq = S::nq, nu = S::nu, nc = S::nc, nx = 2 * S::nq;
-  static constexpr int max_rows = delassus_bound(std::max(1, 3 * S::nc));
-  using RowsMatrix = BoundedMatrix<T, Eigen::Dynamic, nq, max_rows, nq>;
-  using ColsMatrix = BoundedMatrix<T, nq, Eigen::Dynamic, nq, max_rows>;
-  using SquareMatrix = BoundedMatrix<T, Eigen::Dynamic, Eigen::Dynamic, max_rows, max_rows>;
+  using Assembly = DelassusAssembly<S, T>;
+  static constexpr int max_rows = Assembly::max_rows;
+  using SquareMatrix = typename Assembly::SquareMatrix;
   using RowsVector = Eigen::Matrix<T, Eigen::Dynamic, 1, 0, max_rows, 1>;
 
   Kinematics<S, T> kin;
-  RowsMatrix J;
-  ColsMatrix F, MinvF;
-  SquareMatrix A;
+  /// J, F, M^{-1} F and D = J M^{-1} F of the closed contacts (rows, normal_row, tangent_row).
+  Assembly assembly;
   RowsVector rhs, lambda, work, split_scale;
-  SquareMatrix A_scaled;
-  MinNormSolve<T, max_rows> delassus;  ///< J M^{-1} F, factorised by value
-  int rows = 0;
-  std::array<int, nc> normal_row{};  ///< row of each closed contact's normal force (-1 if open)
-  std::array<int, nc> tangent_row{}; ///< first tangential row of each sticking contact (-1 else)
+  SquareMatrix D_scaled;
+  MinNormSolve<T, max_rows> delassus;  ///< D, factorised by value
+  std::array<ContactRows, nc> layout{};
   std::array<VecT<T, 2>, nc> slip_direction{};  ///< unit direction used by each slipping contact
 
   VecT<T, nq> a_free, acceleration, free_force;
@@ -69,15 +66,11 @@ struct FlowWorkspace {
   std::array<ContactForce<T>, nc> force{};
 
   FlowWorkspace() {
-    J.resize(max_rows, nq);
-    F.resize(nq, max_rows);
-    MinvF.resize(nq, max_rows);
-    A.resize(max_rows, max_rows);
     rhs.resize(max_rows);
     lambda.resize(max_rows);
     work.resize(max_rows);
     split_scale.resize(max_rows);
-    A_scaled.resize(max_rows, max_rows);
+    D_scaled.resize(max_rows, max_rows);
   }
 };
 
@@ -98,17 +91,18 @@ VecT<T, 2> slip_direction_of(const ContactState& state, int tangents, const VecT
 }
 
 /// The weighted minimum-norm friction split of redundant sticking contacts (file comment):
-/// re-solves the Delassus system ws.A lambda = ws.rhs (m = ws.rows) with the tangent columns of
+/// re-solves the Delassus system D lambda = ws.rhs (m = rows of ws.assembly) with the tangent columns of
 /// every sticking contact scaled by sqrt(mu lambda_n), lambda_n from the current ws.lambda.
 template <Scene S, class T>
 void split_friction_by_utilisation(const S& scene, FlowWorkspace<S, T>& ws) {
-  const int m = ws.rows;
+  const auto& as = ws.assembly;
+  const int m = as.rows;
   double largest_normal = 0.0;
   bool any_stick_tangent = false;
   for (int i = 0; i < S::nc; ++i) {
-    if (ws.normal_row[i] < 0) continue;
-    largest_normal = std::max(largest_normal, std::abs(ad::value_of(ws.lambda[ws.normal_row[i]])));
-    any_stick_tangent = any_stick_tangent || ws.tangent_row[i] >= 0;
+    if (as.normal_row[i] < 0) continue;
+    largest_normal = std::max(largest_normal, std::abs(ad::value_of(ws.lambda[as.normal_row[i]])));
+    any_stick_tangent = any_stick_tangent || as.tangent_row[i] >= 0;
   }
   if (!any_stick_tangent || !(largest_normal > 0.0)) return;
   // A contact about to release (lambda_n -> 0) keeps a small positive weight, so the scaled
@@ -117,16 +111,16 @@ void split_friction_by_utilisation(const S& scene, FlowWorkspace<S, T>& ws) {
   ws.split_scale.resize(m);
   ws.split_scale.setConstant(T(1));
   for (int i = 0; i < S::nc; ++i) {
-    if (ws.tangent_row[i] < 0) continue;
+    if (as.tangent_row[i] < 0) continue;
     using std::sqrt;
-    T load = T(std::max(scene.contact(i).mu, 1e-12)) * ws.lambda[ws.normal_row[i]];
+    T load = T(std::max(scene.contact(i).mu, 1e-12)) * ws.lambda[as.normal_row[i]];
     if (ad::value_of(load) < floor) load = T(floor);
     const T s = sqrt(load);
-    for (int k = 0; k < scene.contact(i).tangents(); ++k) ws.split_scale[ws.tangent_row[i] + k] = s;
+    for (int k = 0; k < scene.contact(i).tangents(); ++k) ws.split_scale[as.tangent_row[i] + k] = s;
   }
-  ws.A_scaled.resize(m, m);
-  ws.A_scaled = ws.A * ws.split_scale.asDiagonal();
-  ws.delassus.solve(ws.A_scaled, ws.rhs, ws.work);
+  ws.D_scaled.resize(m, m);
+  ws.D_scaled = as.D * ws.split_scale.asDiagonal();
+  ws.delassus.solve(ws.D_scaled, ws.rhs, ws.work);
   ws.lambda = ws.split_scale.cwiseProduct(ws.work);
 }
 
@@ -148,60 +142,50 @@ void evaluate_flow(const S& scene, const Mode<S::nc>& mode, const VecT<T, 2 * S:
   ws.free_force -= kin.h;
   kin.solve_mass(ws.free_force, ws.a_free);
 
-  // Constraint rows, force columns and right-hand side of the closed contacts.
-  int m = 0;
+  // Rows and columns of the closed contacts (delassus.hpp), then the right-hand side -kappa.
   for (int i = 0; i < nc; ++i) {
-    ws.normal_row[i] = -1;
-    ws.tangent_row[i] = -1;
     ws.force[i] = ContactForce<T>{};
+    ws.layout[i] = ContactRows::None;
     if (!mode[i].closed()) continue;
-    const auto& c = kin.contacts[i];
-    const ContactSpec& spec = scene.contact(i);
-    const int nt = c.tangents;
-    ws.normal_row[i] = m;
-    ws.J.row(m) = c.wn.transpose();
-    ws.rhs[m] = -c.kappa_n;
+    const int nt = kin.contacts[i].tangents;
     if (nt > 0 && mode[i].mode == ContactMode::Slip) {
-      ws.slip_direction[i] = slip_direction_of<T>(mode[i], nt, c.zeta_t);
-      ws.F.col(m) = c.wn - T(spec.mu) * (c.Wt.leftCols(nt) * ws.slip_direction[i].head(nt));
-      ++m;
+      ws.slip_direction[i] = slip_direction_of<T>(mode[i], nt, kin.contacts[i].zeta_t);
+      ws.layout[i] = ContactRows::Slip;
     } else {
-      ws.F.col(m) = c.wn;
-      ++m;
-      if (nt > 0) {  // sticking: the tangential velocity is held at zero
-        ws.tangent_row[i] = m;
-        for (int k = 0; k < nt; ++k, ++m) {
-          ws.J.row(m) = c.Wt.col(k).transpose();
-          ws.F.col(m) = c.Wt.col(k);
-          ws.rhs[m] = -c.kappa_t[k];
-        }
-      }
+      ws.layout[i] = ContactRows::Stick;  // sticking: the tangential velocity is held at zero
     }
   }
-  ws.rows = m;
+  auto& as = ws.assembly;
+  as.assemble(scene, kin, ws.layout, ws.slip_direction);
+  const int m = as.rows;
+  for (int i = 0; i < nc; ++i) {
+    if (as.normal_row[i] < 0) continue;
+    const auto& c = kin.contacts[i];
+    ws.rhs[as.normal_row[i]] = -c.kappa_n;
+    if (as.tangent_row[i] >= 0)
+      for (int k = 0; k < c.tangents; ++k) ws.rhs[as.tangent_row[i] + k] = -c.kappa_t[k];
+  }
 
   if (m == 0) {
     ws.acceleration = ws.a_free;
   } else {
-    kin.solve_mass(ws.F.leftCols(m), ws.MinvF);
-    ws.A.resize(m, m);
-    ws.A.noalias() = ws.J.topRows(m) * ws.MinvF;
+    as.form(kin);
     ws.rhs.conservativeResize(m);
-    ws.rhs.noalias() -= ws.J.topRows(m) * ws.a_free;
+    ws.rhs.noalias() -= as.J.topRows(m) * ws.a_free;
     ws.lambda.resize(m);
-    ws.delassus.solve(ws.A, ws.rhs, ws.lambda);
+    ws.delassus.solve(as.D, ws.rhs, ws.lambda);
     if (ws.delassus.rank() < m) split_friction_by_utilisation(scene, ws);
     ws.rhs.resize(FlowWorkspace<S, T>::max_rows);
     ws.acceleration = ws.a_free;
-    ws.acceleration.noalias() += ws.MinvF * ws.lambda;
+    ws.acceleration.noalias() += as.MinvF * ws.lambda;
   }
 
   for (int i = 0; i < nc; ++i) {
-    if (ws.normal_row[i] < 0) continue;
+    if (as.normal_row[i] < 0) continue;
     const int nt = kin.contacts[i].tangents;
-    ws.force[i].normal = ws.lambda[ws.normal_row[i]];
-    if (ws.tangent_row[i] >= 0) {
-      for (int k = 0; k < nt; ++k) ws.force[i].tangent[k] = ws.lambda[ws.tangent_row[i] + k];
+    ws.force[i].normal = ws.lambda[as.normal_row[i]];
+    if (as.tangent_row[i] >= 0) {
+      for (int k = 0; k < nt; ++k) ws.force[i].tangent[k] = ws.lambda[as.tangent_row[i] + k];
     } else if (nt > 0) {
       ws.force[i].tangent = -T(scene.contact(i).mu) * ws.force[i].normal * ws.slip_direction[i];
     }

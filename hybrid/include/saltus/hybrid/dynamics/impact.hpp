@@ -132,19 +132,17 @@ class ImpactSolver {
     }
     problem_.resize();
     const int m = problem_.rows();
-    W_.resize(m, nq);
     velocity_scale_ = 0.0;
-    for (int i = 0; i < nc; ++i) {
-      if (index[i] < 0) continue;
-      const auto& c = kin.contacts[i];
-      const int row = problem_.row[index[i]];
-      W_.row(row) = c.wn.transpose();
-      for (int k = 0; k < c.tangents; ++k) W_.row(row + 1 + k) = c.Wt.col(k).transpose();
-    }
-    MinvWt_.resize(nq, m);
-    MinvWt_ = kin.llt.solve(W_.transpose());
-    problem_.A.noalias() = W_ * MinvWt_;
-    problem_.b.noalias() = W_ * v_minus;
+    // W stacks w_n^T and W_t^T of every contact in the problem, in the problem's row order.
+    std::array<ContactRows, nc> layout{};
+    for (int i = 0; i < nc; ++i) layout[i] = index[i] < 0 ? ContactRows::None : ContactRows::Stick;
+    assembly_.assemble(scene_, kin, layout, no_slip_directions_);
+    SALTUS_ASSERT(assembly_.rows == m);
+    assembly_.form(kin);
+    if (m > 0) problem_.A = assembly_.D;
+    const auto W = assembly_.J.topRows(m);
+    const auto MinvWt = assembly_.MinvF.leftCols(m);
+    problem_.b.noalias() = W * v_minus;
     for (int k = 0; k < m; ++k) velocity_scale_ = std::max(velocity_scale_, std::abs(problem_.b[k]));
     for (int i = 0; i < nc; ++i) {
       if (index[i] < 0) continue;
@@ -182,7 +180,7 @@ class ImpactSolver {
     impulse_scale_ = m > 0 ? solution_.lambda.head(m).cwiseAbs().maxCoeff() : 0.0;
     impulse_scale_ = std::max(impulse_scale_, 1e-300);
     VecT<double, nq> v_plus_solver = v_minus;
-    if (m > 0) v_plus_solver.noalias() += MinvWt_ * solution_.lambda.head(m);
+    if (m > 0) v_plus_solver.noalias() += MinvWt * solution_.lambda.head(m);
     for (int i = 0; i < nc; ++i) {
       r.impulse_mode[i] = ImpulseMode{};
       r.post_mode[i] = ContactState::open();
@@ -223,7 +221,7 @@ class ImpactSolver {
     } catch (const NumericalFailure&) {
       jump_map_ok = false;
     }
-    r.singular_delassus = m > 0 && jump_.rows > 0 && jump_.delassus.rank() < jump_.rows;
+    r.singular_delassus = m > 0 && jump_.assembly.rows > 0 && jump_.delassus.rank() < jump_.assembly.rows;
     r.minimum_norm_impulse = false;
     if (jump_map_ok) {
       const double v_scale = std::max(v_minus.cwiseAbs().maxCoeff(), v_plus_solver.cwiseAbs().maxCoeff());
@@ -307,8 +305,8 @@ class ImpactSolver {
   LemkeSolver<nc> lemke_;
   CoulombSolver<nc> coulomb_;
   JumpWorkspace<S, double> jump_;
-  BoundedMatrix<double, Eigen::Dynamic, nq, std::max(1, 3 * nc), nq> W_;
-  BoundedMatrix<double, nq, Eigen::Dynamic, nq, std::max(1, 3 * nc)> MinvWt_;
+  DelassusAssembly<S> assembly_;
+  std::array<VecT<double, 2>, nc> no_slip_directions_{};  ///< unused: every contact is Stick
   VecT<double, nx> x_jump_;
   std::array<double, nc> restitution_{};
   ImpactResult<S> result_;

@@ -21,6 +21,7 @@
 // impulse returned is the minimum-norm one (same decomposition and threshold as flow.hpp).
 #pragma once
 
+#include <saltus/hybrid/dynamics/delassus.hpp>
 #include <saltus/hybrid/dynamics/flow.hpp>
 #include <saltus/hybrid/contact/linear_solve.hpp>
 #include <saltus/hybrid/vocabulary/impact_mode.hpp>
@@ -34,24 +35,20 @@ namespace saltus {
 template <Scene S, class T = double>
 struct JumpWorkspace {
   static constexpr int nq = S::nq, nc = S::nc, nx = 2 * S::nq;
-  static constexpr int max_rows = delassus_bound(std::max(1, 3 * S::nc));
-  using RowsMatrix = BoundedMatrix<T, Eigen::Dynamic, nq, max_rows, nq>;
-  using ColsMatrix = BoundedMatrix<T, nq, Eigen::Dynamic, nq, max_rows>;
-  using SquareMatrix = BoundedMatrix<T, Eigen::Dynamic, Eigen::Dynamic, max_rows, max_rows>;
+  using Assembly = DelassusAssembly<S, T>;
+  static constexpr int max_rows = Assembly::max_rows;
   using RowsVector = Eigen::Matrix<T, Eigen::Dynamic, 1, 0, max_rows, 1>;
   static constexpr int max_slip = delassus_bound(std::max(1, 2 * S::nc));
   using SlipVector = Eigen::Matrix<T, Eigen::Dynamic, 1, 0, max_slip, 1>;
 
   Kinematics<S, T> kin;
-  RowsMatrix J;
-  ColsMatrix F, MinvF;
-  SquareMatrix A;
-  RowsVector target, lambda, work;
-  MinNormSolve<T, max_rows> delassus;  ///< J M^{-1} F, factorised by value
+  /// J, F, M^{-1} F and D = J M^{-1} F of the contacts taking an impulse (rows, normal_row, ...).
+  Assembly assembly;
+  RowsVector target, lambda;
+  MinNormSolve<T, max_rows> delassus;  ///< D, factorised by value
   /// Restitution per contact overriding the scene's when set (an impact taken as inelastic).
   const std::array<double, nc>* restitution = nullptr;
-  int rows = 0;
-  std::array<int, nc> normal_row{}, tangent_row{};
+  std::array<ContactRows, nc> layout{};
   std::array<VecT<T, 2>, nc> slip_direction{};
   VecT<T, nq> v_plus;
   std::array<ContactForce<T>, nc> impulse{};
@@ -61,13 +58,8 @@ struct JumpWorkspace {
   int newton_iterations = 0;
 
   JumpWorkspace() {
-    J.resize(max_rows, nq);
-    F.resize(nq, max_rows);
-    MinvF.resize(nq, max_rows);
-    A.resize(max_rows, max_rows);
     target.resize(max_rows);
     lambda.resize(max_rows);
-    work.resize(max_rows);
   }
 };
 
@@ -80,45 +72,32 @@ void solve_jump_system(const S& scene, const ImpactMode<S::nc>& mode, const VecT
                        JumpWorkspace<S, T>& ws) {
   const auto restitution = [&](int i) { return ws.restitution ? (*ws.restitution)[i] : scene.contact(i).restitution; };
   constexpr int nc = S::nc;
-  int m = 0;
   for (int i = 0; i < nc; ++i) {
-    ws.normal_row[i] = -1;
-    ws.tangent_row[i] = -1;
-    if (mode[i].role == ImpulseRole::None) continue;
-    const auto& c = ws.kin.contacts[i];
-    const ContactSpec& spec = scene.contact(i);
-    const int nt = c.tangents;
-    ws.normal_row[i] = m;
-    ws.J.row(m) = c.wn.transpose();
-    ws.target[m] = c.zeta_n < T(0) ? T(-restitution(i)) * c.zeta_n : T(0);
-    if (nt > 0 && mode[i].role == ImpulseRole::Slip) {
-      ws.F.col(m) = c.wn - T(spec.mu) * (c.Wt.leftCols(nt) * ws.slip_direction[i].head(nt));
-      ++m;
-    } else {
-      ws.F.col(m) = c.wn;
-      ++m;
-      if (nt > 0) {
-        ws.tangent_row[i] = m;
-        for (int k = 0; k < nt; ++k, ++m) {
-          ws.J.row(m) = c.Wt.col(k).transpose();
-          ws.F.col(m) = c.Wt.col(k);
-          ws.target[m] = T(0);
-        }
-      }
-    }
+    if (mode[i].role == ImpulseRole::None)
+      ws.layout[i] = ContactRows::None;
+    else
+      ws.layout[i] = mode[i].role == ImpulseRole::Slip ? ContactRows::Slip : ContactRows::Stick;
   }
-  ws.rows = m;
+  auto& as = ws.assembly;
+  as.assemble(scene, ws.kin, ws.layout, ws.slip_direction);
+  const int m = as.rows;
+  // Newton's law on the normal rows (2.10), tangential rest on the sticking ones (2.57).
+  for (int i = 0; i < nc; ++i) {
+    if (as.normal_row[i] < 0) continue;
+    const auto& c = ws.kin.contacts[i];
+    ws.target[as.normal_row[i]] = c.zeta_n < T(0) ? T(-restitution(i)) * c.zeta_n : T(0);
+    if (as.tangent_row[i] >= 0)
+      for (int k = 0; k < c.tangents; ++k) ws.target[as.tangent_row[i] + k] = T(0);
+  }
   ws.v_plus = v_minus;
   if (m == 0) return;
-  ws.kin.solve_mass(ws.F.leftCols(m), ws.MinvF);
-  ws.A.resize(m, m);
-  ws.A.noalias() = ws.J.topRows(m) * ws.MinvF;
+  as.form(ws.kin);
   ws.target.conservativeResize(m);
-  ws.target.noalias() -= ws.J.topRows(m) * v_minus;
+  ws.target.noalias() -= as.J.topRows(m) * v_minus;
   ws.lambda.resize(m);
-  ws.delassus.solve(ws.A, ws.target, ws.lambda);
+  ws.delassus.solve(as.D, ws.target, ws.lambda);
   ws.target.resize(JumpWorkspace<S, T>::max_rows);
-  ws.v_plus.noalias() += ws.MinvF * ws.lambda;
+  ws.v_plus.noalias() += as.MinvF * ws.lambda;
 }
 
 /// R(y) = zeta_t^+(d(y)) - y for the spatial slip contacts, stacked two per contact.
@@ -227,12 +206,13 @@ void apply_jump_map(const S& scene, const ImpactMode<S::nc>& mode, const VecT<T,
     detail::spatial_slip_residual(scene, mode, v, ws.y, ws, ws.residual);
   }
 
+  const auto& as = ws.assembly;
   for (int i = 0; i < nc; ++i) {
-    if (ws.normal_row[i] < 0) continue;
+    if (as.normal_row[i] < 0) continue;
     const int nt = ws.kin.contacts[i].tangents;
-    ws.impulse[i].normal = ws.lambda[ws.normal_row[i]];
-    if (ws.tangent_row[i] >= 0) {
-      for (int k = 0; k < nt; ++k) ws.impulse[i].tangent[k] = ws.lambda[ws.tangent_row[i] + k];
+    ws.impulse[i].normal = ws.lambda[as.normal_row[i]];
+    if (as.tangent_row[i] >= 0) {
+      for (int k = 0; k < nt; ++k) ws.impulse[i].tangent[k] = ws.lambda[as.tangent_row[i] + k];
     } else if (nt > 0) {
       ws.impulse[i].tangent = -T(scene.contact(i).mu) * ws.impulse[i].normal * ws.slip_direction[i];
     }

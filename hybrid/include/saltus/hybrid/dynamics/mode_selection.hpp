@@ -13,6 +13,7 @@
 
 #include <saltus/hybrid/contact/contact_problem.hpp>
 #include <saltus/hybrid/contact/coulomb_solver.hpp>
+#include <saltus/hybrid/dynamics/delassus.hpp>
 #include <saltus/hybrid/dynamics/flow.hpp>
 #include <saltus/hybrid/contact/lemke.hpp>
 
@@ -54,9 +55,11 @@ class ModeSelector {
     problem_.reset();
     std::array<int, nc> index{};
     std::array<Eigen::Vector2d, nc> slip_dir{};
+    std::array<ContactRows, nc> layout{};
     bool any_spatial = false;
     for (int i = 0; i < nc; ++i) {
       index[i] = -1;
+      layout[i] = ContactRows::None;
       if (!candidates[i]) continue;
       const auto& c = kin_.contacts[i];
       const int nt = c.tangents;
@@ -65,40 +68,30 @@ class ModeSelector {
       if (nt > 0 && !rest[i] && speed > v_tol) {
         slip_dir[i].head(nt) = c.zeta_t.head(nt) / speed;
         index[i] = problem_.add_contact(0, 0.0);  // friction prescribed along -zeta_t
+        layout[i] = ContactRows::Slip;
       } else {
         index[i] = problem_.add_contact(nt, scene_.contact(i).mu);
+        layout[i] = ContactRows::Stick;
         any_spatial = any_spatial || nt == 2;
       }
     }
     problem_.resize();
+    // The assembly stacks the contacts in the problem's row order: normal, then its tangents.
+    assembly_.assemble(scene_, kin_, layout, slip_dir);
     const int m = problem_.rows();
-    J_.resize(m, nq);
-    F_.resize(nq, m);
-    kappa_.resize(m);
+    SALTUS_ASSERT(assembly_.rows == m);
+    Mode<nc> mode;
+    if (m == 0) return mode;
+    assembly_.form(kin_);
+    problem_.A = assembly_.D;
+    problem_.b.noalias() = assembly_.J.topRows(m) * a_free;
     for (int i = 0; i < nc; ++i) {
       if (index[i] < 0) continue;
       const auto& c = kin_.contacts[i];
       const int r = problem_.row[index[i]];
-      J_.row(r) = c.wn.transpose();
-      kappa_[r] = c.kappa_n;
-      if (problem_.tangents[index[i]] == 0 && c.tangents > 0) {
-        F_.col(r) = c.wn - scene_.contact(i).mu * (c.Wt.leftCols(c.tangents) * slip_dir[i].head(c.tangents));
-      } else {
-        F_.col(r) = c.wn;
-        for (int k = 0; k < problem_.tangents[index[i]]; ++k) {
-          J_.row(r + 1 + k) = c.Wt.col(k).transpose();
-          F_.col(r + 1 + k) = c.Wt.col(k);
-          kappa_[r + 1 + k] = c.kappa_t[k];
-        }
-      }
+      problem_.b[r] += c.kappa_n;
+      for (int k = 0; k < problem_.tangents[index[i]]; ++k) problem_.b[r + 1 + k] += c.kappa_t[k];
     }
-    Mode<nc> mode;
-    if (m == 0) return mode;
-    MinvF_.resize(nq, m);
-    MinvF_ = kin_.llt.solve(F_);
-    problem_.A.noalias() = J_ * MinvF_;
-    problem_.b.noalias() = J_ * a_free;
-    problem_.b += kappa_;
 
     solution_.lambda.resize(m);
     solution_.y.resize(m);
@@ -159,9 +152,7 @@ class ModeSelector {
   ContactSolution<nc> solution_;
   LemkeSolver<nc> lemke_;
   CoulombSolver<nc> coulomb_;
-  BoundedMatrix<double, Eigen::Dynamic, nq, std::max(1, max_rows), nq> J_;
-  BoundedMatrix<double, nq, Eigen::Dynamic, nq, std::max(1, max_rows)> F_, MinvF_;
-  BoundedMatrix<double, Eigen::Dynamic, 1, std::max(1, max_rows), 1> kappa_;
+  DelassusAssembly<S> assembly_;
 };
 
 }  // namespace saltus
