@@ -44,7 +44,7 @@
 #include "scenes/spatial_box.hpp"
 
 #include <saltus/ad/autodiff.hpp>
-#include <saltus/hybrid/dynamics/kinematics.hpp>
+#include <saltus/hybrid/dynamics/kinematics.hxx>
 
 #include <benchmark/benchmark.h>
 #include <unsupported/Eigen/AutoDiff>

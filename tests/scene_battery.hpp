@@ -1,17 +1,29 @@
 // One battery for every scene of the factory: the AD contact Jacobians and curvature terms, the
 // flow, guard and jump-map derivatives against central differences; the Lagrangian structure of
-// M and h; the constraints each mode's flow must satisfy. Each scene instantiates the battery in
-// a test program of its own (test_battery_<scene>.cpp), so they compile in parallel.
+// M and h; the constraints each mode's flow must satisfy; the contact laws and the energy over
+// 10,000 random impacts; no heap allocation on the hot paths. Each scene instantiates the battery
+// in a test program of its own (test_battery_<scene>.cpp), so they compile in parallel and no
+// translation unit compiles five scenes. The programs link the allocation counter
+// (allocation_counter.cpp, with malloc wrapped: tests/CMakeLists.txt).
 #pragma once
 
+#include "allocation_counter.hpp"
+#include "scenes/sampling.hpp"
 #include "support.hpp"
 
 #include <saltus/hybrid/dynamics/derivatives.hpp>
 #include <saltus/hybrid/dynamics/flow.hpp>
 #include <saltus/hybrid/dynamics/guards.hpp>
+#include <saltus/hybrid/dynamics/impact.hpp>
 #include <saltus/hybrid/dynamics/jump_map.hpp>
 
 #include <Eigen/Eigenvalues>
+
+#include <cstdio>
+#include <memory>
+#include <random>
+#include <type_traits>
+#include <vector>
 
 namespace saltus::testing {
 
@@ -106,7 +118,7 @@ TYPED_TEST_P(SceneBattery, FlowJacobianMatchesCentralDifferences) {
     flow_jacobian(this->scene, mode, x, u, dws, f, A, B);
     const Vec<nx> f0 = flow(this->scene, mode, x, u, ws);
     EXPECT_TRUE(matrices_near(f, f0, 1e-13, 1e-13));
-    const bool full_rank = ws.rows == 0 || ws.delassus.rank() == ws.rows;
+    const bool full_rank = ws.assembly.rows == 0 || ws.delassus.rank() == ws.assembly.rows;
     auto fx = [&](const Vec<nx>& y) { return Vec<nx>(flow(this->scene, mode, y, u, ws)); };
     if (full_rank) {
       EXPECT_TRUE(matrices_near(A, central_jacobian<nx, nx>(fx, x), 1e-6, 1e-7))
@@ -171,7 +183,7 @@ TYPED_TEST_P(SceneBattery, GuardGradientsMatchCentralDifferences) {
         this->scene, mode, stack(generic_configuration(this->scene, this->rng), random_vector<S::nq>(this->rng, 1.0)));
     const Vec<nu> u = random_vector<nu>(this->rng, 2.0);
     const Vec<nx> f0 = flow(this->scene, mode, x, u, ws);
-    const bool full_rank = ws.rows == 0 || ws.delassus.rank() == ws.rows;
+    const bool full_rank = ws.assembly.rows == 0 || ws.delassus.rank() == ws.assembly.rows;
     for (const Guard& g : active_guards(this->scene, mode)) {
       Eigen::Matrix<double, 1, nx> dx;
       Eigen::Matrix<double, 1, nu> du;
@@ -246,9 +258,99 @@ TYPED_TEST_P(SceneBattery, JumpMapJacobianMatchesCentralDifferences) {
   }
 }
 
+// Over 10,000 random pre-impact states: Signorini and Coulomb on the impulses and post-impact
+// normal velocities >= 0 to 1e-12 (relative), no energy gain for e_n = 0, and for the ball
+// exactly the restitution e_n.
+TYPED_TEST_P(SceneBattery, ContactLawsAndEnergyHoldOverRandomImpacts) {
+  using S = TypeParam;
+  const S& scene = this->scene;
+  ImpactSolver<S> solver(scene);
+  std::mt19937 rng(12345);
+  int singular = 0;
+  double worst_signorini = 0, worst_coulomb = 0, worst_gain = -1;
+  for (int trial = 0; trial < 10000; ++trial) {
+    const Vec<2 * S::nq> x = scenes::random_pre_impact_state(scene, rng);
+    const auto& r = solver.solve(x);
+    singular += r.singular_delassus;
+    worst_signorini = std::max(worst_signorini, r.signorini_residual);
+    worst_coulomb = std::max(worst_coulomb, r.coulomb_residual);
+    const double gain = (r.kinetic_energy_plus - r.kinetic_energy_minus) / r.kinetic_energy_minus;
+    worst_gain = std::max(worst_gain, gain);
+    ASSERT_LE(r.signorini_residual, 1e-12) << "trial " << trial << " x- = " << x.transpose();
+    ASSERT_LE(r.coulomb_residual, 1e-12) << "trial " << trial << " x- = " << x.transpose();
+    bool elastic = false;
+    for (int i = 0; i < S::nc; ++i) elastic = elastic || scene.contact(i).restitution > 0;
+    if (!elastic) {
+      ASSERT_LE(gain, 1e-12) << "kinetic energy increased, trial " << trial;
+    }
+    EXPECT_TRUE(matrices_near(Vec<S::nq>(r.x_plus.template head<S::nq>()), Vec<S::nq>(x.template head<S::nq>()), 0, 0))
+        << "positions must not jump";
+  }
+  ::testing::Test::RecordProperty("singular_cases", singular);
+  std::printf("%s: worst Signorini %.2e, Coulomb %.2e, relative energy change %.2e, singular %d\n", S::name,
+              worst_signorini, worst_coulomb, worst_gain, singular);
+  if constexpr (std::is_same_v<S, scenes::PlankBox> || std::is_same_v<S, scenes::SpatialBox>) {
+    EXPECT_GT(singular, 500) << "the redundant (flat) cases must be exercised";
+  }
+}
+
+TYPED_TEST_P(SceneBattery, HotPathsAllocateNothing) {
+  using S = TypeParam;
+  constexpr int nx = 2 * S::nq, nu = S::nu;
+  const S& scene = this->scene;
+  std::mt19937 rng(5);
+  // Everything is made before counting starts.
+  FlowWorkspace<S> flow_ws;
+  JumpWorkspace<S> jump_ws;
+  auto derivative_ws = std::make_unique<DerivativeWorkspace<S>>();
+  auto impact = std::make_unique<ImpactSolver<S>>(scene);
+  std::vector<Mode<S::nc>> modes;
+  std::vector<Vec<nx>> states, pre_impact;
+  for (int k = 0; k < 20; ++k) {
+    modes.push_back(random_mode(scene, rng));
+    states.push_back(consistent_with_mode(scene, modes.back(),
+                                          stack(generic_configuration(scene, rng), random_vector<S::nq>(rng, 1.0))));
+    pre_impact.push_back(scenes::random_pre_impact_state(scene, rng));
+  }
+  const Vec<nu> u = random_vector<nu>(rng, 1.0);
+  Vec<nx> f, xp;
+  Mat<nx, nx> A, G;
+  Mat<nx, nu> B;
+  long counted = 0;
+  {
+    CountAllocations guard;
+    std::array<long, 6> by_step{};
+    for (std::size_t k = 0; k < modes.size(); ++k) {
+      long before = allocations;
+      evaluate_flow(scene, modes[k], states[k], u, flow_ws);
+      for (const Guard& g : active_guards(scene, modes[k])) (void)guard_value(scene, modes[k], g, flow_ws);
+      by_step[0] += allocations - before;
+      before = allocations;
+      flow_jacobian(scene, modes[k], states[k], u, *derivative_ws, f, A, B);
+      by_step[1] += allocations - before;
+      before = allocations;
+      const auto& r = impact->solve(pre_impact[k]);
+      by_step[2] += allocations - before;
+      before = allocations;
+      apply_jump_map(scene, r.impulse_mode, pre_impact[k], jump_ws, xp);
+      by_step[3] += allocations - before;
+      before = allocations;
+      jump_map_jacobian(scene, r.impulse_mode, pre_impact[k], *derivative_ws, xp, G);
+      by_step[4] += allocations - before;
+    }
+    counted = allocations;
+    counting = false;
+    if (counted != 0)
+      std::printf("allocations: flow %ld, flow Jacobian %ld, impact %ld, jump map %ld, jump Jacobian %ld\n", by_step[0],
+                  by_step[1], by_step[2], by_step[3], by_step[4]);
+  }
+  EXPECT_EQ(counted, 0) << S::name << ": heap allocations in flows, jump maps, derivatives or impacts";
+}
+
 REGISTER_TYPED_TEST_SUITE_P(SceneBattery, ContactJacobiansAndCurvatureMatchCentralDifferences,
                             MassMatrixAndBiasComeFromOneLagrangian, FlowJacobianMatchesCentralDifferences,
                             FlowSatisfiesTheConstraintsOfItsMode, GuardGradientsMatchCentralDifferences,
-                            JumpMapJacobianMatchesCentralDifferences);
+                            JumpMapJacobianMatchesCentralDifferences, ContactLawsAndEnergyHoldOverRandomImpacts,
+                            HotPathsAllocateNothing);
 
 }  // namespace saltus::testing

@@ -1,4 +1,6 @@
-// Compiles the sensitivity machinery of the hopper scene once (see sensitivity_instances.hpp).
+// Compiles the sensitivity machinery of the Hopper scene once (see sensitivity_instances.hpp).
 #include "sensitivity_instances.hpp"
 
-SALTUS_SENSITIVITY_INSTANCES(, saltus::scenes::Hopper)
+#include <saltus/sensitivity/instantiate.hxx>
+
+SALTUS_INSTANTIATE_SCENE_SENSITIVITY(saltus::scenes::Hopper)

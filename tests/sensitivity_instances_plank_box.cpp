@@ -1,4 +1,6 @@
-// Compiles the sensitivity machinery of the plank_box scene once (see sensitivity_instances.hpp).
+// Compiles the sensitivity machinery of the PlankBox scene once (see sensitivity_instances.hpp).
 #include "sensitivity_instances.hpp"
 
-SALTUS_SENSITIVITY_INSTANCES(, saltus::scenes::PlankBox)
+#include <saltus/sensitivity/instantiate.hxx>
+
+SALTUS_INSTANTIATE_SCENE_SENSITIVITY(saltus::scenes::PlankBox)

@@ -1,4 +1,6 @@
-// Compiles the sensitivity machinery of the point_mass scene once (see sensitivity_instances.hpp).
+// Compiles the sensitivity machinery of the PointMass scene once (see sensitivity_instances.hpp).
 #include "sensitivity_instances.hpp"
 
-SALTUS_SENSITIVITY_INSTANCES(, saltus::scenes::PointMass)
+#include <saltus/sensitivity/instantiate.hxx>
+
+SALTUS_INSTANTIATE_SCENE_SENSITIVITY(saltus::scenes::PointMass)

@@ -1,4 +1,6 @@
-// Compiles the simulation machinery of the plank_box scene once (see instances.hpp).
+// Compiles the machinery of the PlankBox scene once (see instances.hpp).
 #include "scenes/instances.hpp"
 
-SALTUS_SCENE_INSTANCES(, saltus::scenes::PlankBox)
+#include <saltus/hybrid/instantiate.hxx>
+
+SALTUS_INSTANTIATE_SCENE(saltus::scenes::PlankBox)

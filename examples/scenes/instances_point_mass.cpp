@@ -1,4 +1,6 @@
-// Compiles the simulation machinery of the point_mass scene once (see instances.hpp).
+// Compiles the machinery of the PointMass scene once (see instances.hpp).
 #include "scenes/instances.hpp"
 
-SALTUS_SCENE_INSTANCES(, saltus::scenes::PointMass)
+#include <saltus/hybrid/instantiate.hxx>
+
+SALTUS_INSTANTIATE_SCENE(saltus::scenes::PointMass)

@@ -1,4 +1,6 @@
-// Compiles the simulation machinery of the spatial_box scene once (see instances.hpp).
+// Compiles the machinery of the SpatialBox scene once (see instances.hpp).
 #include "scenes/instances.hpp"
 
-SALTUS_SCENE_INSTANCES(, saltus::scenes::SpatialBox)
+#include <saltus/hybrid/instantiate.hxx>
+
+SALTUS_INSTANTIATE_SCENE(saltus::scenes::SpatialBox)

@@ -93,147 +93,38 @@ class LinearisedSystem {
   double t_begin(int i) const { return reference_.reference().segments.at(i).t_begin; }  ///< nominal
   double t_end(int i) const { return reference_.reference().segments.at(i).t_end; }      ///< nominal
   /// The state segment i starts from: x+ of the event before it, or the initial state.
-  State begin_state(int i) const {
-    const auto& traj = reference_.reference();
-    return i > 0 ? traj.events.at(i - 1).x_plus : traj.state(0, t_begin(0));
-  }
+  State begin_state(int i) const;
 
   /// A and B of segment i's mode at (t, x) with the segment's input u_i(t): A = df/dx + df/du K
   /// in closed loop (see the header), df/dx otherwise; B = df/du.
-  void jacobians(int i, double t, const State& x, Mat<nx, nx>& A, Mat<nx, nu>& B) const {
-    const Input u = reference_.input(i, t);
-    State f;
-    flow_jacobian(scene_, mode(i), x, u, *ws_, f, A, B);
-    close_loop(i, t, x, A, B);
-  }
+  void jacobians(int i, double t, const State& x, Mat<nx, nx>& A, Mat<nx, nu>& B) const;
   /// K_i(t) = d law / dx along extended segment i at (t, x): zero with FeedbackTreatment::Signal,
   /// and outside the nominal interval with InputExtension::Hold.
-  Mat<nu, nx> feedback(int i, double t, const State& x) const {
-    Mat<nu, nx> K = Mat<nu, nx>::Zero();
-    if (closed_loop_at(i, t)) {
-      State probe;
-      feedback_gain<S>(reference_.reference().input, t, x, mode(i), options_.gains.feedback_step, probe, K);
-    }
-    return K;
-  }
+  Mat<nu, nx> feedback(int i, double t, const State& x) const;
   /// A, B on the extended reference of segment i at t.
   void jacobians(int i, double t, Mat<nx, nx>& A, Mat<nx, nu>& B) const { jacobians(i, t, reference_.state(i, t), A, B); }
 
   /// Phi_i(t1, t0) on extended segment i (t0, t1 in its extended interval, either order).
-  Mat<nx, nx> transition_matrix(int i, double t1, double t0) const {
-    // [x, Phi] stacked column-wise in one vector (odeint's vector-space algebra wants vectors).
-    using Aug = Eigen::Matrix<double, nx * (nx + 1), 1>;
-    using AugMap = Eigen::Map<Eigen::Matrix<double, nx, nx + 1>>;
-    using ConstAugMap = Eigen::Map<const Eigen::Matrix<double, nx, nx + 1>>;
-    const State x0 = start_state(i, t0);
-    Aug y;
-    AugMap Y(y.data());
-    Y.col(0) = x0;
-    Y.template rightCols<nx>().setIdentity();
-    Mat<nx, nx> A;
-    Mat<nx, nu> B;
-    State f;
-    auto rhs = [&](double t, const Aug& a, Aug& dadt) {
-      const ConstAugMap Av(a.data());
-      AugMap D(dadt.data());
-      const State x = Av.col(0);
-      const Input u = reference_.input(i, t);
-      flow_jacobian(scene_, mode(i), x, u, *ws_, f, A, B);
-      close_loop(i, t, x, A, B);
-      D.col(0) = f;
-      D.template rightCols<nx>().noalias() = A * Av.template rightCols<nx>();
-    };
-    detail::integrate_adaptive(rhs, y, t0, t1, options_.variational);
-    return Y.template rightCols<nx>();
-  }
+  Mat<nx, nx> transition_matrix(int i, double t1, double t0) const;
 
   /// The state-transition matrix of the time-triggered hybrid system from t0 to t1 >= t0 along
   /// the nominal segments, with the jump gains G_z at the nominal event times in between.
-  Mat<nx, nx> state_transition(double t1, double t0) const {
-    const auto& traj = reference_.reference();
-    SALTUS_DEMAND(t1 >= t0, InvalidArgument, "state_transition: t1 = ", t1, " < t0 = ", t0);
-    int i = traj.segment_at(t0);
-    const int last = traj.segment_at(t1);
-    Mat<nx, nx> Phi = Mat<nx, nx>::Identity();
-    double t = t0;
-    for (; i < last; ++i) {
-      Phi = (gains_[i].G_z * transition_matrix(i, t_end(i), t) * Phi).eval();
-      t = t_end(i);
-    }
-    return transition_matrix(last, t1, t) * Phi;
-  }
+  Mat<nx, nx> state_transition(double t1, double t0) const;
 
   /// The first-order prediction of the motion from x(t0) + eps z0 under u + eps v(t), t0 the
   /// reference's start.
-  Prediction<S> predict(const State& z0, InputPerturbation v) const {
-    SALTUS_DEMAND(static_cast<bool>(v), InvalidArgument, "predict: the input perturbation is empty");
-    Prediction<S> p;
-    p.system_ = this;
-    p.v_ = std::make_shared<const InputPerturbation>(std::move(v));
-    const int n = segment_count();
-    p.z_begin_.resize(n);
-    p.z_end_.resize(n);
-    State z = z0;
-    for (int i = 0; i < n; ++i) {
-      p.z_begin_[i] = z;
-      z = propagate(i, z, *p.v_, t_end(i));
-      p.z_end_[i] = z;
-      if (i + 1 < n) {
-        const double te = t_end(i);
-        z = gains_[i].G_z * z;
-        if constexpr (nu > 0) z += gains_[i].G_v * (*p.v_)(te);
-      }
-    }
-    return p;
-  }
+  Prediction<S> predict(const State& z0, InputPerturbation v) const;
 
   /// z(t) on extended segment i from z(t_begin(i)) = z_begin under v.
-  State propagate(int i, const State& z_begin, const InputPerturbation& v, double t) const {
-    using Aug = Eigen::Matrix<double, 2 * nx, 1>;  // [x; z]
-    const double t0 = t_begin(i);
-    Aug y;
-    y.template head<nx>() = begin_state(i);
-    y.template tail<nx>() = z_begin;
-    Mat<nx, nx> A;
-    Mat<nx, nu> B;
-    State f;
-    auto rhs = [&](double s, const Aug& a, Aug& dadt) {
-      const State x = a.template head<nx>();
-      const Input u = reference_.input(i, s);
-      flow_jacobian(scene_, mode(i), x, u, *ws_, f, A, B);
-      close_loop(i, s, x, A, B);
-      dadt.template head<nx>() = f;
-      dadt.template tail<nx>().noalias() = A * a.template tail<nx>();
-      if constexpr (nu > 0) dadt.template tail<nx>().noalias() += B * v(s);
-    };
-    detail::integrate_adaptive(rhs, y, t0, t, options_.variational);
-    return y.template tail<nx>();
-  }
+  State propagate(int i, const State& z_begin, const InputPerturbation& v, double t) const;
 
  private:
-  bool closed_loop_at(int i, double t) const {
-    if constexpr (nu == 0) return false;
-    if (options_.gains.feedback != FeedbackTreatment::ClosedLoop) return false;
-    return options_.spreading.input == InputExtension::Evaluate || (t >= t_begin(i) && t <= t_end(i));
-  }
+  bool closed_loop_at(int i, double t) const;
   // A += B K_i(t) in closed loop (K by central differences of the law in x).
-  void close_loop(int i, double t, const State& x, Mat<nx, nx>& A, const Mat<nx, nu>& B) const {
-    if (!closed_loop_at(i, t)) return;
-    feedback_gain<S>(reference_.reference().input, t, x, mode(i), options_.gains.feedback_step, probe_, K_);
-    A.noalias() += B * K_;
-  }
+  void close_loop(int i, double t, const State& x, Mat<nx, nx>& A, const Mat<nx, nu>& B) const;
 
   // x on extended segment i at t0, integrated from the segment's start with the variational tolerances.
-  State start_state(int i, double t0) const {
-    State x = begin_state(i);
-    auto rhs = [&](double t, const State& y, State& dydt) {
-      const Input u = reference_.input(i, t);
-      evaluate_flow(scene_, mode(i), y, u, flow_);
-      dydt = flow_.xdot;
-    };
-    detail::integrate_adaptive(rhs, x, t_begin(i), t0, options_.variational);
-    return x;
-  }
+  State start_state(int i, double t0) const;
 
   const S& scene_;
   LinearisationOptions options_;

@@ -75,130 +75,39 @@ struct FlowWorkspace {
 };
 
 /// Direction of the friction force of a slipping contact, opposite to -lambda_t / (mu lambda_n).
-/// Planar: the sign the mode keeps. Spatial: the current direction of zeta_t (zero only at the
-/// stop itself, a set of measure zero that the slip->stick guard ends the mode at).
+/// Planar: the sign the mode keeps. Spatial: the current direction of zeta_t while the slip goes
+/// on along the mode's direction d (zeta_t . d > 0, the slip->stick guard positive), and d itself
+/// once zeta_t . d <= 0: the mode's flow continued past its stop. Continued with the current
+/// direction instead, the friction would flip with zeta_t at the stop and hold zeta_t at zero
+/// from above: the guard zeta_t . d would approach zero without crossing it, and an integrator
+/// that steps over the stop (CVODE-BDF at rtol 1e-4 on the spatial box) would miss the event.
+/// Continued along d, the guard crosses zero transversally (at the rate d . zeta_t'), as the
+/// planar slip's s zeta_t does; reference spreading uses the same continuation.
 template <class T>
 VecT<T, 2> slip_direction_of(const ContactState& state, int tangents, const VecT<T, 2>& zeta_t) {
   VecT<T, 2> d = VecT<T, 2>::Zero();
   if (tangents == 1) {
     d[0] = T(state.slip_direction[0] >= 0 ? 1.0 : -1.0);
   } else if (tangents == 2) {
-    using std::sqrt;
-    const T n = sqrt(zeta_t.squaredNorm());
-    if (n > T(0)) d = zeta_t / n;
+    const double along = ad::value_of(zeta_t[0]) * state.slip_direction[0] +
+                         ad::value_of(zeta_t[1]) * state.slip_direction[1];
+    if (along <= 0.0 && state.slip_direction.squaredNorm() > 0.0) {
+      d[0] = T(state.slip_direction[0]);
+      d[1] = T(state.slip_direction[1]);
+    } else {
+      using std::sqrt;
+      const T n = sqrt(zeta_t.squaredNorm());
+      if (n > T(0)) d = zeta_t / n;
+    }
   }
   return d;
-}
-
-/// The weighted minimum-norm friction split of redundant sticking contacts (file comment):
-/// re-solves the Delassus system D lambda = ws.rhs (m = rows of ws.assembly) with the tangent columns of
-/// every sticking contact scaled by sqrt(mu lambda_n), lambda_n from the current ws.lambda.
-template <Scene S, class T>
-void split_friction_by_utilisation(const S& scene, FlowWorkspace<S, T>& ws) {
-  const auto& as = ws.assembly;
-  const int m = as.rows;
-  double largest_normal = 0.0;
-  bool any_stick_tangent = false;
-  for (int i = 0; i < S::nc; ++i) {
-    if (as.normal_row[i] < 0) continue;
-    largest_normal = std::max(largest_normal, std::abs(ad::value_of(ws.lambda[as.normal_row[i]])));
-    any_stick_tangent = any_stick_tangent || as.tangent_row[i] >= 0;
-  }
-  if (!any_stick_tangent || !(largest_normal > 0.0)) return;
-  // A contact about to release (lambda_n -> 0) keeps a small positive weight, so the scaled
-  // matrix keeps the rank of the unscaled one.
-  const double floor = 1e-6 * largest_normal;
-  ws.split_scale.resize(m);
-  ws.split_scale.setConstant(T(1));
-  for (int i = 0; i < S::nc; ++i) {
-    if (as.tangent_row[i] < 0) continue;
-    using std::sqrt;
-    T load = T(std::max(scene.contact(i).mu, 1e-12)) * ws.lambda[as.normal_row[i]];
-    if (ad::value_of(load) < floor) load = T(floor);
-    const T s = sqrt(load);
-    for (int k = 0; k < scene.contact(i).tangents(); ++k) ws.split_scale[as.tangent_row[i] + k] = s;
-  }
-  ws.D_scaled.resize(m, m);
-  ws.D_scaled = as.D * ws.split_scale.asDiagonal();
-  ws.delassus.solve(ws.D_scaled, ws.rhs, ws.work);
-  ws.lambda = ws.split_scale.cwiseProduct(ws.work);
 }
 
 /// Evaluates the flow of `mode` at x = (q, v) under input u: fills ws.kin (all contacts),
 /// ws.acceleration, ws.xdot and ws.force. Allocation-free. Throws NonSpdMassMatrix.
 template <Scene S, class T>
 void evaluate_flow(const S& scene, const Mode<S::nc>& mode, const VecT<T, 2 * S::nq>& x,
-                   const VecT<T, S::nu>& u, FlowWorkspace<S, T>& ws) {
-  constexpr int nq = S::nq, nc = S::nc;
-  const VecT<T, nq> q = x.template head<nq>();
-  const VecT<T, nq> v = x.template tail<nq>();
-  evaluate_kinematics(scene, q, v, ws.kin);
-  auto& kin = ws.kin;
-
-  if constexpr (S::nu > 0)
-    ws.free_force.noalias() = kin.S_u * u;
-  else
-    ws.free_force.setZero();
-  ws.free_force -= kin.h;
-  kin.solve_mass(ws.free_force, ws.a_free);
-
-  // Rows and columns of the closed contacts (delassus.hpp), then the right-hand side -kappa.
-  for (int i = 0; i < nc; ++i) {
-    ws.force[i] = ContactForce<T>{};
-    ws.layout[i] = ContactRows::None;
-    if (!mode[i].closed()) continue;
-    const int nt = kin.contacts[i].tangents;
-    if (nt > 0 && mode[i].mode == ContactMode::Slip) {
-      ws.slip_direction[i] = slip_direction_of<T>(mode[i], nt, kin.contacts[i].zeta_t);
-      ws.layout[i] = ContactRows::Slip;
-    } else {
-      ws.layout[i] = ContactRows::Stick;  // sticking: the tangential velocity is held at zero
-    }
-  }
-  auto& as = ws.assembly;
-  as.assemble(scene, kin, ws.layout, ws.slip_direction);
-  const int m = as.rows;
-  for (int i = 0; i < nc; ++i) {
-    if (as.normal_row[i] < 0) continue;
-    const auto& c = kin.contacts[i];
-    ws.rhs[as.normal_row[i]] = -c.kappa_n;
-    if (as.tangent_row[i] >= 0)
-      for (int k = 0; k < c.tangents; ++k) ws.rhs[as.tangent_row[i] + k] = -c.kappa_t[k];
-  }
-
-  if (m == 0) {
-    ws.acceleration = ws.a_free;
-  } else {
-    as.form(kin);
-    ws.rhs.conservativeResize(m);
-    ws.rhs.noalias() -= as.J.topRows(m) * ws.a_free;
-    ws.lambda.resize(m);
-    ws.delassus.solve(as.D, ws.rhs, ws.lambda);
-    if (ws.delassus.rank() < m) split_friction_by_utilisation(scene, ws);
-    ws.rhs.resize(FlowWorkspace<S, T>::max_rows);
-    ws.acceleration = ws.a_free;
-    ws.acceleration.noalias() += as.MinvF * ws.lambda;
-  }
-
-  for (int i = 0; i < nc; ++i) {
-    if (as.normal_row[i] < 0) continue;
-    const int nt = kin.contacts[i].tangents;
-    ws.force[i].normal = ws.lambda[as.normal_row[i]];
-    if (as.tangent_row[i] >= 0) {
-      for (int k = 0; k < nt; ++k) ws.force[i].tangent[k] = ws.lambda[as.tangent_row[i] + k];
-    } else if (nt > 0) {
-      ws.force[i].tangent = -T(scene.contact(i).mu) * ws.force[i].normal * ws.slip_direction[i];
-    }
-  }
-  ws.xdot.template head<nq>() = v;
-  ws.xdot.template tail<nq>() = ws.acceleration;
-  if (!ws.xdot.allFinite()) {
-    VecT<double, 2 * nq> xv;
-    for (int k = 0; k < 2 * nq; ++k) xv[k] = ad::value_of(x[k]);
-    SALTUS_DEMAND(false, NumericalFailure, "the flow is not finite at x = [", xv.transpose(),
-                  "] (a non-finite state or input, or a degenerate contact configuration)");
-  }
-}
+                   const VecT<T, S::nu>& u, FlowWorkspace<S, T>& ws);
 
 /// Convenience: x' of a mode (allocates nothing beyond the workspace).
 template <Scene S, class T>

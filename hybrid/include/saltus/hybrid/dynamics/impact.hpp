@@ -74,37 +74,17 @@ class ImpactSolver {
 
   static_assert(S::nc > 0, "an impact needs a scene with contacts");
 
-  explicit ImpactSolver(const S& scene, ImpactOptions options = {}) : scene_(scene), options_(options) {
-    validate_scene(scene);
-    SALTUS_DEMAND(options.gap_tolerance >= 0 && options.velocity_tolerance >= 0 && options.impulse_tolerance >= 0 &&
-                      options.residual_tolerance > 0,
-                  InvalidArgument, "ImpactOptions: tolerances must be >= 0 (residual_tolerance > 0)");
-    coulomb_.options = options.coulomb;
-  }
+  explicit ImpactSolver(const S& scene, ImpactOptions options = {});
 
   const ImpactOptions& options() const { return options_; }
 
   /// Impact at x- with the contacts whose gap is within gap_tolerance.
-  const ImpactResult<S>& solve(const VecT<double, nx>& x_minus) {
-    require_finite(x_minus, "pre-impact state x-");
-    for (int i = 0; i < nc; ++i) restitution_[i] = scene_.contact(i).restitution;
-    evaluate_kinematics(scene_, VecT<double, nq>(x_minus.template head<nq>()),
-                        VecT<double, nq>(x_minus.template tail<nq>()), jump_.kin);
-    std::array<bool, nc> in_problem{};
-    for (int i = 0; i < nc; ++i) in_problem[i] = jump_.kin.contacts[i].gap <= options_.gap_tolerance;
-    return solve_evaluated(x_minus, in_problem);
-  }
+  const ImpactResult<S>& solve(const VecT<double, nx>& x_minus);
 
   /// Impact at x- with an explicit set of contacts taking part; `inelastic[i]` sets e_n = 0 for
   /// contact i in this impact (the simulator's rest criterion).
   const ImpactResult<S>& solve(const VecT<double, nx>& x_minus, const std::array<bool, nc>& in_problem,
-                               const std::array<bool, nc>& inelastic = {}) {
-    require_finite(x_minus, "pre-impact state x-");
-    for (int i = 0; i < nc; ++i) restitution_[i] = inelastic[i] ? 0.0 : scene_.contact(i).restitution;
-    evaluate_kinematics(scene_, VecT<double, nq>(x_minus.template head<nq>()),
-                        VecT<double, nq>(x_minus.template tail<nq>()), jump_.kin);
-    return solve_evaluated(x_minus, in_problem);
-  }
+                               const std::array<bool, nc>& inelastic = {});
 
   const ImpactResult<S>& result() const { return result_; }
   /// Restitution used by the last solve (the scene's, or 0 where made inelastic).
@@ -112,191 +92,19 @@ class ImpactSolver {
   const Problem& problem() const { return problem_; }
 
  private:
-  const ImpactResult<S>& solve_evaluated(const VecT<double, nx>& x_minus, const std::array<bool, nc>& in_problem) {
-    auto& r = result_;
-    const auto& kin = jump_.kin;
-    const VecT<double, nq> v_minus = x_minus.template tail<nq>();
-    r.in_problem = in_problem;
-    r.kinetic_energy_minus = kinetic_energy(kin.M, v_minus);
+  const ImpactResult<S>& solve_evaluated(const VecT<double, nx>& x_minus, const std::array<bool, nc>& in_problem);
 
-    // Contact problem y = W M^{-1} W^T Lambda + b.
-    problem_.reset();
-    std::array<int, nc> index{};
-    bool any_spatial = false;
-    for (int i = 0; i < nc; ++i) {
-      index[i] = -1;
-      if (!in_problem[i]) continue;
-      const int nt = kin.contacts[i].tangents;
-      any_spatial = any_spatial || nt == 2;
-      index[i] = problem_.add_contact(nt, scene_.contact(i).mu);
-    }
-    problem_.resize();
-    const int m = problem_.rows();
-    velocity_scale_ = 0.0;
-    // W stacks w_n^T and W_t^T of every contact in the problem, in the problem's row order.
-    std::array<ContactRows, nc> layout{};
-    for (int i = 0; i < nc; ++i) layout[i] = index[i] < 0 ? ContactRows::None : ContactRows::Stick;
-    assembly_.assemble(scene_, kin, layout, no_slip_directions_);
-    SALTUS_ASSERT(assembly_.rows == m);
-    assembly_.form(kin);
-    if (m > 0) problem_.A = assembly_.D;
-    const auto W = assembly_.J.topRows(m);
-    const auto MinvWt = assembly_.MinvF.leftCols(m);
-    problem_.b.noalias() = W * v_minus;
-    for (int k = 0; k < m; ++k) velocity_scale_ = std::max(velocity_scale_, std::abs(problem_.b[k]));
-    for (int i = 0; i < nc; ++i) {
-      if (index[i] < 0) continue;
-      const double zn = kin.contacts[i].zeta_n;
-      problem_.b[problem_.row[index[i]]] += restitution_[i] * std::min(zn, 0.0);
-    }
-    velocity_scale_ = std::max(velocity_scale_, 1e-300);
-
-    // Solve: Lemke when every contact is planar or frictionless, else the Coulomb solver.
-    solution_.lambda.resize(m);
-    solution_.y.resize(m);
-    bool use_lemke = options_.solver == ImpactOptions::Solver::Lemke ||
-                     (options_.solver == ImpactOptions::Solver::Automatic && !any_spatial);
-    ContactSolveStatus status = ContactSolveStatus::Solved;
-    if (m == 0) {
-      solution_.residual = 0.0;
-      solution_.iterations = 0;
-    } else if (use_lemke) {
-      status = lemke_.solve(problem_, solution_);
-      if (!(solution_.residual <= options_.residual_tolerance)) use_lemke = false;  // fall back on Newton
-    }
-    if (m > 0 && !use_lemke) status = coulomb_.solve(problem_, solution_);
-    r.used_lemke = use_lemke;
-    r.residual = solution_.residual;
-    r.iterations = solution_.iterations;
-    // A solver may stop short of its own target (round-off) yet within ours: the residual decides.
-    if (m > 0 && !(solution_.residual <= options_.residual_tolerance)) {
-      throw ContactProblemFailure(detail::concat(
-          "impact problem has no solution within tolerance: solver status '", to_string(status),
-          "', natural-map residual ", solution_.residual, " > ", options_.residual_tolerance,
-          " with ", problem_.contacts, " contacts at x- = [", x_minus.transpose(), "]"));
-    }
-
-    // Identify the impulse mode from the solution.
-    impulse_scale_ = m > 0 ? solution_.lambda.head(m).cwiseAbs().maxCoeff() : 0.0;
-    impulse_scale_ = std::max(impulse_scale_, 1e-300);
-    VecT<double, nq> v_plus_solver = v_minus;
-    if (m > 0) v_plus_solver.noalias() += MinvWt * solution_.lambda.head(m);
-    for (int i = 0; i < nc; ++i) {
-      r.impulse_mode[i] = ImpulseMode{};
-      r.post_mode[i] = ContactState::open();
-      if (index[i] < 0) continue;
-      const int row = problem_.row[index[i]];
-      const int nt = kin.contacts[i].tangents;
-      const double ln = solution_.lambda[row];
-      Eigen::Vector2d yt = Eigen::Vector2d::Zero();
-      for (int k = 0; k < nt; ++k) yt[k] = solution_.y[row + 1 + k];
-      const bool tangential_rest = yt.norm() <= options_.velocity_tolerance * velocity_scale_;
-      const Eigen::Vector2d dir = tangential_rest ? Eigen::Vector2d::Zero() : Eigen::Vector2d(yt / yt.norm());
-      if (ln > options_.impulse_tolerance * impulse_scale_) {
-        if (nt == 0)
-          r.impulse_mode[i].role = ImpulseRole::Stick;  // frictionless: the normal row only
-        else if (tangential_rest)
-          r.impulse_mode[i].role = ImpulseRole::Stick;
-        else
-          r.impulse_mode[i] = ImpulseMode{ImpulseRole::Slip, nt == 1 ? Eigen::Vector2d(dir[0] > 0 ? 1.0 : -1.0, 0.0) : dir};
-      }
-      const double yn_plus = solution_.y[row] - restitution_[i] * std::min(kin.contacts[i].zeta_n, 0.0);
-      if (yn_plus > options_.velocity_tolerance * velocity_scale_) continue;  // separating: open
-      if (nt == 0)
-        r.post_mode[i] = ContactState::slip(Eigen::Vector2d::Zero());
-      else if (tangential_rest)
-        r.post_mode[i] = ContactState::stick();
-      else
-        r.post_mode[i] = nt == 1 ? ContactState::slip_planar(dir[0] > 0 ? 1 : -1) : ContactState::slip(dir);
-    }
-
-    // The jump map of that mode gives v+ and the minimum-norm impulse. Where slipping contacts
-    // are redundant, the velocity depends on how the impulse is shared and the minimum-norm
-    // share need not be admissible (or its implicit slip directions may not exist): then the
-    // solver's own impulse is returned.
-    bool jump_map_ok = true;
-    try {
-      jump_.restitution = &restitution_;
-      apply_jump_map(scene_, r.impulse_mode, x_minus, jump_, x_jump_);
-    } catch (const NumericalFailure&) {
-      jump_map_ok = false;
-    }
-    r.singular_delassus = m > 0 && jump_.assembly.rows > 0 && jump_.delassus.rank() < jump_.assembly.rows;
-    r.minimum_norm_impulse = false;
-    if (jump_map_ok) {
-      const double v_scale = std::max(v_minus.cwiseAbs().maxCoeff(), v_plus_solver.cwiseAbs().maxCoeff());
-      const bool same_velocity =
-          (jump_.v_plus - v_plus_solver).cwiseAbs().maxCoeff() <= 1e-9 * std::max(v_scale, 1e-300);
-      fill_from_jump_map(x_minus, index);
-      const bool laws_hold = r.signorini_residual <= 1e-12 && r.coulomb_residual <= 1e-12;
-      r.minimum_norm_impulse = same_velocity && laws_hold;
-    }
-    if (!r.minimum_norm_impulse) fill_from_solver(x_minus, index, v_plus_solver);
-    r.kinetic_energy_plus = kinetic_energy(kin.M, VecT<double, nq>(r.x_plus.template tail<nq>()));
-    return r;
-  }
-
-  void fill_from_jump_map(const VecT<double, nx>& x_minus, const std::array<int, nc>& index) {
-    auto& r = result_;
-    r.x_plus = x_jump_;
-    for (int i = 0; i < nc; ++i) r.impulse[i] = jump_.impulse[i];
-    compute_law_residuals(x_minus, index);
-  }
+  void fill_from_jump_map(const VecT<double, nx>& x_minus, const std::array<int, nc>& index);
 
   void fill_from_solver(const VecT<double, nx>& x_minus, const std::array<int, nc>& index,
-                        const VecT<double, nq>& v_plus) {
-    auto& r = result_;
-    r.x_plus.template head<nq>() = x_minus.template head<nq>();
-    r.x_plus.template tail<nq>() = v_plus;
-    for (int i = 0; i < nc; ++i) {
-      r.impulse[i] = ContactForce<double>{};
-      if (index[i] < 0) continue;
-      const int row = problem_.row[index[i]];
-      r.impulse[i].normal = solution_.lambda[row];
-      for (int k = 0; k < jump_.kin.contacts[i].tangents; ++k) r.impulse[i].tangent[k] = solution_.lambda[row + 1 + k];
-    }
-    compute_law_residuals(x_minus, index);
-  }
+                        const VecT<double, nq>& v_plus);
 
   /// Signorini and Coulomb residuals of the returned (v+, Lambda), relative to the impulse scale
   /// (largest impulse component) and the velocity scale (largest pre-impact contact velocity):
   ///   Signorini: max(-Lambda_n, 0)/L, max(-y_n, 0)/V, |Lambda_n y_n|/(L V)
   ///   Coulomb:   max(||Lambda_t|| - mu Lambda_n, 0)/L and, where y_t != 0,
   ///              ||Lambda_t + mu Lambda_n y_t/||y_t|| || / L.
-  void compute_law_residuals(const VecT<double, nx>& x_minus, const std::array<int, nc>& index) {
-    (void)x_minus;
-    auto& r = result_;
-    const auto& kin = jump_.kin;
-    const VecT<double, nq> v_plus = r.x_plus.template tail<nq>();
-    double L = 0.0;
-    for (int i = 0; i < nc; ++i)
-      L = std::max({L, std::abs(r.impulse[i].normal), r.impulse[i].tangent.cwiseAbs().maxCoeff()});
-    L = std::max(L, 1e-300);
-    const double V = velocity_scale_;
-    r.velocity_scale = V;
-    r.impulse_scale = L;
-    r.signorini_residual = 0.0;
-    r.coulomb_residual = 0.0;
-    for (int i = 0; i < nc; ++i) {
-      const auto& c = kin.contacts[i];
-      r.normal_velocity_minus[i] = c.zeta_n;
-      r.normal_velocity_plus[i] = c.wn.dot(v_plus);
-      r.tangent_velocity_plus[i].setZero();
-      for (int k = 0; k < c.tangents; ++k) r.tangent_velocity_plus[i][k] = c.Wt.col(k).dot(v_plus);
-      if (index[i] < 0) continue;
-      const ContactSpec& spec = scene_.contact(i);
-      const double ln = r.impulse[i].normal;
-      const double yn = r.normal_velocity_plus[i] + restitution_[i] * std::min(c.zeta_n, 0.0);
-      r.signorini_residual = std::max({r.signorini_residual, std::max(-ln, 0.0) / L, std::max(-yn, 0.0) / V,
-                                       std::abs(ln * yn) / (L * V)});
-      if (c.tangents == 0) continue;
-      const Eigen::Vector2d lt = r.impulse[i].tangent;
-      const Eigen::Vector2d yt = r.tangent_velocity_plus[i];
-      r.coulomb_residual = std::max(r.coulomb_residual, std::max(lt.norm() - spec.mu * ln, 0.0) / L);
-      if (yt.norm() > options_.velocity_tolerance * V)
-        r.coulomb_residual = std::max(r.coulomb_residual, (lt + spec.mu * ln * yt / yt.norm()).norm() / L);
-    }
-  }
+  void compute_law_residuals(const VecT<double, nx>& x_minus, const std::array<int, nc>& index);
 
   const S& scene_;
   ImpactOptions options_;

@@ -10,6 +10,9 @@
 // derivative zeta_n, and the inner gradient of the outer derivative H v, whence kappa_n = v^T H v.
 // When T is itself a dual number (derivatives.hpp) the scene code runs three levels deep,
 // ad::Dual<ad::Dual<T, nq>, 1> (saltus/ad/autodiff.hpp says why that needs its constructors).
+//
+// Compiled once per scene: the definitions are in kinematics.hxx, instantiated for T = double
+// and T = StateInputDual<S> by SALTUS_INSTANTIATE_SCENE (saltus/hybrid/instantiate.hxx).
 #pragma once
 
 #include <saltus/ad/autodiff.hpp>
@@ -45,30 +48,7 @@ struct ContactKinematics {
 /// Fills `out` for contact i at (q, v); allocation-free.
 template <Scene S, class T>
 void evaluate_contact(const S& scene, int i, const VecT<T, S::nq>& q, const VecT<T, S::nq>& v,
-                      ContactKinematics<S, T>& out) {
-  constexpr int nq = S::nq;
-  using Inner = ad::Dual<T, nq>;
-  using Outer = ad::Dual<Inner, 1>;
-  VecT<Outer, nq> qs;
-  for (int k = 0; k < nq; ++k) qs[k] = Outer(ad::seed<nq>(q[k], k), typename Outer::Gradient(Inner(v[k])));
-
-  const Outer g = scene.template gap<Outer>(i, qs);
-  out.gap = g.value().value();
-  out.wn = g.value().derivatives();
-  out.zeta_n = g.derivatives()[0].value();
-  out.kappa_n = g.derivatives()[0].derivatives().dot(v);
-
-  const int nt = scene.contact(i).tangents();
-  out.tangents = nt;
-  if (nt > 0) {
-    const VecT<Outer, 2> tp = scene.template tangent_position<Outer>(i, qs);
-    for (int k = 0; k < nt; ++k) {
-      out.Wt.col(k) = tp[k].value().derivatives();
-      out.zeta_t[k] = tp[k].derivatives()[0].value();
-      out.kappa_t[k] = tp[k].derivatives()[0].derivatives().dot(v);
-    }
-  }
-}
+                      ContactKinematics<S, T>& out);
 
 /// M, the Cholesky factor of its value, h, S and all contacts at (q, v).
 template <Scene S, class T = double>
@@ -97,28 +77,12 @@ struct Kinematics {
 /// Evaluates M (and factorises it), h and S. Throws NonSpdMassMatrix if M is not SPD.
 template <Scene S, class T>
 void evaluate_dynamics(const S& scene, const VecT<T, S::nq>& q, const VecT<T, S::nq>& v,
-                       Kinematics<S, T>& k) {
-  k.M = scene.template mass_matrix<T>(q);
-  Mat<S::nq, S::nq> M0;
-  ad::value_into(k.M, M0);
-  k.llt.compute(M0);
-  if (k.llt.info() != Eigen::Success) {
-    VecT<double, S::nq> qd;
-    for (int i = 0; i < S::nq; ++i) qd[i] = ad::value_of(q[i]);
-    SALTUS_DEMAND(false, NonSpdMassMatrix,
-                  "mass matrix is not symmetric positive definite at q = [", qd.transpose(), "]");
-  }
-  k.h = scene.template bias<T>(q, v);
-  k.S_u = scene.template input_matrix<T>(q);
-}
+                       Kinematics<S, T>& k);
 
 /// evaluate_dynamics plus every contact.
 template <Scene S, class T>
 void evaluate_kinematics(const S& scene, const VecT<T, S::nq>& q, const VecT<T, S::nq>& v,
-                         Kinematics<S, T>& k) {
-  evaluate_dynamics(scene, q, v, k);
-  for (int i = 0; i < S::nc; ++i) evaluate_contact(scene, i, q, v, k.contacts[i]);
-}
+                         Kinematics<S, T>& k);
 
 /// Kinetic energy 1/2 v^T M v.
 template <class T, int N>

@@ -1,0 +1,105 @@
+// The event physics: what happens when guards fire. One component, used by the simulator, the
+// numerical twin of the jump gains and the conewise gains of simultaneous events, so that every
+// analysis composes exactly the transitions the simulator takes (thesis 2.3.3-2.3.4, appendix A.1):
+//  - touchdown: the impact problem over every contact at the impact (dynamics/impact.hpp), then
+//    the acceleration-level choice of which of the contacts left at zero normal velocity stay
+//    closed, stick or slip (dynamics/mode_selection.hpp; an impact into stick may slip at once,
+//    thesis B.3);
+//  - release (lambda_n reaches 0 decreasing): the contact opens;
+//  - slip onset (mu^2 lambda_n^2 - ||lambda_t||^2 reaches 0): the contact slips against its
+//    friction force, d = -lambda_t/||lambda_t|| (planar: the sign);
+//  - stop (the slip velocity reaches 0): the acceleration-level choice with that contact at
+//    tangential rest decides between stick and slip (the other way round, for planar contacts).
+// After a transition, every guard of the new mode is checked at the same instant: one that is
+// already below zero, or at zero and decreasing, fires at once (a chain), until none is due or
+// `max_chain` transitions have been taken. Guards that fired together (within the simulator's
+// simultaneity window) are resolved jointly: one impact problem for all touchdowns.
+//
+// Settled transitions. Contacts whose stick/slip changed at this instant are not changed back at
+// the same instant, and a contact released at this instant is not closed again by its touchdown
+// guard unless it approaches (resolve() says why in its comments).
+// Definitions in transition.hxx (compiled once per scene, saltus/hybrid/instantiate.hpp).
+#pragma once
+
+#include <saltus/hybrid/dynamics/flow.hpp>
+#include <saltus/hybrid/dynamics/impact.hpp>
+#include <saltus/hybrid/dynamics/jump_map.hpp>
+#include <saltus/hybrid/dynamics/mode_selection.hpp>
+#include <saltus/hybrid/simulation/mode_system.hpp>
+#include <saltus/hybrid/simulation/simulation_options.hpp>
+#include <saltus/hybrid/vocabulary/trajectory.hpp>
+
+#include <array>
+#include <memory>
+#include <optional>
+#include <vector>
+
+namespace saltus {
+
+template <Scene S>
+class TransitionResolver {
+ public:
+  static constexpr int nq = S::nq, nx = 2 * S::nq, nu = S::nu, nc = S::nc, ng = 2 * S::nc + 1;
+  using State = VecT<double, nx>;
+  using Input = VecT<double, nu>;
+
+  /// Uses options.impact, options.selection, options.max_chain, options.guard_tolerance and
+  /// options.rest_velocity. The scene must outlive the resolver.
+  TransitionResolver(const S& scene, const SimulationOptions& options);
+  TransitionResolver(S&&, const SimulationOptions&) = delete;  // would dangle
+
+  /// How a motion starts at (t0, x0) when no mode is given: the mode chosen from the state, and
+  /// the impact at t0 if a touching contact approaches.
+  struct Start {
+    Mode<nc> mode;
+    std::optional<Event<S>> impact;  ///< the initial impact (guards: the touchdowns), if any
+  };
+  /// Touching contacts (gap within the impact's gap tolerance) that approach impact at t0; those
+  /// at rest are candidates for the acceleration-level mode selection; the others are open.
+  /// @throws InvalidArgument if x0 penetrates a contact; ContactProblemFailure from the selection.
+  Start start(ModeSystem<S>& sys, double t0, const State& x0);
+
+  /// The event at time t from x- (the state just before) in mode_before, starting with the guards
+  /// `fired` and following the chain at the same instant (file comment). sys is left in the mode
+  /// after the event. @throws NumericalFailure when the chain does not settle in max_chain
+  /// transitions; ContactProblemFailure from an impact or a mode selection.
+  Event<S> resolve(ModeSystem<S>& sys, double t, const State& x_minus, const Mode<nc>& mode_before,
+                   std::vector<Guard> fired);
+
+  /// The guards of sys's mode due at (t, x): below -tolerance, or within it and decreasing (a
+  /// touchdown: approaching faster than the velocity tolerance). Tolerances: the impact's gap
+  /// tolerance (touchdown), guard_tolerance times the force scale (release) or its square (slip
+  /// onset), the velocity tolerance (stop).
+  std::vector<Guard> guards_due(ModeSystem<S>& sys, double t, const State& x);
+
+  /// One transition triggered by `guards` (all at once) at (t, x) in `mode`: updates x (an impact
+  /// changes v) and mode, and records the impulse in tr.
+  void apply(ModeSystem<S>& sys, double t, State& x, Mode<nc>& mode, const std::vector<Guard>& guards,
+             Transition<S>& tr);
+
+  /// The state after a known transition of a reference, with the reference's decisions: the jump
+  /// map of tr.impulse_mode if it was an impact, x itself otherwise. For re-simulations that must
+  /// follow a reference's event (the numerical twin).
+  State replay(const Transition<S>& tr, const State& x);
+
+  /// A velocity below this counts as zero at x: selection.velocity_tolerance * max(1, ||v||_inf).
+  double velocity_tolerance(const State& x) const;
+
+  const S& scene() const { return scene_; }
+  const SimulationOptions& options() const { return options_; }
+  ImpactSolver<S>& impact_solver() { return *impact_; }
+  ModeSelector<S>& mode_selector() { return selector_; }
+
+ private:
+  void apply_impact(ModeSystem<S>& sys, double t, State& x, Mode<nc>& mode, const std::vector<Guard>& guards,
+                    Transition<S>& tr);
+
+  const S& scene_;
+  SimulationOptions options_;
+  std::unique_ptr<ImpactSolver<S>> impact_;  ///< large: on the heap
+  ModeSelector<S> selector_;
+  FlowWorkspace<S> flow_;
+  JumpWorkspace<S> jump_;
+};
+
+}  // namespace saltus

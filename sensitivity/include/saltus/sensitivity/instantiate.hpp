@@ -1,0 +1,34 @@
+// Compile a scene's sensitivity machinery once, as saltus/hybrid/instantiate.hpp does for the
+// hybrid machinery (see there for the pattern):
+//
+//   // my_scene.hpp, after SALTUS_DECLARE_SCENE(MyScene):
+//   #include <saltus/sensitivity/instantiate.hpp>
+//   SALTUS_DECLARE_SCENE_SENSITIVITY(MyScene)
+//
+//   // my_scene_sensitivity.cpp (or the scene's one instantiation file):
+//   #include "my_scene.hpp"
+//   #include <saltus/sensitivity/instantiate.hxx>
+//   SALTUS_INSTANTIATE_SCENE_SENSITIVITY(MyScene)
+//
+// Compiled per scene: feedback_gain, JumpGainSolver, jump_gains, LinearisedSystem and
+// numerical_jump_gain. The hybrid machinery they call must be instantiated too
+// (SALTUS_INSTANTIATE_SCENE). <saltus/sensitivity/header_only.hpp> is the header-only path.
+#pragma once
+
+#include <saltus/sensitivity/jump_gain.hpp>
+#include <saltus/sensitivity/linearisation.hpp>
+#include <saltus/sensitivity/numerical_jump_gain.hpp>
+
+#define SALTUS_SENSITIVITY_TEMPLATES(prefix, S)                                                                  \
+  prefix template void saltus::feedback_gain<S>(const saltus::InputLaw<S>&, double, const saltus::Vec<2 * S::nq>&, \
+                                                const saltus::Mode<S::nc>&, double, saltus::Vec<2 * S::nq>&,     \
+                                                saltus::Mat<S::nu, 2 * S::nq>&);                                 \
+  prefix template class saltus::JumpGainSolver<S>;                                                               \
+  prefix template std::vector<saltus::JumpGain<S>> saltus::jump_gains<S>(                                        \
+      const S&, const saltus::HybridTrajectory<S>&, const saltus::JumpGainOptions&);                             \
+  prefix template class saltus::LinearisedSystem<S>;                                                             \
+  prefix template saltus::NumericalJumpGain<S> saltus::numerical_jump_gain<S>(                                   \
+      const S&, const saltus::HybridTrajectory<S>&, int, const saltus::NumericalJumpGainOptions&);
+
+/// In the scene's header, after SALTUS_DECLARE_SCENE: its sensitivity machinery is compiled elsewhere.
+#define SALTUS_DECLARE_SCENE_SENSITIVITY(S) SALTUS_SENSITIVITY_TEMPLATES(extern, S)

@@ -1,0 +1,11 @@
+// The definitions of saltus::sensitivity and the macro that compiles them for one scene (see
+// instantiate.hpp).
+#pragma once
+
+#include <saltus/sensitivity/instantiate.hpp>
+#include <saltus/sensitivity/jump_gain.hxx>
+#include <saltus/sensitivity/linearisation.hxx>
+#include <saltus/sensitivity/numerical_jump_gain.hxx>
+
+/// feedback_gain, JumpGainSolver, jump_gains, LinearisedSystem and numerical_jump_gain of scene S.
+#define SALTUS_INSTANTIATE_SCENE_SENSITIVITY(S) SALTUS_SENSITIVITY_TEMPLATES(, S)

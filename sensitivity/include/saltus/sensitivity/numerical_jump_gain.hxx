@@ -1,0 +1,245 @@
+// Definitions of numerical_jump_gain.hpp (see there for the method).
+#pragma once
+
+#include <Eigen/LU>
+#include <Eigen/SVD>
+#include <algorithm>
+#include <array>
+#include <limits>
+#include <saltus/hybrid/simulation/integrator_dopri.hpp>
+#include <saltus/hybrid/simulation/simulator.hpp>
+#include <saltus/hybrid/simulation/transition.hpp>
+#include <saltus/sensitivity/numerical_jump_gain.hpp>
+
+namespace saltus {
+
+namespace detail {
+
+/// The constraints a mode keeps: gap and normal velocity of every closed contact, tangential
+/// velocity of every sticking one.
+template <Scene S>
+int mode_constraints(const S& scene, const Mode<S::nc>& mode, const Vec<2 * S::nq>& x, Kinematics<S>& kin,
+                     Eigen::Matrix<double, 3 * S::nc + 1, 1>& c) {
+  constexpr int nq = S::nq;
+  evaluate_kinematics(scene, Vec<nq>(x.template head<nq>()), Vec<nq>(x.template tail<nq>()), kin);
+  int m = 0;
+  for (int i = 0; i < S::nc; ++i) {
+    if (!mode[i].closed()) continue;
+    c[m++] = kin.contacts[i].gap;
+    c[m++] = kin.contacts[i].zeta_n;
+    if (mode[i].mode == ContactMode::Stick)
+      for (int k = 0; k < scene.contact(i).tangents() && m < 3 * S::nc + 1; ++k) c[m++] = kin.contacts[i].zeta_t[k];
+  }
+  return m;
+}
+
+}  // namespace detail
+
+template <Scene S>
+NumericalJumpGain<S> numerical_jump_gain(const S& scene, const HybridTrajectory<S>& traj, int e,
+                                         const NumericalJumpGainOptions& options) {
+  constexpr int nx = 2 * S::nq, nu = S::nu;
+  using State = Vec<nx>;
+  SALTUS_DEMAND(e >= 0 && e < static_cast<int>(traj.events.size()), InvalidArgument, "event index ", e,
+                " out of range [0, ", traj.events.size(), ")");
+  SALTUS_DEMAND(options.window > 0 && options.state_step > 0 && options.input_step > 0, InvalidArgument,
+                "NumericalJumpGainOptions: window and steps must be > 0");
+  const Event<S>& ev = traj.events[e];
+  const double ts = ev.t;
+  double w = options.window;
+  if (e > 0 && ev.t > traj.events[e - 1].t) w = std::min(w, 0.25 * (ev.t - traj.events[e - 1].t));
+  if (e + 1 < static_cast<int>(traj.events.size())) w = std::min(w, 0.25 * (traj.events[e + 1].t - ev.t));
+  if (traj.t_end() > ev.t) w = std::min(w, 0.25 * (traj.t_end() - ev.t));
+  SALTUS_DEMAND(w > 1e-12, InvalidArgument, "numerical jump gain: no room around the event at t = ", ts,
+                " (neighbouring events or the end of the trajectory coincide with it)");
+  const double ta = ts - w, tb = ts + w;
+
+  DormandPrinceIntegrator<S> integrator(options.simulation.integrator);
+  // Smooth flow of `mode` from (t0, x) to t1 under `law`, events off.
+  auto smooth = [&](const Mode<S::nc>& mode, const InputLaw<S>& law, double t0, State x, double t1) {
+    ModeSystem<S> sys(scene, law);
+    sys.set_mode(mode);
+    integrator.integrate(sys, t0, x, t1, 0.0, nullptr, false);
+    return x;
+  };
+  const State x_a = smooth(ev.mode_before, traj.input, ts, ev.x_minus, ta);
+
+  Simulator<S> simulator(scene, options.simulation);
+  TransitionResolver<S> transitions(scene, options.simulation);
+  // The same run replayed transition by transition: the integrator with event detection in each
+  // mode of the reference's chain until that transition's guard fires (or at once if the guard is
+  // already below zero: an immediate chained transition), then the transition's jump map
+  // (apply_jump_map with the reference's impulse mode; identity for a mode change). Used when the
+  // Simulator's own run fails: its chain check can cycle stick -> slip -> stick at a slip onset,
+  // where the new slip's stop guard starts at zero with a rate of round-off size.
+  double event_time = ts;  // of the last run through the event (its first transition)
+  auto replay = [&](State x, const InputLaw<S>& law) {
+    double t = ta;
+    event_time = std::numeric_limits<double>::quiet_NaN();
+    ModeSystem<S> sys(scene, law);
+    std::array<double, 2 * S::nc + 1> gv{};
+    for (std::size_t k = 0; k < ev.transitions.size(); ++k) {
+      const Transition<S>& tr = ev.transitions[k];
+      sys.set_mode(tr.mode_before);
+      int index = -1;
+      for (int j = 0; j < sys.guards().count && !tr.guards.empty(); ++j)
+        if (sys.guards()[j] == tr.guards.front()) index = j;
+      SALTUS_DEMAND(index >= 0 || tr.guards.empty(), NumericalFailure, "numerical jump gain: transition ", k,
+                    " of the event at t = ", ts, " has a guard its mode does not have");
+      bool cross = k == 0 && index >= 0;
+      if (k > 0 && index >= 0) {
+        sys.guard_values(t, x, gv);
+        cross = gv[index] >= 0.0;
+      }
+      if (cross) {
+        const auto end = integrator.integrate(sys, t, x, tb, options.simulation.simultaneity, nullptr, true);
+        SALTUS_DEMAND(end.at_guard && end.fired[index], NumericalFailure,
+                      "numerical jump gain: a replayed run did not ", "reach the ", to_string(tr.guards.front().kind),
+                      " guard of the event at t = ", ts, " within the window (reduce the steps or enlarge the window)");
+        t = end.t;
+        if (k == 0) event_time = t;
+      }
+      x = transitions.replay(tr, x);
+    }
+    return smooth(ev.mode_after, law, t, x, tb);
+  };
+  int replays = 0;
+  auto through = [&](const State& x0, const InputLaw<S>& law) {
+    try {
+      const auto run = simulator.run(x0, ev.mode_before, ta, tb, law);
+      const int events = static_cast<int>(run.events.size());
+      // The same structure as the reference's event: one event, the same chain, the same end mode.
+      SALTUS_DEMAND(events == 1 && run.events.front().transitions.size() == ev.transitions.size() &&
+                        run.segments.back().mode == ev.mode_after,
+                    NumericalFailure, "numerical jump gain: a perturbed run through the event at t = ", ts,
+                    " ended in mode '", describe(scene, run.segments.back().mode), "' after ", events,
+                    " events, not in '", describe(scene, ev.mode_after), "' after one");
+      event_time = run.events.front().t;
+      return run.final_state();
+    } catch (const NumericalFailure&) {
+      if (!options.replay_on_failure) throw;
+      ++replays;
+      return replay(x0, law);
+    }
+  };
+
+  // The end state and the event time of a run through the event, stacked.
+  using Augmented = Vec<nx + 1>;
+  auto through_timed = [&](const State& x0, const InputLaw<S>& law) {
+    Augmented y;
+    y.template head<nx>() = through(x0, law);
+    y[nx] = event_time;
+    return y;
+  };
+
+  // Central difference of f(s) at s = 0 with step h, Richardson-extrapolated if asked.
+  auto difference = [&](auto&& f, double h) {
+    const auto d = [&](double k) { return ((f(k) - f(-k)) / (2 * k)).eval(); };
+    if (!options.richardson) return d(h);
+    return ((4 * d(0.5 * h) - d(h)) / 3).eval();
+  };
+
+  // Admissible directions at x_a: the kernel of the constraints' Jacobian C (central differences).
+  Kinematics<S> kin;
+  using Constraints = Eigen::Matrix<double, 3 * S::nc + 1, 1>;
+  Constraints c0, cp, cm;
+  const int m = detail::mode_constraints(scene, ev.mode_before, x_a, kin, c0);
+  using Basis = typename NumericalJumpGain<S>::Basis;
+  Basis T;
+  Eigen::Matrix<double, Eigen::Dynamic, nx, 0, 3 * S::nc + 1, nx> C(m, nx);
+  auto constraint_jacobian = [&](const State& x) {
+    for (int j = 0; j < nx; ++j) {
+      const double h = 1e-7 * std::max(1.0, std::abs(x[j]));
+      State xp = x, xm = x;
+      xp[j] += h;
+      xm[j] -= h;
+      detail::mode_constraints(scene, ev.mode_before, xp, kin, cp);
+      detail::mode_constraints(scene, ev.mode_before, xm, kin, cm);
+      C.col(j) = (cp.head(m) - cm.head(m)) / (2 * h);
+    }
+  };
+  if (m == 0) {
+    T = Mat<nx, nx>::Identity();
+  } else {
+    constraint_jacobian(x_a);
+    const Eigen::JacobiSVD<Eigen::MatrixXd> svd(Eigen::MatrixXd(C), Eigen::ComputeFullV);
+    const double tol = 1e-6 * std::max(1.0, svd.singularValues()[0]);
+    int rank = 0;
+    while (rank < svd.singularValues().size() && svd.singularValues()[rank] > tol) ++rank;
+    T = svd.matrixV().rightCols(nx - rank);
+  }
+  // Back onto the constraints c(x) = c(x_a) (Gauss-Newton; perturbations are ~1e-5, so the
+  // first-order violation is ~1e-10 and two or three steps reach round-off).
+  auto project = [&](State x) {
+    if (m == 0) return x;
+    for (int it = 0; it < 4; ++it) {
+      // The Jacobian first: constraint_jacobian overwrites cp with its probes.
+      constraint_jacobian(x);
+      detail::mode_constraints(scene, ev.mode_before, x, kin, cp);
+      x -= C.completeOrthogonalDecomposition().solve(Eigen::VectorXd(cp.head(m) - c0.head(m)));
+    }
+    return x;
+  };
+
+  const int r = static_cast<int>(T.cols());
+  Basis P(nx, r), B(nx, r);
+  Eigen::Matrix<double, 1, Eigen::Dynamic, Eigen::RowMajor, 1, nx> dt_basis(1, r);
+  Mat<nx, nx> Phi_plus;
+  for (int j = 0; j < r; ++j) {
+    const double h = options.state_step * std::max(1.0, x_a.cwiseAbs().maxCoeff());
+    const auto start = [&](double k) { return project(State(x_a + k * T.col(j))); };
+    const Augmented d = difference([&](double k) { return through_timed(start(k), traj.input); }, h);
+    P.col(j) = d.template head<nx>();
+    dt_basis[j] = d[nx];
+    B.col(j) = difference([&](double k) { return smooth(ev.mode_before, traj.input, ta, start(k), ts); }, h);
+  }
+  for (int j = 0; j < nx; ++j) {
+    const double h = options.state_step * std::max(1.0, std::abs(ev.x_plus[j]));
+    Phi_plus.col(j) = difference(
+        [&](double k) {
+          State y = ev.x_plus;
+          y[j] += k;
+          return smooth(ev.mode_after, traj.input, ts, y, tb);
+        },
+        h);
+  }
+  const Eigen::PartialPivLU<Mat<nx, nx>> plus_lu(Phi_plus);
+  NumericalJumpGain<S> g;
+  g.window = w;
+  g.basis = B;
+  g.G_z_basis = plus_lu.solve(P);
+  g.dt_basis = dt_basis;
+  g.full = r == nx;
+  if (g.full) g.G_z = g.G_z_basis * Mat<nx, nx>(B).inverse();
+
+  if constexpr (nu > 0) {
+    const Vec<nu> u_star = traj.input(ts, ev.x_minus, ev.mode_before);
+    Mat<nx, nu> P_v, Psi_minus, Psi_plus;
+    Eigen::Matrix<double, 1, nu> dt_v;
+    for (int j = 0; j < nu; ++j) {
+      const double h = options.input_step * std::max(1.0, std::abs(u_star[j]));
+      auto shifted = [&](double s) -> InputLaw<S> {
+        const InputLaw<S> base = traj.input;
+        return [base, j, s](double t, const State& x, const Mode<S::nc>& mode) {
+          Vec<nu> u = base(t, x, mode);
+          u[j] += s;
+          return u;
+        };
+      };
+      const Augmented d = difference([&](double k) { return through_timed(x_a, shifted(k)); }, h);
+      P_v.col(j) = d.template head<nx>();
+      dt_v[j] = d[nx];
+      Psi_minus.col(j) = difference([&](double k) { return smooth(ev.mode_before, shifted(k), ta, x_a, ts); }, h);
+      Psi_plus.col(j) = difference([&](double k) { return smooth(ev.mode_after, shifted(k), ts, ev.x_plus, tb); }, h);
+    }
+    // G_z Psi- = (G_z B) c with B c = Psi- (least squares; exact when Psi- is admissible).
+    const Eigen::MatrixXd c = Eigen::MatrixXd(B).completeOrthogonalDecomposition().solve(Eigen::MatrixXd(Psi_minus));
+    g.G_v = plus_lu.solve(P_v - Psi_plus) - g.G_z_basis * c;
+    // The run's event time moves by dt_dz Psi- v + dt_dv v = dt_basis c v + dt_dv v.
+    g.dt_dv = dt_v - g.dt_basis * c;
+  }
+  g.replays = replays;
+  return g;
+}
+
+}  // namespace saltus
