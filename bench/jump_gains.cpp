@@ -15,7 +15,8 @@
 //   numerical_twin_us  wall time of one numerical twin (numerical_jump_gain), microseconds
 // Both times are measured in the same run, so their ratio is the meaningful figure.
 // Plain main; `--json` prints one JSON object, otherwise a table.
-#include "prediction_check.hpp"
+#include "scenes/references.hpp"
+#include <saltus/sensitivity/prediction_check.hpp>
 
 #include <algorithm>
 #include <chrono>
@@ -84,7 +85,7 @@ void measure(const references::Reference<S>& ref, const Vec<2 * S::nq>& z0, std:
     // Remainder sampled in the middle of the segment after the event.
     const double t_next = e + 1 < static_cast<int>(traj.events.size()) ? traj.events[e + 1].t : traj.t_end();
     const double t_sample = traj.events[e].t + 0.5 * (t_next - traj.events[e].t);
-    const auto fit = references::remainder_fit(ref, lin, z0, [](double) { return Vec<S::nu>::Zero().eval(); },
+    const auto fit = prediction_remainder(lin, ref.options, z0, [](double) { return Vec<S::nu>::Zero().eval(); },
                                                {t_sample});
     std::vector<double> e_above{fit.eps.front()}, r_above{fit.remainder.front()};
     for (std::size_t k = 1; k < fit.eps.size() && fit.remainder[k] < fit.remainder[k - 1] / 3.0; ++k) {
@@ -92,7 +93,7 @@ void measure(const references::Reference<S>& ref, const Vec<2 * S::nq>& z0, std:
       r_above.push_back(fit.remainder[k]);
     }
     row.slope_points = static_cast<int>(e_above.size());
-    row.slope = fit.structure_matched && e_above.size() >= 2 ? references::fitted_slope(e_above, r_above) : std::nan("");
+    row.slope = fit.structure_matched && e_above.size() >= 2 ? fitted_log_slope(e_above, r_above) : std::nan("");
     rows.push_back(row);
   }
 }

@@ -19,7 +19,7 @@
 // "tolerance", "final_state_error", "event_time_error", "wall_seconds", "events", "steps",
 // "error"}, ...]} (errors null when a run threw; "error" then holds the message). Without it, a
 // table. Exit status 0 unless a run threw.
-#include "scenes/instances.hpp"
+#include "scenes/all_scenes.hpp"
 
 #include <algorithm>
 #include <chrono>

@@ -2,7 +2,7 @@
 // finite time (Zeno). The simulator stops with status "zeno" and predicts the accumulation time;
 // the closed form is t_inf = sqrt(2 h / g) (1 + e) / (1 - e).
 #include "report.hpp"
-#include "scenes/instances.hpp"
+#include "scenes/all_scenes.hpp"
 
 #include <cmath>
 #include <cstdio>

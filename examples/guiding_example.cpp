@@ -3,7 +3,7 @@
 // u2 = 2 g (t - 1). It lands at t = sqrt(2/g) (inelastic impact), slides, and lifts off at t = 1.5
 // when the normal force m g - u2 reaches zero: a state-input guard.
 #include "report.hpp"
-#include "scenes/instances.hpp"
+#include "scenes/all_scenes.hpp"
 
 #include <cmath>
 #include <cstdio>

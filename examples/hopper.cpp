@@ -9,7 +9,7 @@
 // The controller is a feedback law u(t, x, mode); the simulator evaluates it inside the flow, and
 // the gains and the linearisation are closed-loop: d u / dx enters them (jump_gain.hpp).
 #include "report.hpp"
-#include "scenes/instances.hpp"
+#include "scenes/all_scenes.hpp"
 
 #include <saltus/sensitivity/sensitivity.hpp>
 

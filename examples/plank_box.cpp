@@ -3,7 +3,7 @@
 // Delassus matrix: two contacts, redundant tangentially), the box sticks and the plank rocks on
 // its spring. The box is held by a force slightly below its weight, so it descends at 2 m/s^2.
 #include "report.hpp"
-#include "scenes/instances.hpp"
+#include "scenes/all_scenes.hpp"
 
 #include <cstdio>
 

@@ -3,7 +3,7 @@
 // mu times the normal impulse off the sliding speed, the box slides and comes to rest at
 // t_stop = t_impact + (v_x - mu v_n) / (mu g).
 #include "report.hpp"
-#include "scenes/instances.hpp"
+#include "scenes/all_scenes.hpp"
 
 #include <cmath>
 #include <cstdio>

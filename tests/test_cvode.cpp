@@ -3,7 +3,7 @@
 // flag, every exception thrown inside a callback reaches the caller.
 #include "support.hpp"
 
-#include "scenes/instances.hpp"
+#include "scenes/all_scenes.hpp"
 
 #include <saltus/hybrid/simulation/integrator_cvode.hpp>
 

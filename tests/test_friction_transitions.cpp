@@ -6,7 +6,7 @@
 //    at zero at the onset and must not send the contact back to stick at the same instant.
 #include "support.hpp"
 
-#include "scenes/instances.hpp"
+#include "scenes/all_scenes.hpp"
 
 #include <saltus/hybrid/dynamics/derivatives.hpp>
 

@@ -2,7 +2,7 @@
 // central differences) for every event kind on the point mass, the hopper and the plank-box;
 // every AD derivative the gains use against central differences; the grazing error; the
 // input-rate term; chained transitions; simultaneous activations are refused.
-#include "references.hpp"
+#include "scenes/references.hpp"
 #include "support.hpp"
 
 #include <map>

@@ -2,7 +2,7 @@
 // import of a reference from CSV with its polishing by re-simulation.
 #include "support.hpp"
 
-#include "scenes/instances.hpp"
+#include "scenes/all_scenes.hpp"
 
 #include <sstream>
 

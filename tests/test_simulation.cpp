@@ -5,7 +5,7 @@
 // spatial box landing on four corners.
 #include "support.hpp"
 
-#include "scenes/instances.hpp"
+#include "scenes/all_scenes.hpp"
 
 namespace saltus::testing {
 namespace {

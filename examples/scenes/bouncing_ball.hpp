@@ -4,7 +4,9 @@
 //   q'+ = -e_n q'- at each impact.
 #pragma once
 
+#include <saltus/hybrid/instantiate.hpp>
 #include <saltus/hybrid/vocabulary/scene.hpp>
+#include <saltus/sensitivity/instantiate.hpp>
 
 #include <random>
 
@@ -63,3 +65,7 @@ class BouncingBall {
 };
 
 }  // namespace saltus::scenes
+
+// Compiled once, in bouncing_ball.cpp (saltus_scenes): a program that includes this header links it.
+SALTUS_DECLARE_SCENE(saltus::scenes::BouncingBall)
+SALTUS_DECLARE_SCENE_SENSITIVITY(saltus::scenes::BouncingBall)

@@ -32,7 +32,9 @@
 //   knee torque on phi_knee.
 #pragma once
 
+#include <saltus/hybrid/instantiate.hpp>
 #include <saltus/hybrid/vocabulary/scene.hpp>
+#include <saltus/sensitivity/instantiate.hpp>
 
 #include <cmath>
 #include <random>
@@ -183,3 +185,7 @@ class Hopper {
 };
 
 }  // namespace saltus::scenes
+
+// Compiled once, in hopper.cpp (saltus_scenes): a program that includes this header links it.
+SALTUS_DECLARE_SCENE(saltus::scenes::Hopper)
+SALTUS_DECLARE_SCENE_SENSITIVITY(saltus::scenes::Hopper)

@@ -22,7 +22,9 @@
 // (a 1 kg box at 0.6 m tilts it by about 0.03 rad); mu = 0.4 on both corners; e_n = 0.
 #pragma once
 
+#include <saltus/hybrid/instantiate.hpp>
 #include <saltus/hybrid/vocabulary/scene.hpp>
+#include <saltus/sensitivity/instantiate.hpp>
 
 #include <array>
 #include <cmath>
@@ -88,6 +90,19 @@ class PlankBox {
     return S;
   }
 
+  /// The box flat over the level plank, everything at rest: its centre at x = `along` (m, world
+  /// frame; the hinge is at the origin) and its bottom edge `clearance` (m) above the plank's top
+  /// face, so both corners have gap `clearance`. The start of "the box lowered flat".
+  Vec<2 * nq> flat_state(double along = 0.6, double clearance = 0.05) const {
+    Vec<2 * nq> x = Vec<2 * nq>::Zero();
+    x[0] = along;
+    x[1] = 0.5 * (p_.box_height + p_.plank_thickness) + clearance;
+    return x;
+  }
+  /// The input that lowers the box flat: the actuated box holds its weight but `push` (N),
+  /// u = (0, m g - push, 0); from flat_state(x, c) both corners land at once at sqrt(2 c m / push).
+  Vec<nu> lowering_input(double push = 2.0) const { return Vec<nu>(0.0, p_.box_mass * p_.gravity - push, 0.0); }
+
   /// Corner i in world coordinates.
   template <class T>
   VecT<T, 2> corner(int i, const VecT<T, nq>& q) const {
@@ -150,3 +165,7 @@ class PlankBox {
 };
 
 }  // namespace saltus::scenes
+
+// Compiled once, in plank_box.cpp (saltus_scenes): a program that includes this header links it.
+SALTUS_DECLARE_SCENE(saltus::scenes::PlankBox)
+SALTUS_DECLARE_SCENE_SENSITIVITY(saltus::scenes::PlankBox)

@@ -5,7 +5,9 @@
 // Example 1 is frictionless; planar Coulomb friction can be switched on for tests.
 #pragma once
 
+#include <saltus/hybrid/instantiate.hpp>
 #include <saltus/hybrid/vocabulary/scene.hpp>
+#include <saltus/sensitivity/instantiate.hpp>
 
 #include <array>
 #include <random>
@@ -69,3 +71,7 @@ class PointMass {
 };
 
 }  // namespace saltus::scenes
+
+// Compiled once, in point_mass.cpp (saltus_scenes): a program that includes this header links it.
+SALTUS_DECLARE_SCENE(saltus::scenes::PointMass)
+SALTUS_DECLARE_SCENE_SENSITIVITY(saltus::scenes::PointMass)

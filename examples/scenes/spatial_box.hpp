@@ -15,7 +15,9 @@
 #pragma once
 
 #include <saltus/hybrid/dynamics/kinematics.hpp>
+#include <saltus/hybrid/instantiate.hpp>
 #include <saltus/hybrid/vocabulary/scene.hpp>
+#include <saltus/sensitivity/instantiate.hpp>
 
 #include <array>
 #include <cmath>
@@ -145,3 +147,7 @@ class SpatialBox {
 };
 
 }  // namespace saltus::scenes
+
+// Compiled once, in spatial_box.cpp (saltus_scenes): a program that includes this header links it.
+SALTUS_DECLARE_SCENE(saltus::scenes::SpatialBox)
+SALTUS_DECLARE_SCENE_SENSITIVITY(saltus::scenes::SpatialBox)

@@ -10,14 +10,15 @@
 //   #include <saltus/sensitivity/instantiate.hxx>
 //   SALTUS_INSTANTIATE_SCENE_SENSITIVITY(MyScene)
 //
-// Compiled per scene: feedback_gain, JumpGainSolver, jump_gains, LinearisedSystem and
-// numerical_jump_gain. The hybrid machinery they call must be instantiated too
-// (SALTUS_INSTANTIATE_SCENE). <saltus/sensitivity/header_only.hpp> is the header-only path.
+// Compiled per scene: feedback_gain, JumpGainSolver, jump_gains, LinearisedSystem,
+// numerical_jump_gain and prediction_remainder. The hybrid machinery they call must be
+// instantiated too (SALTUS_INSTANTIATE_SCENE). <saltus/sensitivity/header_only.hpp> is the header-only path.
 #pragma once
 
 #include <saltus/sensitivity/jump_gain.hpp>
 #include <saltus/sensitivity/linearisation.hpp>
 #include <saltus/sensitivity/numerical_jump_gain.hpp>
+#include <saltus/sensitivity/prediction_check.hpp>
 
 #define SALTUS_SENSITIVITY_TEMPLATES(prefix, S)                                                                  \
   prefix template void saltus::feedback_gain<S>(const saltus::InputLaw<S>&, double, const saltus::Vec<2 * S::nq>&, \
@@ -28,7 +29,10 @@
       const S&, const saltus::HybridTrajectory<S>&, const saltus::JumpGainOptions&);                             \
   prefix template class saltus::LinearisedSystem<S>;                                                             \
   prefix template saltus::NumericalJumpGain<S> saltus::numerical_jump_gain<S>(                                   \
-      const S&, const saltus::HybridTrajectory<S>&, int, const saltus::NumericalJumpGainOptions&);
+      const S&, const saltus::HybridTrajectory<S>&, int, const saltus::NumericalJumpGainOptions&);             \
+  prefix template saltus::RemainderFit saltus::prediction_remainder<S>(                                          \
+      const saltus::LinearisedSystem<S>&, const saltus::SimulationOptions&, const saltus::Vec<2 * S::nq>&,       \
+      const std::function<saltus::Vec<S::nu>(double)>&, const std::vector<double>&, const std::vector<double>&);
 
 /// In the scene's header, after SALTUS_DECLARE_SCENE: its sensitivity machinery is compiled elsewhere.
 #define SALTUS_DECLARE_SCENE_SENSITIVITY(S) SALTUS_SENSITIVITY_TEMPLATES(extern, S)

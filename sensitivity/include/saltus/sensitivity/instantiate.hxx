@@ -6,6 +6,8 @@
 #include <saltus/sensitivity/jump_gain.hxx>
 #include <saltus/sensitivity/linearisation.hxx>
 #include <saltus/sensitivity/numerical_jump_gain.hxx>
+#include <saltus/sensitivity/prediction_check.hxx>
 
-/// feedback_gain, JumpGainSolver, jump_gains, LinearisedSystem and numerical_jump_gain of scene S.
+/// feedback_gain, JumpGainSolver, jump_gains, LinearisedSystem, numerical_jump_gain and
+/// prediction_remainder of scene S.
 #define SALTUS_INSTANTIATE_SCENE_SENSITIVITY(S) SALTUS_SENSITIVITY_TEMPLATES(, S)

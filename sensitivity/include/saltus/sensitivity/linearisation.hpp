@@ -85,6 +85,7 @@ class LinearisedSystem {
         gains_(jump_gains(scene, traj, options.gains)),
         ws_(std::make_unique<DerivativeWorkspace<S>>()) {}
 
+  const S& scene() const { return scene_; }
   const Reference& reference() const { return reference_; }
   const std::vector<JumpGain<S>>& gains() const { return gains_; }
   int segment_count() const { return reference_.segment_count(); }

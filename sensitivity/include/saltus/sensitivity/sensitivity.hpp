@@ -1,7 +1,9 @@
 // saltus::sensitivity in one include: jump gains (thesis C.37-C.39) and their numerical twin,
-// the linearised time-triggered hybrid system and the first-order prediction.
+// the linearised time-triggered hybrid system, the first-order prediction and its check against
+// re-simulation.
 #pragma once
 
 #include <saltus/sensitivity/jump_gain.hpp>
 #include <saltus/sensitivity/linearisation.hpp>
 #include <saltus/sensitivity/numerical_jump_gain.hpp>
+#include <saltus/sensitivity/prediction_check.hpp>

@@ -1,6 +1,0 @@
-// Compiles the sensitivity machinery of the PlankBox scene once (see sensitivity_instances.hpp).
-#include "sensitivity_instances.hpp"
-
-#include <saltus/sensitivity/instantiate.hxx>
-
-SALTUS_INSTANTIATE_SCENE_SENSITIVITY(saltus::scenes::PlankBox)
