@@ -35,6 +35,10 @@ class ModeSelector {
  public:
   static constexpr int nq = S::nq, nx = 2 * S::nq, nu = S::nu, nc = S::nc;
   static constexpr int max_rows = 3 * nc;
+  using Problem = ContactProblem<contact_bound(nc)>;
+  using Solution = ContactSolution<contact_bound(nc)>;
+  using Lemke = LemkeSolver<contact_bound(nc)>;
+  using Coulomb = CoulombSolver<contact_bound(nc)>;
 
   explicit ModeSelector(const S& scene, ModeSelectionOptions options = {}) : scene_(scene), options_(options) {}
 
@@ -149,16 +153,16 @@ class ModeSelector {
     return mode;
   }
 
-  const ContactSolution<nc>& solution() const { return solution_; }
+  const Solution& solution() const { return solution_; }
 
  private:
   const S& scene_;
   ModeSelectionOptions options_;
   Kinematics<S> kin_;
-  ContactProblem<nc> problem_;
-  ContactSolution<nc> solution_;
-  LemkeSolver<nc> lemke_;
-  CoulombSolver<nc> coulomb_;
+  Problem problem_;
+  Solution solution_;
+  Lemke lemke_;
+  Coulomb coulomb_;
   BoundedMatrix<double, Eigen::Dynamic, nq, std::max(1, max_rows), nq> J_;
   BoundedMatrix<double, nq, Eigen::Dynamic, nq, std::max(1, max_rows)> F_, MinvF_;
   BoundedMatrix<double, Eigen::Dynamic, 1, std::max(1, max_rows), 1> kappa_;
