@@ -25,6 +25,23 @@
 
 namespace saltus {
 
+/// Contact-count bound of the contact numerics for a scene with nc contacts: the smallest of
+/// 1, 2, 4, 8, 16, 32 that is >= nc. The solvers (LemkeSolver, CoulombSolver, lemke.hpp and
+/// coulomb_solver.hpp) are compiled once in the library for these bounds, and a problem of
+/// ContactProblem<contact_bound(nc)> holds nc contacts or fewer (`contacts` says how many).
+/// Larger: nc itself, instantiated on use from the header-only definitions (include lemke.hxx
+/// and coulomb_solver.hxx).
+///
+/// Defining SALTUS_CONTACT_NO_EXTERN_TEMPLATES before including the contact headers drops
+/// their extern template declarations: with the .hxx files included, every bound is then
+/// instantiated in the including translation unit (test_contact_solvers does so to compile
+/// the solvers with EIGEN_RUNTIME_NO_MALLOC).
+inline constexpr int contact_bound(int nc) {
+  return nc <= 1 ? 1 : nc <= 2 ? 2 : nc <= 4 ? 4 : nc <= 8 ? 8 : nc <= 16 ? 16 : nc <= 32 ? 32 : nc;
+}
+
+/// A contact problem of at most MaxContacts contacts (see the file comment); A and b are
+/// bounded by 3 MaxContacts rows and sized to the rows of the declared contacts.
 template <int MaxContacts>
 struct ContactProblem {
   static constexpr int max_rows = 3 * MaxContacts;

@@ -99,13 +99,16 @@ class MinNormSolver {
 };
 
 // Instantiated once in the library for these bounds (contact-problem rows of 1, 2, 4, 8, 16 and
-// 32 contacts); scenes pick the smallest bound that fits (delassus_bound).
+// 32 contacts; hybrid/src/contact_bound_*.cpp); scenes pick the smallest bound that fits
+// (delassus_bound). The definitions are in linear_solve.hxx: include it for another bound.
+#ifndef SALTUS_CONTACT_NO_EXTERN_TEMPLATES
 extern template class MinNormSolver<3>;
 extern template class MinNormSolver<6>;
 extern template class MinNormSolver<12>;
 extern template class MinNormSolver<24>;
 extern template class MinNormSolver<48>;
 extern template class MinNormSolver<96>;
+#endif
 
 inline constexpr int delassus_bound(int rows) {
   return rows <= 3 ? 3 : rows <= 6 ? 6 : rows <= 12 ? 12 : rows <= 24 ? 24 : rows <= 48 ? 48 : rows <= 96 ? 96 : rows;

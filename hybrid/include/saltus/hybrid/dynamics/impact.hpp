@@ -70,7 +70,10 @@ template <Scene S>
 class ImpactSolver {
  public:
   static constexpr int nq = S::nq, nx = 2 * S::nq, nc = S::nc;
-  using Problem = ContactProblem<nc>;
+  using Problem = ContactProblem<contact_bound(nc)>;
+  using Solution = ContactSolution<contact_bound(nc)>;
+  using Lemke = LemkeSolver<contact_bound(nc)>;
+  using Coulomb = CoulombSolver<contact_bound(nc)>;
 
   static_assert(S::nc > 0, "an impact needs a scene with contacts");
 
@@ -109,9 +112,9 @@ class ImpactSolver {
   const S& scene_;
   ImpactOptions options_;
   Problem problem_;
-  ContactSolution<nc> solution_;
-  LemkeSolver<nc> lemke_;
-  CoulombSolver<nc> coulomb_;
+  Solution solution_;
+  Lemke lemke_;
+  Coulomb coulomb_;
   JumpWorkspace<S, double> jump_;
   DelassusAssembly<S> assembly_;
   std::array<VecT<double, 2>, nc> no_slip_directions_{};  ///< unused: every contact is Stick

@@ -36,6 +36,10 @@ class ModeSelector {
  public:
   static constexpr int nq = S::nq, nx = 2 * S::nq, nu = S::nu, nc = S::nc;
   static constexpr int max_rows = 3 * nc;
+  using Problem = ContactProblem<contact_bound(nc)>;
+  using Solution = ContactSolution<contact_bound(nc)>;
+  using Lemke = LemkeSolver<contact_bound(nc)>;
+  using Coulomb = CoulombSolver<contact_bound(nc)>;
 
   explicit ModeSelector(const S& scene, ModeSelectionOptions options = {}) : scene_(scene), options_(options) {}
 
@@ -46,16 +50,16 @@ class ModeSelector {
   Mode<nc> select(const VecT<double, nx>& x, const VecT<double, nu>& u, const std::array<bool, nc>& candidates,
                   const std::array<bool, nc>& rest = {});
 
-  const ContactSolution<nc>& solution() const { return solution_; }
+  const Solution& solution() const { return solution_; }
 
  private:
   const S& scene_;
   ModeSelectionOptions options_;
   Kinematics<S> kin_;
-  ContactProblem<nc> problem_;
-  ContactSolution<nc> solution_;
-  LemkeSolver<nc> lemke_;
-  CoulombSolver<nc> coulomb_;
+  Problem problem_;
+  Solution solution_;
+  Lemke lemke_;
+  Coulomb coulomb_;
   DelassusAssembly<S> assembly_;
 };
 

@@ -1,5 +1,8 @@
-// The double-precision factorisations behind every linear solve of the hybrid module, compiled
-// once here for the bounds listed in linear_solve.hpp.
+// Definitions of MinNormSolver (linear_solve.hpp). The library compiles them once for the
+// bounds declared extern there (hybrid/src/linear_solve_*.cpp); include this file, not
+// linear_solve.hpp, to use another bound (then instantiated on use).
+#pragma once
+
 #include <saltus/hybrid/contact/linear_solve.hpp>
 
 namespace saltus {
@@ -39,12 +42,5 @@ template <int MaxN>
 void MinNormSolver<MaxN>::set_threshold(double relative) {
   cod_.setThreshold(relative);
 }
-
-template class MinNormSolver<3>;
-template class MinNormSolver<6>;
-template class MinNormSolver<12>;
-template class MinNormSolver<24>;
-template class MinNormSolver<48>;
-template class MinNormSolver<96>;
 
 }  // namespace saltus
