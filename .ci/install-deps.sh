@@ -3,8 +3,8 @@
 # present). Used by tests/run.sh, examples/demo.sh and .ci/run.
 set -euo pipefail
 # Only what the build uses today (Ipopt arrives with timefreezing/).
-packages=(build-essential cmake pkg-config libeigen3-dev libboost-dev libsundials-dev libgtest-dev
-          libgmock-dev libbenchmark-dev)
+packages=(build-essential cmake pkg-config libeigen3-dev libboost-dev libsundials-dev nlohmann-json3-dev
+          libgtest-dev libgmock-dev libbenchmark-dev)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

@@ -20,6 +20,8 @@
 
 #include <saltus/hybrid/dynamics/impact.hpp>
 
+#include <nlohmann/json.hpp>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -135,31 +137,29 @@ SceneRow measure(const S& scene, int impacts) {
   return row;
 }
 
-/// A JSON number (JSON has no NaN or infinity: those become null).
-std::string number(double x, const char* format = "%.3e") {
-  if (!std::isfinite(x)) return "null";
+/// A JSON number as printed with `format` (JSON has no NaN or infinity: those become null).
+nlohmann::ordered_json number(double x, const char* format = "%.3e") {
+  if (!std::isfinite(x)) return nullptr;
   char buf[64];
   std::snprintf(buf, sizeof buf, format, x);
-  return buf;
+  return std::strtod(buf, nullptr);
 }
 
 void write_json(const std::vector<SceneRow>& rows) {
-  std::string out = "{";
-  for (std::size_t i = 0; i < rows.size(); ++i) {
-    const SceneRow& r = rows[i];
+  nlohmann::ordered_json out = nlohmann::ordered_json::object();
+  for (const SceneRow& r : rows) {
     const double n = std::max(1, r.impacts);
-    out += (i ? ", \"" : "\"") + r.name + "\": {";
-    out += "\"impacts\": " + std::to_string(r.impacts);
-    out += ", \"max_signorini_residual\": " + number(r.max_signorini);
-    out += ", \"max_coulomb_residual\": " + number(r.max_coulomb);
-    out += ", \"max_energy_gain\": " + number(r.max_energy_gain);
-    out += ", \"singular_cases\": " + std::to_string(r.singular);
-    out += ", \"impact_solve_us\": " + number(r.solve_us);
-    out += ", \"solver\": {\"lemke_fraction\": " + number(r.lemke / n, "%.4f");
-    out += ", \"minimum_norm_fraction\": " + number(r.minimum_norm / n, "%.4f") + "}}";
+    out[r.name] = {{"impacts", r.impacts},
+                   {"max_signorini_residual", number(r.max_signorini)},
+                   {"max_coulomb_residual", number(r.max_coulomb)},
+                   {"max_energy_gain", number(r.max_energy_gain)},
+                   {"singular_cases", r.singular},
+                   {"impact_solve_us", number(r.solve_us)},
+                   {"solver",
+                    {{"lemke_fraction", number(r.lemke / n, "%.4f")},
+                     {"minimum_norm_fraction", number(r.minimum_norm / n, "%.4f")}}}};
   }
-  out += "}\n";
-  std::fputs(out.c_str(), stdout);
+  std::fputs((out.dump() + "\n").c_str(), stdout);
 }
 
 void write_table(const std::vector<SceneRow>& rows) {

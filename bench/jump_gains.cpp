@@ -18,8 +18,13 @@
 #include "scenes/references.hpp"
 #include <saltus/sensitivity/prediction_check.hpp>
 
+#include <nlohmann/json.hpp>
+
 #include <algorithm>
 #include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <iomanip>
 #include <iostream>
@@ -118,29 +123,26 @@ int main(int argc, char** argv) {
   os << std::setprecision(4);
   if (json) {
     // {"<scene>": {"<event kind>": {...}}}; repeated kinds within a scene get "#2", "#3".
+    // Numbers as the table prints them (4 significant digits); a non-finite one is null.
+    const auto number = [](double x) -> nlohmann::ordered_json {
+      if (!std::isfinite(x)) return nullptr;
+      char buf[64];
+      std::snprintf(buf, sizeof buf, "%.4g", x);
+      return std::strtod(buf, nullptr);
+    };
     std::map<std::string, std::map<std::string, int>> seen;
-    os << "{";
-    std::string current;
-    bool first_scene = true, first_kind = true;
+    nlohmann::ordered_json out = nlohmann::ordered_json::object();
     for (const Row& r : rows) {
-      if (r.scene != current) {
-        if (!first_scene) os << "}";
-        os << (first_scene ? "" : ", ") << "\"" << r.scene << "\": {";
-        current = r.scene;
-        first_scene = false;
-        first_kind = true;
-      }
       const int k = ++seen[r.scene][r.kind];
-      os << (first_kind ? "" : ", ") << "\"" << r.kind << (k > 1 ? " #" + std::to_string(k) : "") << "\": {"
-         << "\"fd_rel_error\": " << r.fd_rel_error << ", \"dt_rel_error\": " << r.dt_rel_error << ", \"slope\": ";
-      if (std::isfinite(r.slope))
-        os << r.slope;
-      else
-        os << "null";
-      os << ", \"slope_points\": " << r.slope_points << ", \"gain_us\": " << r.gain_us << ", \"numerical_twin_us\": " << r.twin_us << "}";
-      first_kind = false;
+      const std::string kind = r.kind + (k > 1 ? " #" + std::to_string(k) : "");
+      out[r.scene][kind] = {{"fd_rel_error", number(r.fd_rel_error)},
+                            {"dt_rel_error", number(r.dt_rel_error)},
+                            {"slope", number(r.slope)},
+                            {"slope_points", r.slope_points},
+                            {"gain_us", number(r.gain_us)},
+                            {"numerical_twin_us", number(r.twin_us)}};
     }
-    os << (first_scene ? "" : "}") << "}\n";
+    os << out.dump() << "\n";
   } else {
     os << std::left << std::setw(32) << "scene" << std::setw(36) << "event kind" << std::setw(14) << "fd_rel_error"
        << std::setw(14) << "dt_rel_error" << std::setw(8) << "slope" << std::setw(8) << "points" << std::setw(12) << "gain_us" << "numerical_twin_us\n";

@@ -21,10 +21,13 @@
 // table. Exit status 0 unless a run threw.
 #include "scenes/all_scenes.hpp"
 
+#include <nlohmann/json.hpp>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <functional>
 #include <limits>
@@ -162,11 +165,12 @@ SimulationOptions options_for(IntegratorKind kind, double tol) {
   return o;
 }
 
-void print_number(double x) {
-  if (std::isfinite(x))
-    std::printf("%.6e", x);
-  else
-    std::printf("null");
+/// A JSON number as printed with `format` (JSON has no NaN or infinity: those become null).
+nlohmann::ordered_json number(double x, const char* format = "%.6e") {
+  if (!std::isfinite(x)) return nullptr;
+  char buf[64];
+  std::snprintf(buf, sizeof buf, format, x);
+  return std::strtod(buf, nullptr);
 }
 
 }  // namespace
@@ -226,29 +230,22 @@ int main(int argc, char** argv) {
     }
   }
   if (json) {
-    std::printf("{\"repeats\": %d, \"runs\": [", repeats);
-    for (std::size_t i = 0; i < runs.size(); ++i) {
-      const Run& r = runs[i];
-      std::printf("%s{\"case\": \"%s\", \"backend\": \"%s\", \"tolerance\": %.0e, \"final_state_error\": ", i ? ", " : "",
-                  r.case_name.c_str(), r.backend.c_str(), r.tolerance);
-      print_number(r.final_error);
-      std::printf(", \"event_time_error\": ");
-      print_number(r.event_error);
-      std::printf(", \"wall_seconds\": ");
-      print_number(r.wall);
-      std::printf(", \"events\": %d, \"steps\": %ld, \"error\": ", r.events, r.steps);
-      if (r.error.empty()) {
-        std::printf("null}");
-      } else {
-        std::string escaped;
-        for (char ch : r.error) {
-          if (ch == '"' || ch == '\\') escaped.push_back('\\');
-          escaped.push_back(ch == '\n' ? ' ' : ch);
-        }
-        std::printf("\"%s\"}", escaped.c_str());
-      }
+    auto all = nlohmann::ordered_json::array();
+    for (const Run& r : runs) {
+      std::string message = r.error;  // on one line
+      std::replace(message.begin(), message.end(), '\n', ' ');
+      all.push_back({{"case", r.case_name},
+                     {"backend", r.backend},
+                     {"tolerance", number(r.tolerance, "%.0e")},
+                     {"final_state_error", number(r.final_error)},
+                     {"event_time_error", number(r.event_error)},
+                     {"wall_seconds", number(r.wall)},
+                     {"events", r.events},
+                     {"steps", r.steps},
+                     {"error", r.error.empty() ? nlohmann::ordered_json(nullptr) : nlohmann::ordered_json(message)}});
     }
-    std::printf("]}\n");
+    const nlohmann::ordered_json out = {{"repeats", repeats}, {"runs", std::move(all)}};
+    std::printf("%s\n", out.dump(-1, ' ', false, nlohmann::ordered_json::error_handler_t::replace).c_str());
   } else {
     std::fprintf(stderr, "\n");
     std::printf("%-10s %-12s %8s %14s %14s %12s %7s %8s\n", "case", "backend", "tol", "final err", "event err",

@@ -13,8 +13,11 @@
 
 #include <saltus/sensitivity/sensitivity.hpp>
 
+#include <nlohmann/json.hpp>
+
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
 
 int main() {
@@ -58,19 +61,29 @@ int main() {
   lo.spreading.before = lo.spreading.after = 0.02;  // covers the perturbed event shifts below
   const LinearisedSystem<H> lin(hopper, traj, lo);
   std::printf("\njump gains z+ = G_z z- + G_v v- (closed loop), event-time shift dt = dt_dz z- + dt_dv v-:\n");
-  std::ofstream json(examples::report_dir() / "hopper_gains.json");
-  json << "{\"events\": [";
+  // report/hopper_gains.json: {"events": [{t, guard, G_z_minus_identity_max, G_v_max, dt_dz_norm}]},
+  // numbers to 6 significant digits.
+  const auto number = [](double x) -> nlohmann::ordered_json {
+    if (!std::isfinite(x)) return nullptr;
+    char buf[64];
+    std::snprintf(buf, sizeof buf, "%.6g", x);
+    return std::strtod(buf, nullptr);
+  };
+  auto gains = nlohmann::ordered_json::array();
   for (std::size_t e = 0; e < lin.gains().size(); ++e) {
     const auto& g = lin.gains()[e];
     const auto& ev = traj.events[e];
     const double off_identity = (g.G_z - Mat<8, 8>::Identity()).cwiseAbs().maxCoeff();
     std::printf("  t = %.6f %-10s |G_z - I|max = %-10.3g |G_v|max = %-10.3g |dt_dz| = %.3g\n", ev.t,
                 to_string(ev.guards().at(0).kind), off_identity, g.G_v.cwiseAbs().maxCoeff(), g.dt_dz.norm());
-    json << (e ? ", " : "") << "{\"t\": " << ev.t << ", \"guard\": \"" << to_string(ev.guards().at(0).kind)
-         << "\", \"G_z_minus_identity_max\": " << off_identity << ", \"G_v_max\": " << g.G_v.cwiseAbs().maxCoeff()
-         << ", \"dt_dz_norm\": " << g.dt_dz.norm() << "}";
+    gains.push_back({{"t", number(ev.t)},
+                     {"guard", to_string(ev.guards().at(0).kind)},
+                     {"G_z_minus_identity_max", number(off_identity)},
+                     {"G_v_max", number(g.G_v.cwiseAbs().maxCoeff())},
+                     {"dt_dz_norm", number(g.dt_dz.norm())}});
   }
-  json << "]}\n";
+  std::ofstream json(examples::report_dir() / "hopper_gains.json");
+  json << nlohmann::ordered_json{{"events", gains}}.dump() << "\n";
 
   // A perturbed hop: initial state x0 + eps z0, torques + eps v(t). The reference-spreading
   // remainder |x_eps(t_end) - x_k(t_end) - eps z_k(t_end)| must shrink like eps^2.

@@ -2,7 +2,7 @@
 // files under report/ (JSON: segments and events; CSV: samples of t, mode, x, u).
 #pragma once
 
-#include <saltus/hybrid/vocabulary/trajectory.hpp>
+#include <saltus/hybrid/vocabulary/trajectory_io.hpp>
 
 #include <cstdio>
 #include <filesystem>
@@ -38,9 +38,9 @@ template <Scene S>
 void write_trajectory(const S& scene, const HybridTrajectory<S>& traj, const std::string& name, double dt) {
   const auto dir = report_dir();
   std::ofstream json(dir / (name + ".json"));
-  traj.write_json(json, scene);
+  saltus::write_json(json, traj, scene);
   std::ofstream csv(dir / (name + ".csv"));
-  traj.write_csv(csv, dt, scene);
+  saltus::write_csv(csv, traj, dt, scene);
   std::printf("  wrote %s and %s\n", (dir / (name + ".json")).c_str(), (dir / (name + ".csv")).c_str());
 }
 

@@ -1,8 +1,12 @@
-// Reference spreading (each segment extended by its own mode's flow) against closed forms, and the
-// import of a reference from CSV with its polishing by re-simulation.
+// Reference spreading (each segment extended by its own mode's flow) against closed forms, the
+// import of a reference from CSV with its polishing by re-simulation, and a trajectory's JSON.
 #include "support.hpp"
 
 #include "scenes/all_scenes.hpp"
+
+#include <saltus/hybrid/vocabulary/trajectory_io.hpp>
+
+#include <nlohmann/json.hpp>
 
 #include <sstream>
 
@@ -127,7 +131,7 @@ TEST(ReferenceImport, CsvRoundTripIsExact) {
   scenes::PointMass mass;
   const auto traj = example3();
   std::stringstream csv;
-  traj.write_csv(csv, 0.01, mass);
+  write_csv(csv, traj, 0.01, mass);
   const auto ref = read_reference_csv<scenes::PointMass>(csv);
   ASSERT_EQ(ref.event_times.size(), traj.events.size());
   for (std::size_t e = 0; e < traj.events.size(); ++e) EXPECT_EQ(ref.event_times[e], traj.events[e].t);
@@ -140,6 +144,34 @@ TEST(ReferenceImport, CsvRoundTripIsExact) {
   }
 }
 
+// write_json's output parses back to the trajectory: its events, their times to the last bit and
+// the guards by contact name.
+TEST(TrajectoryJson, ParsesBackToTheTrajectory) {
+  scenes::PointMass mass;
+  const auto traj = example3();
+  ASSERT_EQ(traj.events.size(), 2u);
+  std::stringstream out;
+  write_json(out, traj, mass);
+  const std::string text = out.str();
+  ASSERT_FALSE(text.empty());
+  EXPECT_EQ(text.find('\n'), text.size() - 1) << "one line, then a newline";
+  const nlohmann::json j = nlohmann::json::parse(text);
+  EXPECT_EQ(j.at("status"), "completed");
+  ASSERT_EQ(j.at("events").size(), traj.events.size());
+  for (std::size_t e = 0; e < traj.events.size(); ++e) {
+    const auto& ev = j.at("events").at(e);
+    EXPECT_EQ(ev.at("t").get<double>(), traj.events[e].t) << "event " << e;
+    const auto guards = traj.events[e].guards();
+    ASSERT_EQ(ev.at("guards").size(), guards.size()) << "event " << e;
+    ASSERT_FALSE(guards.empty());
+    EXPECT_EQ(ev.at("guards").at(0).at("contact"), mass.contact(guards[0].contact).name) << "event " << e;
+    EXPECT_EQ(ev.at("guards").at(0).at("kind"), to_string(guards[0].kind)) << "event " << e;
+    EXPECT_EQ(ev.at("x_plus").at(1).get<double>(), traj.events[e].x_plus[1]) << "event " << e;
+  }
+  EXPECT_TRUE(j.at("events").at(0).at("impact").get<bool>());
+  EXPECT_TRUE(j.at("zeno_time").is_null());
+}
+
 // The spatial box's slip modes are written with their direction "(dx,dy)": quoted, so the CSV
 // still parses.
 TEST(ReferenceImport, ReadsModesWithCommas) {
@@ -150,7 +182,7 @@ TEST(ReferenceImport, ReadsModesWithCommas) {
   Simulator<scenes::SpatialBox> sim(box, tight());
   const auto traj = sim.run(x0, 0.0, 0.4, zero_input<scenes::SpatialBox>());
   std::stringstream csv;
-  traj.write_csv(csv, 0.02, box);
+  write_csv(csv, traj, 0.02, box);
   EXPECT_NE(csv.str().find("(1,0)"), std::string::npos) << csv.str().substr(0, 400);
   const auto ref = read_reference_csv<scenes::SpatialBox>(csv);
   ASSERT_EQ(ref.event_times.size(), traj.events.size());
@@ -178,7 +210,7 @@ TEST(ReferenceImport, PolishReproducesAnImportedReference) {
   scenes::PointMass mass;
   const auto traj = example3();
   std::stringstream csv;
-  traj.write_csv(csv, 0.01, mass);
+  write_csv(csv, traj, 0.01, mass);
   const auto ref = read_reference_csv<scenes::PointMass>(csv);
   for (IntegratorKind kind : {IntegratorKind::DormandPrince, IntegratorKind::CvodeBdf}) {
     const auto polished = polish(mass, ref, tight(kind));
