@@ -25,7 +25,7 @@
 #pragma once
 
 #include <saltus/hybrid/dynamics/impact.hpp>
-#include <saltus/hybrid/simulation/integrator_cvode.hpp>
+#include <saltus/hybrid/simulation/integrator_cvode.hxx>
 #include <saltus/hybrid/simulation/integrator_dopri.hpp>
 #include <saltus/hybrid/dynamics/mode_selection.hpp>
 #include <saltus/hybrid/reference/reference_spreading.hpp>
