@@ -1,6 +1,7 @@
-// The CVODE backend (BDF and Adams) on the analytic cases of test_simulation.cpp, its projection
-// onto the closed contacts, and its failures: every CVODE error becomes an exception naming the
-// flag, every exception thrown inside a callback reaches the caller.
+// The CVODE backend (BDF and Adams): its agreement with Dormand-Prince, its projection onto the
+// closed contacts, and its failures: every CVODE error becomes an exception naming the flag, every
+// exception thrown inside a callback reaches the caller. The analytic cases run with every
+// integrator in test_simulation.cpp.
 #include "support.hpp"
 
 #include "scenes/all_scenes.hpp"
@@ -22,122 +23,6 @@ class Cvode : public ::testing::TestWithParam<IntegratorKind> {
     return o;
   }
 };
-
-TEST_P(Cvode, InelasticBallFallsAndRests) {
-  scenes::BouncingBallParameters p;
-  p.restitution = 0.0;
-  scenes::BouncingBall ball(p);
-  Simulator<scenes::BouncingBall> sim(ball, tight());
-  const auto traj = sim.run(Vec<2>(1.0, 0.0), 0.0, 2.0, zero_input<scenes::BouncingBall>());
-  ASSERT_EQ(traj.events.size(), 1u);
-  EXPECT_NEAR(traj.events[0].t, std::sqrt(2.0 / g), 1e-12);
-  EXPECT_NEAR(traj.events[0].x_minus[1], -std::sqrt(2.0 * g), 1e-10);
-  EXPECT_TRUE(traj.events[0].mode_after[0].closed());
-  EXPECT_TRUE(matrices_near(traj.final_state(), Vec<2>(0.0, 0.0), 0.0, 1e-9));
-  // The dense output is CVODE's interpolant: the free fall before the impact.
-  for (double t : {0.1, 0.25, 0.4})
-    EXPECT_TRUE(matrices_near(traj.state(0, t), Vec<2>(1 - 0.5 * g * t * t, -g * t), 0.0, 1e-10)) << "t = " << t;
-}
-
-TEST_P(Cvode, ElasticBallBouncesUntilItsZenoTime) {
-  scenes::BouncingBall ball;  // e_n = 0.5
-  const double e = ball.parameters().restitution, h0 = 1.0;
-  Simulator<scenes::BouncingBall> sim(ball, tight());
-  const auto traj = sim.run(Vec<2>(h0, 0.0), 0.0, 10.0, zero_input<scenes::BouncingBall>());
-  ASSERT_EQ(traj.status, SimulationStatus::Zeno);
-  const double t1 = std::sqrt(2 * h0 / g), v1 = std::sqrt(2 * g * h0);
-  double t = t1, v = v1, time_tolerance = 0.0;
-  // A height error dz shifts a touchdown at speed v by dz / v: the late, slow bounces amplify the
-  // integrator's position error (about 1e-12 at these tolerances; BDF, restarting at order 1 after
-  // every bounce, accumulates the most), so the time tolerance grows with 1 / v.
-  for (std::size_t k = 0; k < traj.events.size(); ++k) {
-    time_tolerance = 1e-11 * (k + 1) + 2e-12 / v;
-    EXPECT_NEAR(traj.events[k].t, t, time_tolerance) << "bounce " << k;
-    EXPECT_NEAR(traj.events[k].x_plus[1], e * v, 1e-9 + e * g * time_tolerance) << "bounce " << k;
-    v *= e;
-    t += 2 * v / g;
-  }
-  EXPECT_NEAR(traj.zeno_time, t1 + 2 * v1 * e / (g * (1 - e)), 1e-9 + 3 * time_tolerance);
-}
-
-Vec<4> example3_closed_form(double t) {
-  const double q1 = 3.5 * t * t, v1 = 7 * t;
-  if (t < 1.5) return Vec<4>(q1, 0.0, v1, 0.0);
-  const double s = t - 1.5;
-  return Vec<4>(q1, g * s * s * s / 3, v1, g * s * s);
-}
-
-TEST_P(Cvode, PointMassOfExampleThreeImpactsSlidesAndLiftsOff) {
-  scenes::PointMass mass;
-  auto input = open_loop<scenes::PointMass>([](double t) { return Vec<2>(7.0, t < 1.0 ? 0.0 : 2 * g * (t - 1.0)); });
-  SimulationOptions o = tight();
-  o.breakpoints = {1.0};
-  Simulator<scenes::PointMass> sim(mass, o);
-  const auto traj = sim.run(Vec<4>(0.0, 1.0, 0.0, 0.0), 0.0, 2.0, input);
-  ASSERT_EQ(traj.events.size(), 2u);
-  EXPECT_NEAR(traj.events[0].t, std::sqrt(2.0 / g), 1e-12);
-  EXPECT_TRUE(traj.events[0].impact());
-  EXPECT_EQ(traj.events[1].guards().at(0).kind, GuardKind::Release);
-  EXPECT_NEAR(traj.events[1].t, 1.5, 1e-12);
-  EXPECT_TRUE(matrices_near(traj.final_state(), example3_closed_form(2.0), 0.0, 1e-9));
-  for (double t : {0.1, 0.3, 0.45})  // free fall before the impact
-    EXPECT_TRUE(matrices_near(traj.state_at(t), Vec<4>(3.5 * t * t, 1 - 0.5 * g * t * t, 7 * t, -g * t), 0.0, 1e-9))
-        << "t = " << t;
-  for (double t : {0.9, 1.2, 1.7})
-    EXPECT_TRUE(matrices_near(traj.state_at(t), example3_closed_form(t), 0.0, 1e-8)) << "t = " << t;
-}
-
-TEST_P(Cvode, BoxSlidesToAStopAtTheAnalyticTime) {
-  scenes::SpatialBox box;
-  const double mu = box.parameters().mu, v0 = 1.2;
-  Vec<12> x0 = Vec<12>::Zero();
-  x0[2] = 0.5 * box.parameters().size[2];
-  x0[6] = v0;
-  Simulator<scenes::SpatialBox> sim(box, tight());
-  const auto traj = sim.run(x0, 0.0, 0.5, zero_input<scenes::SpatialBox>());
-  ASSERT_GE(traj.events.size(), 1u);
-  const auto& stop = traj.events.front();
-  EXPECT_NEAR(stop.t, v0 / (mu * g), 1e-10);
-  for (int i = 0; i < 4; ++i) EXPECT_EQ(stop.mode_after[i].mode, ContactMode::Stick) << "corner " << i;
-  EXPECT_NEAR(traj.final_state()[0], v0 * v0 / (2 * mu * g), 1e-9);
-  EXPECT_NEAR(traj.final_state().tail<6>().norm(), 0.0, 1e-9);
-}
-
-TEST_P(Cvode, PlankBoxLandsFlatOnBothCornersAtOnce) {
-  scenes::PlankBox plank_box;
-  const auto& p = plank_box.parameters();
-  Vec<8> x0 = Vec<8>::Zero();
-  x0[0] = 0.6;
-  x0[1] = 0.5 * p.box_height + 0.5 * p.plank_thickness + 0.05;
-  auto input = open_loop<scenes::PlankBox>([&](double) { return Vec<3>(0.0, p.box_mass * g - 2.0, 0.0); });
-  Simulator<scenes::PlankBox> sim(plank_box, tight());
-  const auto traj = sim.run(x0, 0.0, 0.5, input);
-  ASSERT_GE(traj.events.size(), 1u);
-  const auto& landing = traj.events.front();
-  EXPECT_NEAR(landing.t, std::sqrt(2 * 0.05 / 2.0), 1e-11);
-  EXPECT_EQ(landing.guards().size(), 2u) << "a simultaneous touchdown of C_L and C_R";
-  EXPECT_TRUE(landing.impact());
-  EXPECT_EQ(landing.mode_after[0].mode, ContactMode::Stick);
-  EXPECT_EQ(landing.mode_after[1].mode, ContactMode::Stick);
-}
-
-TEST_P(Cvode, SpatialBoxLandsOnFourCornersAndSlidesToRest) {
-  scenes::SpatialBox box;
-  const double mu = box.parameters().mu, h = 0.1, vx = 2.0;
-  Vec<12> x0 = Vec<12>::Zero();
-  x0[2] = 0.5 * box.parameters().size[2] + h;
-  x0[6] = vx;
-  Simulator<scenes::SpatialBox> sim(box, tight());
-  const auto traj = sim.run(x0, 0.0, 1.0, zero_input<scenes::SpatialBox>());
-  ASSERT_GE(traj.events.size(), 2u);
-  const auto& landing = traj.events[0];
-  const double vn = std::sqrt(2 * g * h);
-  EXPECT_NEAR(landing.t, std::sqrt(2 * h / g), 1e-11);
-  EXPECT_EQ(landing.guards().size(), 4u);
-  EXPECT_NEAR(landing.x_plus[6], vx - mu * vn, 1e-9);
-  const double t_stop = landing.t + (vx - mu * vn) / (mu * g);
-  EXPECT_NEAR(traj.events[1].t, t_stop, 1e-9);
-}
 
 // Both CVODE variants agree with Dormand-Prince on a case without a closed form (the plank-box
 // after landing: spring, damper and two sticking corners), up to t = 0.5: the landing and the
