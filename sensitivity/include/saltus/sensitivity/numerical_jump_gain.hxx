@@ -40,9 +40,9 @@ NumericalJumpGain<S> numerical_jump_gain(const S& scene, const HybridTrajectory<
                                          const NumericalJumpGainOptions& options) {
   constexpr int nx = 2 * S::nq, nu = S::nu;
   using State = Vec<nx>;
-  SALTUS_DEMAND(e >= 0 && e < static_cast<int>(traj.events.size()), InvalidArgument, "event index ", e,
+  SALTUS_REQUIRE(e >= 0 && e < static_cast<int>(traj.events.size()), "event index ", e,
                 " out of range [0, ", traj.events.size(), ")");
-  SALTUS_DEMAND(options.window > 0 && options.state_step > 0 && options.input_step > 0, InvalidArgument,
+  SALTUS_REQUIRE(options.window > 0 && options.state_step > 0 && options.input_step > 0, 
                 "NumericalJumpGainOptions: window and steps must be > 0");
   const Event<S>& ev = traj.events[e];
   const double ts = ev.t;
@@ -50,7 +50,7 @@ NumericalJumpGain<S> numerical_jump_gain(const S& scene, const HybridTrajectory<
   if (e > 0 && ev.t > traj.events[e - 1].t) w = std::min(w, 0.25 * (ev.t - traj.events[e - 1].t));
   if (e + 1 < static_cast<int>(traj.events.size())) w = std::min(w, 0.25 * (traj.events[e + 1].t - ev.t));
   if (traj.t_end() > ev.t) w = std::min(w, 0.25 * (traj.t_end() - ev.t));
-  SALTUS_DEMAND(w > 1e-12, InvalidArgument, "numerical jump gain: no room around the event at t = ", ts,
+  SALTUS_REQUIRE(w > 1e-12, "numerical jump gain: no room around the event at t = ", ts,
                 " (neighbouring events or the end of the trajectory coincide with it)");
   const double ta = ts - w, tb = ts + w;
 
@@ -84,7 +84,7 @@ NumericalJumpGain<S> numerical_jump_gain(const S& scene, const HybridTrajectory<
       int index = -1;
       for (int j = 0; j < sys.guards().count && !tr.guards.empty(); ++j)
         if (sys.guards()[j] == tr.guards.front()) index = j;
-      SALTUS_DEMAND(index >= 0 || tr.guards.empty(), NumericalFailure, "numerical jump gain: transition ", k,
+      SALTUS_CHECK_NUMERICS(index >= 0 || tr.guards.empty(), "numerical jump gain: transition ", k,
                     " of the event at t = ", ts, " has a guard its mode does not have");
       bool cross = k == 0 && index >= 0;
       if (k > 0 && index >= 0) {
@@ -93,7 +93,7 @@ NumericalJumpGain<S> numerical_jump_gain(const S& scene, const HybridTrajectory<
       }
       if (cross) {
         const auto end = integrator.integrate(sys, t, x, tb, options.simulation.simultaneity, nullptr, true);
-        SALTUS_DEMAND(end.at_guard && end.fired[index], NumericalFailure,
+        SALTUS_CHECK_NUMERICS(end.at_guard && end.fired[index], 
                       "numerical jump gain: a replayed run did not ", "reach the ", to_string(tr.guards.front().kind),
                       " guard of the event at t = ", ts, " within the window (reduce the steps or enlarge the window)");
         t = end.t;
@@ -109,9 +109,8 @@ NumericalJumpGain<S> numerical_jump_gain(const S& scene, const HybridTrajectory<
       const auto run = simulator.run(x0, ev.mode_before, ta, tb, law);
       const int events = static_cast<int>(run.events.size());
       // The same structure as the reference's event: one event, the same chain, the same end mode.
-      SALTUS_DEMAND(events == 1 && run.events.front().transitions.size() == ev.transitions.size() &&
-                        run.segments.back().mode == ev.mode_after,
-                    NumericalFailure, "numerical jump gain: a perturbed run through the event at t = ", ts,
+      SALTUS_CHECK_NUMERICS(events == 1 && run.events.front().transitions.size() == ev.transitions.size() &&
+                        run.segments.back().mode == ev.mode_after, "numerical jump gain: a perturbed run through the event at t = ", ts,
                     " ended in mode '", describe(scene, run.segments.back().mode), "' after ", events,
                     " events, not in '", describe(scene, ev.mode_after), "' after one");
       event_time = run.events.front().t;
