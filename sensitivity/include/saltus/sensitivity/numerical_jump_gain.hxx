@@ -6,34 +6,13 @@
 #include <algorithm>
 #include <array>
 #include <limits>
+#include <saltus/hybrid/dynamics/constraints.hpp>
 #include <saltus/hybrid/simulation/integrator_dopri.hpp>
 #include <saltus/hybrid/simulation/simulator.hpp>
 #include <saltus/hybrid/simulation/transition.hpp>
 #include <saltus/sensitivity/numerical_jump_gain.hpp>
 
 namespace saltus {
-
-namespace detail {
-
-/// The constraints a mode keeps: gap and normal velocity of every closed contact, tangential
-/// velocity of every sticking one.
-template <Scene S>
-int mode_constraints(const S& scene, const Mode<S::nc>& mode, const Vec<2 * S::nq>& x, Kinematics<S>& kin,
-                     Eigen::Matrix<double, 3 * S::nc + 1, 1>& c) {
-  constexpr int nq = S::nq;
-  evaluate_kinematics(scene, Vec<nq>(x.template head<nq>()), Vec<nq>(x.template tail<nq>()), kin);
-  int m = 0;
-  for (int i = 0; i < S::nc; ++i) {
-    if (!mode[i].closed()) continue;
-    c[m++] = kin.contacts[i].gap;
-    c[m++] = kin.contacts[i].zeta_n;
-    if (mode[i].mode == ContactMode::Stick)
-      for (int k = 0; k < scene.contact(i).tangents() && m < 3 * S::nc + 1; ++k) c[m++] = kin.contacts[i].zeta_t[k];
-  }
-  return m;
-}
-
-}  // namespace detail
 
 template <Scene S>
 NumericalJumpGain<S> numerical_jump_gain(const S& scene, const HybridTrajectory<S>& traj, int e,
@@ -138,45 +117,45 @@ NumericalJumpGain<S> numerical_jump_gain(const S& scene, const HybridTrajectory<
     return ((4 * d(0.5 * h) - d(h)) / 3).eval();
   };
 
-  // Admissible directions at x_a: the kernel of the constraints' Jacobian C (central differences).
-  Kinematics<S> kin;
-  using Constraints = Eigen::Matrix<double, 3 * S::nc + 1, 1>;
-  Constraints c0, cp, cm;
-  const int m = detail::mode_constraints(scene, ev.mode_before, x_a, kin, c0);
+  // Admissible directions at x_a: the kernel of the Jacobian C of the mode's constraints c(x)
+  // (constraints.hpp: gaps of the closed contacts, their normal velocities and the sticking
+  // contacts' tangential velocities), by central differences.
+  ConstraintProjection<S> constraints;
+  using Values = typename ConstraintProjection<S>::Values;
+  Values c_q0, c_v0, c_q, c_v;
+  constraints.values(scene, ev.mode_before, x_a, c_q0, c_v0);
+  const int mq = static_cast<int>(c_q0.size()), m = mq + static_cast<int>(c_v0.size());
   using Basis = typename NumericalJumpGain<S>::Basis;
   Basis T;
-  Eigen::Matrix<double, Eigen::Dynamic, nx, 0, 3 * S::nc + 1, nx> C(m, nx);
-  auto constraint_jacobian = [&](const State& x) {
-    for (int j = 0; j < nx; ++j) {
-      const double h = 1e-7 * std::max(1.0, std::abs(x[j]));
-      State xp = x, xm = x;
-      xp[j] += h;
-      xm[j] -= h;
-      detail::mode_constraints(scene, ev.mode_before, xp, kin, cp);
-      detail::mode_constraints(scene, ev.mode_before, xm, kin, cm);
-      C.col(j) = (cp.head(m) - cm.head(m)) / (2 * h);
-    }
+  Eigen::Matrix<double, Eigen::Dynamic, nx, 0, 4 * S::nc, nx> C(m, nx);
+  auto constraint_row_values = [&](const State& x, int j, double sign) {
+    constraints.values(scene, ev.mode_before, x, c_q, c_v);
+    C.col(j).head(mq) += sign * c_q;
+    C.col(j).tail(m - mq) += sign * c_v;
   };
   if (m == 0) {
     T = Mat<nx, nx>::Identity();
   } else {
-    constraint_jacobian(x_a);
+    C.setZero();
+    for (int j = 0; j < nx; ++j) {
+      const double h = 1e-7 * std::max(1.0, std::abs(x_a[j]));
+      State xp = x_a, xm = x_a;
+      xp[j] += h;
+      xm[j] -= h;
+      constraint_row_values(xp, j, 1.0);
+      constraint_row_values(xm, j, -1.0);
+      C.col(j) /= 2 * h;
+    }
     const Eigen::JacobiSVD<Eigen::MatrixXd> svd(Eigen::MatrixXd(C), Eigen::ComputeFullV);
     const double tol = 1e-6 * std::max(1.0, svd.singularValues()[0]);
     int rank = 0;
     while (rank < svd.singularValues().size() && svd.singularValues()[rank] > tol) ++rank;
     T = svd.matrixV().rightCols(nx - rank);
   }
-  // Back onto the constraints c(x) = c(x_a) (Gauss-Newton; perturbations are ~1e-5, so the
-  // first-order violation is ~1e-10 and two or three steps reach round-off).
+  // Back onto the constraints c(x) = c(x_a) (constraints.hpp: the kinetic-metric projection;
+  // perturbations are ~1e-5 along admissible directions, so the correction is ~1e-10).
   auto project = [&](State x) {
-    if (m == 0) return x;
-    for (int it = 0; it < 4; ++it) {
-      // The Jacobian first: constraint_jacobian overwrites cp with its probes.
-      constraint_jacobian(x);
-      detail::mode_constraints(scene, ev.mode_before, x, kin, cp);
-      x -= C.completeOrthogonalDecomposition().solve(Eigen::VectorXd(cp.head(m) - c0.head(m)));
-    }
+    if (m > 0) constraints.project(scene, ev.mode_before, x, &c_q0, &c_v0);
     return x;
   };
 
