@@ -135,14 +135,9 @@ std::vector<Case> cases() {
     c.name = "plank_box";
     c.run = [](const SimulationOptions& o) {
       scenes::PlankBox plank_box;
-      const auto& p = plank_box.parameters();
-      Vec<8> x0 = Vec<8>::Zero();
-      x0[0] = 0.6;
-      x0[1] = 0.5 * p.box_height + 0.5 * p.plank_thickness + 0.05;
-      const double push = p.box_mass * g - 2.0;
-      auto input = open_loop<scenes::PlankBox>([push](double) { return Vec<3>(0.0, push, 0.0); });
+      auto input = open_loop<scenes::PlankBox>([&](double) { return plank_box.lowering_input(); });
       Simulator<scenes::PlankBox> sim(plank_box, o);
-      return outcome_of(sim.run(x0, 0.0, 0.5, input));
+      return outcome_of(sim.run(plank_box.flat_state(), 0.0, 0.5, input));
     };
     c.exact_events = {std::sqrt(0.05)};  // a = 2 N / 1 kg over 0.05 m
     all.push_back(c);

@@ -7,7 +7,7 @@ set -euo pipefail
 here=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 build="$here/build"
 bash "$here/.ci/install-deps.sh"
-cmake -S "$here" -B "$build" -DCMAKE_BUILD_TYPE=Release -DSALTUS_BUILD_BENCH=ON
+bash "$here/.ci/configure.sh" "$here" "$build" -DCMAKE_BUILD_TYPE=Release -DSALTUS_BUILD_BENCH=ON
 cmake --build "$build" -j "${SALTUS_JOBS:-$(nproc)}"
 export SALTUS_REPORT_DIR="$here/report"
 mkdir -p "$SALTUS_REPORT_DIR"

@@ -11,11 +11,8 @@ int main() {
   using namespace saltus;
   using PB = scenes::PlankBox;
   PB plank_box;  // parameters and their sources: scenes/plank_box.hpp
-  const auto& p = plank_box.parameters();
-  Vec<8> x0 = Vec<8>::Zero();
-  x0[0] = 0.6;                                                      // box centre over the plank, m
-  x0[1] = 0.5 * p.box_height + 0.5 * p.plank_thickness + 0.05;      // bottom 5 cm above the plank
-  auto hold = open_loop<PB>([&](double) { return Vec<3>(0.0, p.box_mass * p.gravity - 2.0, 0.0); });
+  const Vec<8> x0 = plank_box.flat_state(0.6, 0.05);  // box centre 0.6 m along, bottom 5 cm above the plank
+  auto hold = open_loop<PB>([&](double) { return plank_box.lowering_input(2.0); });  // weight - 2 N
 
   SimulationOptions options;
   options.integrator.relative_tolerance = 1e-12;

@@ -10,6 +10,6 @@ bash "$here/.ci/install-deps.sh"  # apt-get update + apt-get install of the miss
 jobs=${SALTUS_JOBS:-$(nproc)}
 # Benchmarks are built and run by the main job (examples/demo.sh), not here: they add minutes of
 # compile time to every CI run and test nothing the suites do not.
-cmake -S "$here" -B "$build" -DCMAKE_BUILD_TYPE=Release -DSALTUS_BUILD_BENCH=OFF "$@"
+bash "$here/.ci/configure.sh" "$here" "$build" -DCMAKE_BUILD_TYPE=Release -DSALTUS_BUILD_BENCH=OFF "$@"
 cmake --build "$build" -j "$jobs"
 ctest --test-dir "$build" --output-on-failure -j "$jobs"

@@ -4,6 +4,7 @@
 
 #include "scenes/all_scenes.hpp"
 
+#include <saltus/hybrid/dynamics/constraints.hpp>
 #include <saltus/hybrid/dynamics/kinematics.hpp>
 #include <saltus/hybrid/vocabulary/mode.hpp>
 #include <saltus/hybrid/vocabulary/scene.hpp>
@@ -100,35 +101,17 @@ Mode<S::nc> random_mode(const S& scene, Rng& rng) {
 }
 
 /// x with its velocity projected (in the kinetic metric) onto the velocities a mode allows:
-/// zero normal velocity at closed contacts, zero tangential velocity at sticking ones. Flows are
-/// only consistent there: for a rigid pair of sticking contacts (a box stuck on the plank at both
+/// zero normal velocity at closed contacts, zero tangential velocity at sticking ones, the
+/// configuration kept (ConstraintProjection with the current gaps as targets). Flows are only
+/// consistent there: for a rigid pair of sticking contacts (a box stuck on the plank at both
 /// corners) the Delassus system has a solution only if the velocities respect the contacts.
 template <Scene S>
 Vec<2 * S::nq> consistent_with_mode(const S& scene, const Mode<S::nc>& mode, const Vec<2 * S::nq>& x) {
-  constexpr int nq = S::nq;
-  const Vec<nq> q = x.template head<nq>();
-  Vec<nq> v = x.template tail<nq>();
-  Kinematics<S> kin;
-  evaluate_kinematics(scene, q, v, kin);
-  Eigen::MatrixXd J(0, nq);
-  for (int i = 0; i < S::nc; ++i) {
-    if (!mode[i].closed()) continue;
-    const auto& c = kin.contacts[i];
-    J.conservativeResize(J.rows() + 1, nq);
-    J.row(J.rows() - 1) = c.wn.transpose();
-    if (mode[i].mode == ContactMode::Stick)
-      for (int k = 0; k < c.tangents; ++k) {
-        J.conservativeResize(J.rows() + 1, nq);
-        J.row(J.rows() - 1) = c.Wt.col(k).transpose();
-      }
-  }
-  if (J.rows() > 0) {
-    const Eigen::MatrixXd MinvJt = kin.llt.solve(J.transpose());
-    const Eigen::MatrixXd D = J * MinvJt;
-    v -= MinvJt * D.completeOrthogonalDecomposition().solve(J * v);
-  }
-  Vec<2 * nq> out = x;
-  out.template tail<nq>() = v;
+  ConstraintProjection<S> projection;
+  typename ConstraintProjection<S>::Values gaps, velocities;
+  projection.values(scene, mode, x, gaps, velocities);
+  Vec<2 * S::nq> out = x;
+  projection.project(scene, mode, out, &gaps);
   return out;
 }
 

@@ -11,7 +11,7 @@ TEST(PlankBox, EmptyPlankRestsHorizontally) {
   const Vec<4> q(0.5, 1.0, 0.0, 0.0);
   EXPECT_NEAR(plank_box.bias<double>(q, Vec<4>::Zero())[3], 0.0, 1e-12);
   // Flat box at rest on the plank: both corners touch at once.
-  Vec<4> flat(0.6, 0.5 * plank_box.parameters().box_height + 0.5 * plank_box.parameters().plank_thickness, 0, 0);
+  const Vec<4> flat = plank_box.flat_state(0.6, 0.0).head<4>();
   EXPECT_NEAR(plank_box.gap<double>(0, flat), 0.0, 1e-15);
   EXPECT_NEAR(plank_box.gap<double>(1, flat), 0.0, 1e-15);
 }

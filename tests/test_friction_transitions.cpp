@@ -81,11 +81,8 @@ TEST(RedundantFriction, FlowJacobianOfTheFlatStickMatchesCentralDifferences) {
 
 TEST(RedundantFriction, PlankBoxSlipsOnBothCornersAtOnceAndSettles) {
   PB pb;
-  const auto& p = pb.parameters();
-  Vec<8> x0 = Vec<8>::Zero();
-  x0[0] = 0.6;
-  x0[1] = 0.5 * p.box_height + 0.5 * p.plank_thickness + 0.05;
-  auto input = open_loop<PB>([&](double) { return Vec<3>(0.0, p.box_mass * p.gravity - 2.0, 0.0); });
+  const Vec<8> x0 = pb.flat_state();
+  auto input = open_loop<PB>([&](double) { return pb.lowering_input(); });
   SimulationOptions o;
   o.integrator.relative_tolerance = 1e-12;
   o.integrator.absolute_tolerance = 1e-13;

@@ -98,9 +98,8 @@ TEST(Impact, FrictionlessMultiContactImpactIsTheKineticMetricProjection) {
 // matrix in stick); the minimum-norm impulse is split equally.
 TEST(Impact, FlatLandingSplitsTheImpulseEqually) {
   scenes::PlankBox plank_box;
-  const auto& p = plank_box.parameters();
-  Vec<8> x = Vec<8>::Zero();
-  x << 0.6, 0.5 * p.box_height + 0.5 * p.plank_thickness, 0, 0, 0.1, -1.0, 0, 0;
+  Vec<8> x = plank_box.flat_state(0.6, 0.0);  // touching, flat
+  x.tail<4>() << 0.1, -1.0, 0, 0;
   ImpactSolver<scenes::PlankBox> solver(plank_box);
   const auto& r = solver.solve(x);
   EXPECT_TRUE(r.singular_delassus);

@@ -304,11 +304,8 @@ TEST(JumpGains, NearGrazingTouchdownRaisesGrazingEvent) {
 // The plank-box landing flat fires both touchdown guards in one transition: conewise, refused.
 TEST(JumpGains, SimultaneousTouchdownsAreRefused) {
   scenes::PlankBox plank_box;
-  const auto& p = plank_box.parameters();
-  Vec<8> x0 = Vec<8>::Zero();
-  x0[0] = 0.6;
-  x0[1] = 0.5 * p.box_height + 0.5 * p.plank_thickness + 0.05;
-  auto input = open_loop<scenes::PlankBox>([&](double) { return Vec<3>(0.0, p.box_mass * references::g - 2.0, 0.0); });
+  const Vec<8> x0 = plank_box.flat_state();
+  auto input = open_loop<scenes::PlankBox>([&](double) { return plank_box.lowering_input(); });
   Simulator<scenes::PlankBox> sim(plank_box, references::tight());
   const auto traj = sim.run(x0, 0.0, 0.3, input);
   ASSERT_GE(traj.events.size(), 1u);

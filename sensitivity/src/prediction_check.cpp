@@ -6,7 +6,7 @@
 namespace saltus {
 
 double fitted_log_slope(const std::vector<double>& x, const std::vector<double>& y) {
-  SALTUS_DEMAND(x.size() == y.size() && x.size() >= 2, InvalidArgument, "fitted_log_slope: ", x.size(), " x and ",
+  SALTUS_REQUIRE(x.size() == y.size() && x.size() >= 2, "fitted_log_slope: ", x.size(), " x and ",
                 y.size(), " y values (at least 2 pairs needed)");
   const double n = static_cast<double>(x.size());
   double sx = 0, sy = 0, sxx = 0, sxy = 0;

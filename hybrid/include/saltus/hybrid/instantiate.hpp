@@ -21,11 +21,13 @@
 //
 // What is compiled per scene: the kernels of one state for T = double and for the dual number of
 // the derivatives (StateInputDual<S>: evaluate_contact, evaluate_dynamics, evaluate_kinematics,
-// evaluate_flow, apply_jump_map), ImpactSolver, ModeSelector, flow_jacobian, guard_gradient,
-// jump_map_jacobian, ModeSystem, both integrators, TransitionResolver, Simulator,
-// ExtendedReference and polish. The scene-free contact numerics are compiled once in the library.
+// evaluate_flow, apply_jump_map), ImpactSolver, ModeSelector, ConstraintProjection,
+// flow_jacobian, guard_gradient, jump_map_jacobian, ModeSystem, both integrators,
+// TransitionResolver, Simulator, ExtendedReference and polish. The scene-free contact numerics
+// are compiled once in the library.
 #pragma once
 
+#include <saltus/hybrid/dynamics/constraints.hpp>
 #include <saltus/hybrid/dynamics/derivatives.hpp>
 #include <saltus/hybrid/dynamics/flow.hpp>
 #include <saltus/hybrid/dynamics/impact.hpp>
@@ -54,7 +56,8 @@
 #define SALTUS_HYBRID_DYNAMICS_TEMPLATES(prefix, S) \
   SALTUS_HYBRID_KERNEL_TEMPLATES(prefix, S, double) \
   prefix template class saltus::ImpactSolver<S>;    \
-  prefix template class saltus::ModeSelector<S>;
+  prefix template class saltus::ModeSelector<S>;    \
+  prefix template class saltus::ConstraintProjection<S>;
 
 #define SALTUS_HYBRID_DERIVATIVE_TEMPLATES(prefix, S)                                                            \
   SALTUS_HYBRID_KERNEL_TEMPLATES(prefix, S, saltus::StateInputDual<S>)                                           \

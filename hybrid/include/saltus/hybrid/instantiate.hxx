@@ -4,6 +4,7 @@
 
 #include <saltus/hybrid/instantiate.hpp>
 
+#include <saltus/hybrid/dynamics/constraints.hxx>
 #include <saltus/hybrid/dynamics/derivatives.hxx>
 #include <saltus/hybrid/dynamics/flow.hxx>
 #include <saltus/hybrid/dynamics/impact.hxx>

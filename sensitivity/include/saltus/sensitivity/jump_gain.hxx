@@ -8,18 +8,17 @@ namespace saltus {
 template <Scene S>
 JumpGainSolver<S>::JumpGainSolver(const S& scene, JumpGainOptions options, int reserved_transitions)
     : scene_(scene), options_(options), ws_(std::make_unique<DerivativeWorkspace<S>>()) {
-  SALTUS_DEMAND(options.grazing_threshold >= 0 && options.input_rate_step > 0 && options.chain_time_tolerance >= 0 &&
-                    options.feedback_step > 0,
-                InvalidArgument, "JumpGainOptions: grazing_threshold >= 0, input_rate_step > 0, ",
+  SALTUS_REQUIRE(options.grazing_threshold >= 0 && options.input_rate_step > 0 && options.chain_time_tolerance >= 0 &&
+                    options.feedback_step > 0, "JumpGainOptions: grazing_threshold >= 0, input_rate_step > 0, ",
                 "chain_time_tolerance >= 0 and feedback_step > 0 are required");
   gain_.info.reserve(reserved_transitions);
 }
 
 template <Scene S>
 auto JumpGainSolver<S>::compute(const Event<S>& event, const InputLaw<S>& law) -> const JumpGain<S>& {
-  SALTUS_DEMAND(!event.transitions.empty(), InvalidArgument, "jump gain: the event at t = ", event.t,
+  SALTUS_REQUIRE(!event.transitions.empty(), "jump gain: the event at t = ", event.t,
                 " has no transitions");
-  SALTUS_DEMAND(static_cast<bool>(law), InvalidArgument, "jump gain: the input law is empty");
+  SALTUS_REQUIRE(static_cast<bool>(law), "jump gain: the input law is empty");
   const double t = event.t;
   auto& g = gain_;
   g.transitions = static_cast<int>(event.transitions.size());
@@ -41,10 +40,11 @@ auto JumpGainSolver<S>::compute(const Event<S>& event, const InputLaw<S>& law) -
     if (k == 0) g.f_minus = f_before_;
 
     if (!tr.guards.empty()) {
-      SALTUS_DEMAND(tr.guards.size() == 1, SimultaneousActivation, "jump gain: transition ", k,
+      if (tr.guards.size() != 1)
+        throw SimultaneousActivation(detail::concat("jump gain: transition ", k,
                     " of the event at t = ", t, " is fired by ", tr.guards.size(),
                     " guards at once; its first-order gain is conewise (one per activation order) and is "
-                    "not computed by JumpGainSolver");
+                    "not computed by JumpGainSolver"));
       const Guard& guard = tr.guards.front();
       info.guarded = true;
       info.gamma = guard_gradient(scene_, tr.mode_before, guard, tr.x_before, u_before_, *ws_, dgx_, dgu_);

@@ -61,7 +61,7 @@ auto LinearisedSystem<S>::transition_matrix(int i, double t1, double t0) const -
 template <Scene S>
 auto LinearisedSystem<S>::state_transition(double t1, double t0) const -> Mat<nx, nx> {
   const auto& traj = reference_.reference();
-  SALTUS_DEMAND(t1 >= t0, InvalidArgument, "state_transition: t1 = ", t1, " < t0 = ", t0);
+  SALTUS_REQUIRE(t1 >= t0, "state_transition: t1 = ", t1, " < t0 = ", t0);
   int i = traj.segment_at(t0);
   const int last = traj.segment_at(t1);
   Mat<nx, nx> Phi = Mat<nx, nx>::Identity();
@@ -75,7 +75,7 @@ auto LinearisedSystem<S>::state_transition(double t1, double t0) const -> Mat<nx
 
 template <Scene S>
 auto LinearisedSystem<S>::predict(const State& z0, InputPerturbation v) const -> Prediction<S> {
-  SALTUS_DEMAND(static_cast<bool>(v), InvalidArgument, "predict: the input perturbation is empty");
+  SALTUS_REQUIRE(static_cast<bool>(v), "predict: the input perturbation is empty");
   Prediction<S> p;
   p.system_ = this;
   p.v_ = std::make_shared<const InputPerturbation>(std::move(v));

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <array>
 #include <limits>
+#include <saltus/hybrid/dynamics/constraints.hpp>
 #include <saltus/hybrid/simulation/integrator_dopri.hpp>
 #include <saltus/hybrid/simulation/simulator.hpp>
 #include <saltus/hybrid/simulation/transition.hpp>
@@ -13,36 +14,14 @@
 
 namespace saltus {
 
-namespace detail {
-
-/// The constraints a mode keeps: gap and normal velocity of every closed contact, tangential
-/// velocity of every sticking one.
-template <Scene S>
-int mode_constraints(const S& scene, const Mode<S::nc>& mode, const Vec<2 * S::nq>& x, Kinematics<S>& kin,
-                     Eigen::Matrix<double, 3 * S::nc + 1, 1>& c) {
-  constexpr int nq = S::nq;
-  evaluate_kinematics(scene, Vec<nq>(x.template head<nq>()), Vec<nq>(x.template tail<nq>()), kin);
-  int m = 0;
-  for (int i = 0; i < S::nc; ++i) {
-    if (!mode[i].closed()) continue;
-    c[m++] = kin.contacts[i].gap;
-    c[m++] = kin.contacts[i].zeta_n;
-    if (mode[i].mode == ContactMode::Stick)
-      for (int k = 0; k < scene.contact(i).tangents() && m < 3 * S::nc + 1; ++k) c[m++] = kin.contacts[i].zeta_t[k];
-  }
-  return m;
-}
-
-}  // namespace detail
-
 template <Scene S>
 NumericalJumpGain<S> numerical_jump_gain(const S& scene, const HybridTrajectory<S>& traj, int e,
                                          const NumericalJumpGainOptions& options) {
   constexpr int nx = 2 * S::nq, nu = S::nu;
   using State = Vec<nx>;
-  SALTUS_DEMAND(e >= 0 && e < static_cast<int>(traj.events.size()), InvalidArgument, "event index ", e,
+  SALTUS_REQUIRE(e >= 0 && e < static_cast<int>(traj.events.size()), "event index ", e,
                 " out of range [0, ", traj.events.size(), ")");
-  SALTUS_DEMAND(options.window > 0 && options.state_step > 0 && options.input_step > 0, InvalidArgument,
+  SALTUS_REQUIRE(options.window > 0 && options.state_step > 0 && options.input_step > 0, 
                 "NumericalJumpGainOptions: window and steps must be > 0");
   const Event<S>& ev = traj.events[e];
   const double ts = ev.t;
@@ -50,7 +29,7 @@ NumericalJumpGain<S> numerical_jump_gain(const S& scene, const HybridTrajectory<
   if (e > 0 && ev.t > traj.events[e - 1].t) w = std::min(w, 0.25 * (ev.t - traj.events[e - 1].t));
   if (e + 1 < static_cast<int>(traj.events.size())) w = std::min(w, 0.25 * (traj.events[e + 1].t - ev.t));
   if (traj.t_end() > ev.t) w = std::min(w, 0.25 * (traj.t_end() - ev.t));
-  SALTUS_DEMAND(w > 1e-12, InvalidArgument, "numerical jump gain: no room around the event at t = ", ts,
+  SALTUS_REQUIRE(w > 1e-12, "numerical jump gain: no room around the event at t = ", ts,
                 " (neighbouring events or the end of the trajectory coincide with it)");
   const double ta = ts - w, tb = ts + w;
 
@@ -84,7 +63,7 @@ NumericalJumpGain<S> numerical_jump_gain(const S& scene, const HybridTrajectory<
       int index = -1;
       for (int j = 0; j < sys.guards().count && !tr.guards.empty(); ++j)
         if (sys.guards()[j] == tr.guards.front()) index = j;
-      SALTUS_DEMAND(index >= 0 || tr.guards.empty(), NumericalFailure, "numerical jump gain: transition ", k,
+      SALTUS_CHECK_NUMERICS(index >= 0 || tr.guards.empty(), "numerical jump gain: transition ", k,
                     " of the event at t = ", ts, " has a guard its mode does not have");
       bool cross = k == 0 && index >= 0;
       if (k > 0 && index >= 0) {
@@ -93,7 +72,7 @@ NumericalJumpGain<S> numerical_jump_gain(const S& scene, const HybridTrajectory<
       }
       if (cross) {
         const auto end = integrator.integrate(sys, t, x, tb, options.simulation.simultaneity, nullptr, true);
-        SALTUS_DEMAND(end.at_guard && end.fired[index], NumericalFailure,
+        SALTUS_CHECK_NUMERICS(end.at_guard && end.fired[index], 
                       "numerical jump gain: a replayed run did not ", "reach the ", to_string(tr.guards.front().kind),
                       " guard of the event at t = ", ts, " within the window (reduce the steps or enlarge the window)");
         t = end.t;
@@ -109,9 +88,8 @@ NumericalJumpGain<S> numerical_jump_gain(const S& scene, const HybridTrajectory<
       const auto run = simulator.run(x0, ev.mode_before, ta, tb, law);
       const int events = static_cast<int>(run.events.size());
       // The same structure as the reference's event: one event, the same chain, the same end mode.
-      SALTUS_DEMAND(events == 1 && run.events.front().transitions.size() == ev.transitions.size() &&
-                        run.segments.back().mode == ev.mode_after,
-                    NumericalFailure, "numerical jump gain: a perturbed run through the event at t = ", ts,
+      SALTUS_CHECK_NUMERICS(events == 1 && run.events.front().transitions.size() == ev.transitions.size() &&
+                        run.segments.back().mode == ev.mode_after, "numerical jump gain: a perturbed run through the event at t = ", ts,
                     " ended in mode '", describe(scene, run.segments.back().mode), "' after ", events,
                     " events, not in '", describe(scene, ev.mode_after), "' after one");
       event_time = run.events.front().t;
@@ -139,45 +117,45 @@ NumericalJumpGain<S> numerical_jump_gain(const S& scene, const HybridTrajectory<
     return ((4 * d(0.5 * h) - d(h)) / 3).eval();
   };
 
-  // Admissible directions at x_a: the kernel of the constraints' Jacobian C (central differences).
-  Kinematics<S> kin;
-  using Constraints = Eigen::Matrix<double, 3 * S::nc + 1, 1>;
-  Constraints c0, cp, cm;
-  const int m = detail::mode_constraints(scene, ev.mode_before, x_a, kin, c0);
+  // Admissible directions at x_a: the kernel of the Jacobian C of the mode's constraints c(x)
+  // (constraints.hpp: gaps of the closed contacts, their normal velocities and the sticking
+  // contacts' tangential velocities), by central differences.
+  ConstraintProjection<S> constraints;
+  using Values = typename ConstraintProjection<S>::Values;
+  Values c_q0, c_v0, c_q, c_v;
+  constraints.values(scene, ev.mode_before, x_a, c_q0, c_v0);
+  const int mq = static_cast<int>(c_q0.size()), m = mq + static_cast<int>(c_v0.size());
   using Basis = typename NumericalJumpGain<S>::Basis;
   Basis T;
-  Eigen::Matrix<double, Eigen::Dynamic, nx, 0, 3 * S::nc + 1, nx> C(m, nx);
-  auto constraint_jacobian = [&](const State& x) {
-    for (int j = 0; j < nx; ++j) {
-      const double h = 1e-7 * std::max(1.0, std::abs(x[j]));
-      State xp = x, xm = x;
-      xp[j] += h;
-      xm[j] -= h;
-      detail::mode_constraints(scene, ev.mode_before, xp, kin, cp);
-      detail::mode_constraints(scene, ev.mode_before, xm, kin, cm);
-      C.col(j) = (cp.head(m) - cm.head(m)) / (2 * h);
-    }
+  Eigen::Matrix<double, Eigen::Dynamic, nx, 0, 4 * S::nc, nx> C(m, nx);
+  auto constraint_row_values = [&](const State& x, int j, double sign) {
+    constraints.values(scene, ev.mode_before, x, c_q, c_v);
+    C.col(j).head(mq) += sign * c_q;
+    C.col(j).tail(m - mq) += sign * c_v;
   };
   if (m == 0) {
     T = Mat<nx, nx>::Identity();
   } else {
-    constraint_jacobian(x_a);
+    C.setZero();
+    for (int j = 0; j < nx; ++j) {
+      const double h = 1e-7 * std::max(1.0, std::abs(x_a[j]));
+      State xp = x_a, xm = x_a;
+      xp[j] += h;
+      xm[j] -= h;
+      constraint_row_values(xp, j, 1.0);
+      constraint_row_values(xm, j, -1.0);
+      C.col(j) /= 2 * h;
+    }
     const Eigen::JacobiSVD<Eigen::MatrixXd> svd(Eigen::MatrixXd(C), Eigen::ComputeFullV);
     const double tol = 1e-6 * std::max(1.0, svd.singularValues()[0]);
     int rank = 0;
     while (rank < svd.singularValues().size() && svd.singularValues()[rank] > tol) ++rank;
     T = svd.matrixV().rightCols(nx - rank);
   }
-  // Back onto the constraints c(x) = c(x_a) (Gauss-Newton; perturbations are ~1e-5, so the
-  // first-order violation is ~1e-10 and two or three steps reach round-off).
+  // Back onto the constraints c(x) = c(x_a) (constraints.hpp: the kinetic-metric projection;
+  // perturbations are ~1e-5 along admissible directions, so the correction is ~1e-10).
   auto project = [&](State x) {
-    if (m == 0) return x;
-    for (int it = 0; it < 4; ++it) {
-      // The Jacobian first: constraint_jacobian overwrites cp with its probes.
-      constraint_jacobian(x);
-      detail::mode_constraints(scene, ev.mode_before, x, kin, cp);
-      x -= C.completeOrthogonalDecomposition().solve(Eigen::VectorXd(cp.head(m) - c0.head(m)));
-    }
+    if (m > 0) constraints.project(scene, ev.mode_before, x, &c_q0, &c_v0);
     return x;
   };
 

@@ -123,23 +123,23 @@ ContactSolveStatus CoulombSolver<MaxContacts>::solve(const Problem& p, Solution&
 
 template <int MaxContacts>
 void CoulombSolver<MaxContacts>::validate(const Problem& p, const Vector* guess) {
-  SALTUS_DEMAND(p.contacts >= 0 && p.contacts <= MaxContacts, InvalidArgument,
+  SALTUS_REQUIRE(p.contacts >= 0 && p.contacts <= MaxContacts, 
                 "CoulombSolver: ", p.contacts, " contacts, at most ", MaxContacts);
   for (int k = 0; k < p.contacts; ++k) {
-    SALTUS_DEMAND(p.tangents[k] >= 0 && p.tangents[k] <= 2, InvalidArgument,
+    SALTUS_REQUIRE(p.tangents[k] >= 0 && p.tangents[k] <= 2, 
                   "CoulombSolver: contact ", k, " has ", p.tangents[k],
                   " tangents (0, 1 or 2 expected)");
-    SALTUS_DEMAND(std::isfinite(p.mu[k]) && p.mu[k] >= 0.0, InvalidArgument,
+    SALTUS_REQUIRE(std::isfinite(p.mu[k]) && p.mu[k] >= 0.0, 
                   "CoulombSolver: contact ", k, " has friction coefficient mu = ", p.mu[k]);
   }
   const int m = p.rows();
-  SALTUS_DEMAND(p.A.rows() == m && p.A.cols() == m && p.b.size() == m, InvalidArgument,
+  SALTUS_REQUIRE(p.A.rows() == m && p.A.cols() == m && p.b.size() == m, 
                 "CoulombSolver: A is ", p.A.rows(), "x", p.A.cols(), " and b has ",
                 p.b.size(), " rows, the contacts declare ", m);
-  SALTUS_DEMAND(p.A.allFinite() && p.b.allFinite(), InvalidArgument,
+  SALTUS_REQUIRE(p.A.allFinite() && p.b.allFinite(), 
                 "CoulombSolver: A or b is not finite");
   if (guess != nullptr)
-    SALTUS_DEMAND(guess->size() == m && guess->allFinite(), InvalidArgument,
+    SALTUS_REQUIRE(guess->size() == m && guess->allFinite(), 
                   "CoulombSolver: the initial guess has ", guess->size(),
                   " rows (or non-finite entries), the problem has ", m);
 }

@@ -360,21 +360,21 @@ ContactSolveStatus LemkeSolver<MaxContacts>::solve(const Problem& p, Solution& o
 
 template <int MaxContacts>
 void LemkeSolver<MaxContacts>::validate(const Problem& p) {
-  SALTUS_DEMAND(p.contacts >= 0 && p.contacts <= MaxContacts, InvalidArgument,
+  SALTUS_REQUIRE(p.contacts >= 0 && p.contacts <= MaxContacts, 
                 "LemkeSolver: ", p.contacts, " contacts, at most ", MaxContacts);
   for (int k = 0; k < p.contacts; ++k) {
-    SALTUS_DEMAND(p.tangents[k] >= 0 && p.tangents[k] <= 1, InvalidArgument,
+    SALTUS_REQUIRE(p.tangents[k] >= 0 && p.tangents[k] <= 1, 
                   "LemkeSolver: contact ", k, " has ", p.tangents[k],
                   " tangents; Lemke solves planar problems only (0 or 1 tangent), use "
                   "CoulombSolver for spatial friction");
-    SALTUS_DEMAND(std::isfinite(p.mu[k]) && p.mu[k] >= 0.0, InvalidArgument,
+    SALTUS_REQUIRE(std::isfinite(p.mu[k]) && p.mu[k] >= 0.0, 
                   "LemkeSolver: contact ", k, " has friction coefficient mu = ", p.mu[k]);
   }
   const int m = p.rows();
-  SALTUS_DEMAND(p.A.rows() == m && p.A.cols() == m && p.b.size() == m, InvalidArgument,
+  SALTUS_REQUIRE(p.A.rows() == m && p.A.cols() == m && p.b.size() == m, 
                 "LemkeSolver: A is ", p.A.rows(), "x", p.A.cols(), " and b has ", p.b.size(),
                 " rows, the contacts declare ", m);
-  SALTUS_DEMAND(p.A.allFinite() && p.b.allFinite(), InvalidArgument,
+  SALTUS_REQUIRE(p.A.allFinite() && p.b.allFinite(), 
                 "LemkeSolver: A or b is not finite");
 }
 

@@ -17,7 +17,7 @@ MinNormSolver<MaxN>::MinNormSolver() : cod_(MaxN, MaxN) {
 
 template <int MaxN>
 typename MinNormSolver<MaxN>::Matrix& MinNormSolver<MaxN>::matrix(int m) {
-  SALTUS_ASSERT(m <= MaxN);
+  SALTUS_INVARIANT(m <= MaxN, "a minimum-norm solve is sized within its bound");
   A_.resize(m, m);
   return A_;
 }

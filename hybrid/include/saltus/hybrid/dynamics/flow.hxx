@@ -112,7 +112,7 @@ void evaluate_flow(const S& scene, const Mode<S::nc>& mode, const VecT<T, 2 * S:
   if (!ws.xdot.allFinite()) {
     VecT<double, 2 * nq> xv;
     for (int k = 0; k < 2 * nq; ++k) xv[k] = ad::value_of(x[k]);
-    SALTUS_DEMAND(false, NumericalFailure, "the flow is not finite at x = [", xv.transpose(),
+    SALTUS_CHECK_NUMERICS(false, "the flow is not finite at x = [", xv.transpose(),
                   "] (a non-finite state or input, or a degenerate contact configuration)");
   }
 }

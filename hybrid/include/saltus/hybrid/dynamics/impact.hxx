@@ -8,9 +8,8 @@ namespace saltus {
 template <Scene S>
 ImpactSolver<S>::ImpactSolver(const S& scene, ImpactOptions options) : scene_(scene), options_(options) {
   validate_scene(scene);
-  SALTUS_DEMAND(options.gap_tolerance >= 0 && options.velocity_tolerance >= 0 && options.impulse_tolerance >= 0 &&
-                    options.residual_tolerance > 0,
-                InvalidArgument, "ImpactOptions: tolerances must be >= 0 (residual_tolerance > 0)");
+  SALTUS_REQUIRE(options.gap_tolerance >= 0 && options.velocity_tolerance >= 0 && options.impulse_tolerance >= 0 &&
+                    options.residual_tolerance > 0, "ImpactOptions: tolerances must be >= 0 (residual_tolerance > 0)");
   coulomb_.options = options.coulomb;
 }
 
@@ -62,7 +61,7 @@ auto ImpactSolver<S>::solve_evaluated(const VecT<double, nx>& x_minus, const std
   std::array<ContactRows, nc> layout{};
   for (int i = 0; i < nc; ++i) layout[i] = index[i] < 0 ? ContactRows::None : ContactRows::Stick;
   assembly_.assemble(scene_, kin, layout, no_slip_directions_);
-  SALTUS_ASSERT(assembly_.rows == m);
+  SALTUS_INVARIANT(assembly_.rows == m, "the Delassus assembly has the contact problem's rows");
   assembly_.form(kin);
   if (m > 0) problem_.A = assembly_.D;
   const auto W = assembly_.J.topRows(m);

@@ -138,7 +138,7 @@ void apply_jump_map(const S& scene, const ImpactMode<S::nc>& mode, const VecT<T,
       ws.y -= ws.step;
       ++ws.newton_iterations;
     }
-    SALTUS_DEMAND(converged, NumericalFailure,
+    SALTUS_CHECK_NUMERICS(converged, 
                   "jump map: the implicit post-impact slip direction did not converge (a spatial "
                   "slip that stops within the impact should be given the stick role)");
     detail::spatial_slip_residual(scene, mode, v, ws.y, ws, ws.residual);

@@ -41,8 +41,7 @@ void evaluate_dynamics(const S& scene, const VecT<T, S::nq>& q, const VecT<T, S:
   if (k.llt.info() != Eigen::Success) {
     VecT<double, S::nq> qd;
     for (int i = 0; i < S::nq; ++i) qd[i] = ad::value_of(q[i]);
-    SALTUS_DEMAND(false, NonSpdMassMatrix, "mass matrix is not symmetric positive definite at q = [", qd.transpose(),
-                  "]");
+    throw NonSpdMassMatrix(detail::concat("mass matrix is not symmetric positive definite at q = [", qd.transpose(), "]"));
   }
   k.h = scene.template bias<T>(q, v);
   k.S_u = scene.template input_matrix<T>(q);

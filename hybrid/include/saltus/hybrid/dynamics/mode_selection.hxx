@@ -42,7 +42,7 @@ auto ModeSelector<S>::select(const VecT<double, nx>& x, const VecT<double, nu>& 
   // The assembly stacks the contacts in the problem's row order: normal, then its tangents.
   assembly_.assemble(scene_, kin_, layout, slip_dir);
   const int m = problem_.rows();
-  SALTUS_ASSERT(assembly_.rows == m);
+  SALTUS_INVARIANT(assembly_.rows == m, "the Delassus assembly has the contact problem's rows");
   Mode<nc> mode;
   if (m == 0) return mode;
   assembly_.form(kin_);

@@ -8,12 +8,11 @@ namespace saltus {
 template <Scene S>
 ExtendedReference<S>::ExtendedReference(const S& scene, const HybridTrajectory<S>& reference, ExtensionOptions options)
     : reference_(reference), options_(options) {
-  SALTUS_DEMAND(
-      options.before >= 0 && options.after >= 0 && std::isfinite(options.before) && std::isfinite(options.after),
-      InvalidArgument, "extension lengths must be finite and >= 0, got before ", options.before, ", after ",
+  SALTUS_REQUIRE(
+      options.before >= 0 && options.after >= 0 && std::isfinite(options.before) && std::isfinite(options.after), "extension lengths must be finite and >= 0, got before ", options.before, ", after ",
       options.after);
-  SALTUS_DEMAND(reference.segment_count() > 0, InvalidArgument, "the reference has no segments");
-  SALTUS_DEMAND(static_cast<bool>(reference.input), InvalidArgument, "the reference has no input law");
+  SALTUS_REQUIRE(reference.segment_count() > 0, "the reference has no segments");
+  SALTUS_REQUIRE(static_cast<bool>(reference.input), "the reference has no input law");
   options_.integrator.kind = IntegratorKind::DormandPrince;
   DormandPrinceIntegrator<S> integrator(options_.integrator);
   extensions_.resize(reference.segment_count());
@@ -36,7 +35,7 @@ auto ExtendedReference<S>::state(int i, double t) const -> State {
   const Extension& ext = extension(i);
   const Segment<S>& seg = reference_.segments[i];
   const double slack = 1e-12 * std::max(1.0, std::abs(t));
-  SALTUS_DEMAND(t >= ext.reached_before - slack && t <= ext.reached_after + slack, InvalidArgument, "t = ", t,
+  SALTUS_REQUIRE(t >= ext.reached_before - slack && t <= ext.reached_after + slack, "t = ", t,
                 " is outside the extended segment ", i, " [", ext.reached_before, ", ", ext.reached_after, "]");
   if (t > seg.t_end && !ext.after.empty()) return ext.after.value(t);
   if (t < seg.t_begin && !ext.before.empty()) return ext.before.value(t);
@@ -55,7 +54,7 @@ auto ExtendedReference<S>::input(int i, double t) const -> Input {
 
 template <Scene S>
 auto ExtendedReference<S>::extension(int i) const -> const Extension& {
-  SALTUS_DEMAND(i >= 0 && i < segment_count(), InvalidArgument, "segment index ", i, " out of range [0, ",
+  SALTUS_REQUIRE(i >= 0 && i < segment_count(), "segment index ", i, " out of range [0, ",
                 segment_count(), ")");
   return extensions_[i];
 }

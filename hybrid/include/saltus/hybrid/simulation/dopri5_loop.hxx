@@ -59,7 +59,7 @@ bool dopri5_integrate(Dopri5Stepper<State>& stepper, Rhs&& rhs, double& t, State
   State xa = x, fa, xb, fb, error = State::Zero();
   system(xa, fa, t);
   while (direction * (t1 - t) > 0) {
-    SALTUS_DEMAND(steps.accepted < settings.max_steps, NumericalFailure, settings.what, " exceeded ",
+    SALTUS_CHECK_NUMERICS(steps.accepted < settings.max_steps, settings.what, " exceeded ",
                   settings.max_steps, " steps at t = ", t);
     if (max_step > 0 && std::abs(dt) > max_step) dt = direction * max_step;
     const bool last = direction * (t + dt - t1) >= 0;
@@ -69,7 +69,7 @@ bool dopri5_integrate(Dopri5Stepper<State>& stepper, Rhs&& rhs, double& t, State
     const double err = checker.error(stepper.algebra(), xa, fa, error, dt);
     if (!(err <= 1.0)) {
       dt = adjuster.decrease_step(dt, std::isfinite(err) ? err : 1e10, stepper.error_order());
-      SALTUS_DEMAND(std::abs(dt) > 1e-15 * std::max(1.0, std::abs(t)), NumericalFailure, settings.what,
+      SALTUS_CHECK_NUMERICS(std::abs(dt) > 1e-15 * std::max(1.0, std::abs(t)), settings.what,
                     ": step size underflow at t = ", t, settings.underflow_hint);
       ++steps.rejected;
       continue;

@@ -23,7 +23,7 @@ template <Scene S>
 double ModeSystem<S>::guard_rate(double t, const State& x, const Guard& g, double dt) {
   int k = 0;
   while (k < guards_.count && !(guards_[k] == g)) ++k;
-  SALTUS_DEMAND(k < guards_.count, InvalidArgument, "guard_rate: the guard is not active in this mode");
+  SALTUS_REQUIRE(k < guards_.count, "guard_rate: the guard is not active in this mode");
   State f;
   rhs(t, x, f);
   const double h = dt * std::max(1.0, std::abs(t));

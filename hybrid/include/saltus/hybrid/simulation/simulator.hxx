@@ -11,8 +11,7 @@ template <Scene S>
 Simulator<S>::Simulator(const S& scene, SimulationOptions options)
     : scene_(scene), options_(std::move(options)), transitions_(scene, options_), dopri_(options_.integrator) {
   validate_scene(scene);
-  SALTUS_DEMAND(options_.integrator.relative_tolerance > 0 && options_.integrator.absolute_tolerance > 0,
-                InvalidArgument, "integrator tolerances must be > 0");
+  SALTUS_REQUIRE(options_.integrator.relative_tolerance > 0 && options_.integrator.absolute_tolerance > 0, "integrator tolerances must be > 0");
   // The backend: Dormand-Prince (member, always there) or CVODE (BDF/Adams), created once here.
   if (options_.integrator.kind != IntegratorKind::DormandPrince)
     cvode_ = std::make_unique<CvodeIntegrator<S>>(options_.integrator);
@@ -37,9 +36,9 @@ HybridTrajectory<S> Simulator<S>::run_impl(const State& x0, std::optional<Mode<n
                                            const InputLaw<S>& input) {
   const auto wall_start = std::chrono::steady_clock::now();
   require_finite(x0, "initial state x0");
-  SALTUS_DEMAND(std::isfinite(t0) && std::isfinite(t_final) && t_final > t0, InvalidArgument,
+  SALTUS_REQUIRE(std::isfinite(t0) && std::isfinite(t_final) && t_final > t0, 
                 "simulation interval must be finite with t_final > t0, got [", t0, ", ", t_final, "]");
-  SALTUS_DEMAND(static_cast<bool>(input), InvalidArgument, "the input law is empty");
+  SALTUS_REQUIRE(static_cast<bool>(input), "the input law is empty");
   HybridTrajectory<S> traj;
   traj.input = input;
   ModeSystem<S> sys(scene_, input);

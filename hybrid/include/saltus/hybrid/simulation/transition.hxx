@@ -29,7 +29,7 @@ auto TransitionResolver<S>::start(ModeSystem<S>& sys, double t0, const State& x0
   const double v_tol = velocity_tolerance(x0);
   for (int i = 0; i < nc; ++i) {
     const double gap = kin.contacts[i].gap;
-    SALTUS_DEMAND(gap >= -options_.impact.gap_tolerance, InvalidArgument, "initial state penetrates contact '",
+    SALTUS_REQUIRE(gap >= -options_.impact.gap_tolerance, "initial state penetrates contact '",
                   scene_.contact(i).name, "': gap ", gap, " < 0");
     if (gap > options_.impact.gap_tolerance) continue;
     if (kin.contacts[i].zeta_n < -v_tol)
@@ -87,7 +87,7 @@ Event<S> TransitionResolver<S>::resolve(ModeSystem<S>& sys, double t, const Stat
       if (g.kind == GuardKind::Stop || g.kind == GuardKind::SlipOnset) settled_friction[g.contact] = true;
       if (g.kind == GuardKind::Release) released[g.contact] = true;
     }
-    SALTUS_DEMAND(round < options_.max_chain, NumericalFailure, "the chain of transitions at t = ", t,
+    SALTUS_CHECK_NUMERICS(round < options_.max_chain, "the chain of transitions at t = ", t,
                   " did not settle after ", options_.max_chain, " transitions (last mode ", describe(scene_, mode),
                   ")");
     Transition<S> tr;

@@ -93,7 +93,7 @@ class DenseOutput {
 
   /// The piece containing t (nearest at the ends, so the last step's end point evaluates exactly).
   const Piece& piece(double t) const {
-    SALTUS_DEMAND(!pieces_.empty(), InvalidArgument, "dense output is empty");
+    SALTUS_REQUIRE(!pieces_.empty(), "dense output is empty");
     const bool forward = end() >= begin();
     // Pieces are ordered along the direction of integration.
     std::size_t lo_i = 0, hi_i = pieces_.size();

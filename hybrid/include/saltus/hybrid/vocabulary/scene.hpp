@@ -58,10 +58,9 @@ struct ContactSpec {
 
 /// Throws InvalidArgument when a contact's coefficients are outside their domain.
 inline void validate(const ContactSpec& c) {
-  SALTUS_DEMAND(std::isfinite(c.mu) && c.mu >= 0.0, InvalidArgument, "contact '", c.name,
+  SALTUS_REQUIRE(std::isfinite(c.mu) && c.mu >= 0.0, "contact '", c.name,
                 "': friction coefficient mu must be finite and >= 0, got ", c.mu);
-  SALTUS_DEMAND(std::isfinite(c.restitution) && c.restitution >= 0.0 && c.restitution <= 1.0,
-                InvalidArgument, "contact '", c.name,
+  SALTUS_REQUIRE(std::isfinite(c.restitution) && c.restitution >= 0.0 && c.restitution <= 1.0, "contact '", c.name,
                 "': restitution e_n must lie in [0, 1], got ", c.restitution);
 }
 

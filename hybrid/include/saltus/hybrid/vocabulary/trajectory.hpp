@@ -94,8 +94,7 @@ class HybridTrajectory {
   /// x on segment i at t (t within the segment's interval).
   State state(int i, double t) const {
     const auto& s = segment(i);
-    SALTUS_DEMAND(t >= s.t_begin - 1e-12 * std::max(1.0, std::abs(t)) && t <= s.t_end + 1e-12 * std::max(1.0, std::abs(t)),
-                  InvalidArgument, "t = ", t, " is outside segment ", i, " [", s.t_begin, ", ", s.t_end, "]");
+    SALTUS_REQUIRE(t >= s.t_begin - 1e-12 * std::max(1.0, std::abs(t)) && t <= s.t_end + 1e-12 * std::max(1.0, std::abs(t)), "t = ", t, " is outside segment ", i, " [", s.t_begin, ", ", s.t_end, "]");
     if (s.x.empty()) return i < static_cast<int>(events.size()) ? events[i].x_minus : final_state_;
     return s.x.value(t);
   }
@@ -115,7 +114,7 @@ class HybridTrajectory {
 
  private:
   const Segment<S>& segment(int i) const {
-    SALTUS_DEMAND(i >= 0 && i < segment_count(), InvalidArgument, "segment index ", i, " out of range [0, ",
+    SALTUS_REQUIRE(i >= 0 && i < segment_count(), "segment index ", i, " out of range [0, ",
                   segment_count(), ")");
     return segments[i];
   }
@@ -153,16 +152,16 @@ struct ImportedReference {
   /// Throws InvalidArgument unless there are >= 2 samples, sizes agree, times are finite and
   /// non-decreasing, and every value is finite.
   void validate() const {
-    SALTUS_DEMAND(t.size() >= 2, InvalidArgument, "an imported reference needs at least 2 samples, got ", t.size());
-    SALTUS_DEMAND(x.size() == t.size() && u.size() == t.size(), InvalidArgument, "imported reference: ", t.size(),
+    SALTUS_REQUIRE(t.size() >= 2, "an imported reference needs at least 2 samples, got ", t.size());
+    SALTUS_REQUIRE(x.size() == t.size() && u.size() == t.size(), "imported reference: ", t.size(),
                   " times but ", x.size(), " states and ", u.size(), " inputs");
     for (std::size_t k = 0; k < t.size(); ++k) {
-      SALTUS_DEMAND(std::isfinite(t[k]) && x[k].allFinite() && u[k].allFinite(), InvalidArgument,
+      SALTUS_REQUIRE(std::isfinite(t[k]) && x[k].allFinite() && u[k].allFinite(), 
                     "imported reference: sample ", k, " (t = ", t[k], ") is not finite");
-      SALTUS_DEMAND(k == 0 || t[k] >= t[k - 1], InvalidArgument, "imported reference: times decrease at sample ", k,
+      SALTUS_REQUIRE(k == 0 || t[k] >= t[k - 1], "imported reference: times decrease at sample ", k,
                     " (", t[k - 1], " then ", t[k], ")");
     }
-    SALTUS_DEMAND(t.back() > t.front(), InvalidArgument, "imported reference spans no time");
+    SALTUS_REQUIRE(t.back() > t.front(), "imported reference spans no time");
   }
 
   /// u(t): linear between consecutive samples, right-continuous where a time repeats (an input

@@ -139,11 +139,11 @@ ImportedReference<S> read_reference_csv(std::istream& in) {
   ImportedReference<S> ref;
   std::string line;
   std::vector<std::string> fields;
-  SALTUS_DEMAND(static_cast<bool>(std::getline(in, line)), InvalidArgument, "reference CSV: no header row");
+  SALTUS_REQUIRE(static_cast<bool>(std::getline(in, line)), "reference CSV: no header row");
   detail::split_csv_line(line, fields);
   auto column = [&](const std::string& name, bool required) {
     const auto it = std::find(fields.begin(), fields.end(), name);
-    SALTUS_DEMAND(it != fields.end() || !required, InvalidArgument, "reference CSV: no column '", name, "' in header '",
+    SALTUS_REQUIRE(it != fields.end() || !required, "reference CSV: no column '", name, "' in header '",
                   line, "'");
     return it == fields.end() ? -1 : static_cast<int>(it - fields.begin());
   };
@@ -167,7 +167,7 @@ ImportedReference<S> read_reference_csv(std::istream& in) {
     } catch (const std::exception&) {
       used = 0;
     }
-    SALTUS_DEMAND(used == f.size() && !f.empty(), InvalidArgument, "reference CSV row ", row, ": '", f,
+    SALTUS_REQUIRE(used == f.size() && !f.empty(), "reference CSV row ", row, ": '", f,
                   "' is not a number");
     return value;
   };
@@ -175,7 +175,7 @@ ImportedReference<S> read_reference_csv(std::istream& in) {
     ++row;
     if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
     detail::split_csv_line(line, fields);
-    SALTUS_DEMAND(fields.size() == n_columns, InvalidArgument, "reference CSV row ", row, ": ", fields.size(),
+    SALTUS_REQUIRE(fields.size() == n_columns, "reference CSV row ", row, ": ", fields.size(),
                   " fields, the header has ", n_columns);
     const double t = number(t_col);
     typename ImportedReference<S>::State x;
