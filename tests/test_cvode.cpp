@@ -29,11 +29,9 @@ class Cvode : public ::testing::TestWithParam<IntegratorKind> {
 // sticking phase (both corners start slipping at t = 0.564).
 TEST_P(Cvode, AgreesWithDormandPrinceOnThePlankBox) {
   scenes::PlankBox plank_box;
-  const auto& p = plank_box.parameters();
-  Vec<8> x0 = Vec<8>::Zero();
-  x0[0] = 0.6;
-  x0[1] = 0.5 * p.box_height + 0.5 * p.plank_thickness + 0.05;
-  auto input = open_loop<scenes::PlankBox>([&](double) { return Vec<3>(0.0, p.box_mass * g - 2.0, 0.0); });
+  const Vec<8> x0 = plank_box.flat_state();  // the box flat, 5 cm above the level plank
+  // The actuated box holds its weight but 2 N: u = (0, m g - 2, 0).
+  auto input = open_loop<scenes::PlankBox>([&](double) { return plank_box.lowering_input(); });
   SimulationOptions dopri_options = tight();
   dopri_options.integrator.kind = IntegratorKind::DormandPrince;
   Simulator<scenes::PlankBox> dopri(plank_box, dopri_options), cvode(plank_box, tight());
@@ -72,11 +70,9 @@ double constraint_violation(const S& scene, const Mode<S::nc>& mode, const VecT<
 // gap and the constrained velocities stay zero to round-off at every step end and at the end.
 TEST(CvodeProjection, KeepsTheClosedContactsOfTheSwingingPlankOnTheirConstraints) {
   scenes::PlankBox plank_box;
-  const auto& p = plank_box.parameters();
-  Vec<8> x0 = Vec<8>::Zero();
-  x0[0] = 0.6;
-  x0[1] = 0.5 * p.box_height + 0.5 * p.plank_thickness + 0.05;
-  auto input = open_loop<scenes::PlankBox>([&](double) { return Vec<3>(0.0, p.box_mass * g - 2.0, 0.0); });
+  const Vec<8> x0 = plank_box.flat_state();  // the box flat, 5 cm above the level plank
+  // The actuated box holds its weight but 2 N: u = (0, m g - 2, 0).
+  auto input = open_loop<scenes::PlankBox>([&](double) { return plank_box.lowering_input(); });
   auto worst_violation = [&](bool project) {
     SimulationOptions o;
     o.integrator.kind = IntegratorKind::CvodeBdf;

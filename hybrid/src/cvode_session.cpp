@@ -47,7 +47,7 @@ struct CvodeSession::Impl {
   }
   template <class P>
   static P created(P p, const char* what) {
-    SALTUS_DEMAND(p != nullptr, NumericalFailure, "SUNDIALS could not create ", what);
+    SALTUS_CHECK_NUMERICS(p != nullptr, "SUNDIALS could not create ", what);
     return p;
   }
 
@@ -107,7 +107,7 @@ CvodeSession::CvodeSession(int n, Method method, const char* label, CvodeProblem
     : impl_(std::make_unique<Impl>(n, method, label, problem)) {
   // On a throw below, impl_ (already constructed) frees whatever was created.
   Impl& s = *impl_;
-  SALTUS_DEMAND(SUNContext_Create(nullptr, &s.context) == 0, NumericalFailure, "SUNDIALS could not create its context");
+  SALTUS_CHECK_NUMERICS(SUNContext_Create(nullptr, &s.context) == 0, "SUNDIALS could not create its context");
   s.y = Impl::created(N_VNew_Serial(n, s.context), "an N_Vector");
   s.dky = Impl::created(N_VNew_Serial(n, s.context), "an N_Vector");
   N_VConst(0.0, s.y);

@@ -35,7 +35,8 @@
 //
 // Projection (IntegratorOptions::project_constraints). Closed contacts must keep
 //     h_n(q) = 0,   w_n(q)^T v = 0,   and, sticking, W_t(q)^T v = 0.
-// The state is corrected in the kinetic metric, the M(q)^{-1} metric on forces:
+// The state is corrected in the kinetic metric, the M(q)^{-1} metric on forces
+// (ConstraintProjection, dynamics/constraints.hpp, shared with the numerical twin):
 //     q <- q - M^{-1} G^T (G M^{-1} G^T)^+ h_n(q)      (G = rows w_n^T; Gauss-Newton, <= 4 iterations)
 //     v <- v - M^{-1} J^T (J M^{-1} J^T)^+ J v         (J = rows w_n^T and, sticking, W_t^T)
 // Why this metric rather than the Euclidean one: it does not depend on the units of the
@@ -67,10 +68,9 @@
 // scene-free: CvodeSession (cvode_session.hpp), compiled once in saltus_hybrid.
 #pragma once
 
+#include <saltus/hybrid/dynamics/constraints.hpp>
 #include <saltus/hybrid/simulation/cvode_session.hpp>
 #include <saltus/hybrid/simulation/integrator.hpp>
-#include <saltus/hybrid/dynamics/kinematics.hpp>
-#include <saltus/hybrid/contact/linear_solve.hpp>
 
 #include <algorithm>
 #include <array>
@@ -81,7 +81,6 @@ template <Scene S>
 class CvodeIntegrator : private CvodeProblem {
  public:
   static constexpr int nq = S::nq, nx = 2 * S::nq, nc = S::nc, ng = 2 * S::nc + 1;
-  static constexpr int max_rows = delassus_bound(std::max(1, 3 * S::nc));
   using State = VecT<double, nx>;
 
   /// options.kind must be CvodeBdf or CvodeAdams. Throws InvalidArgument on bad options,
@@ -105,16 +104,9 @@ class CvodeIntegrator : private CvodeProblem {
 
  private:
   using Piece = PolynomialPiece<nx>;
-  using Rows = BoundedMatrix<double, Eigen::Dynamic, nq, max_rows, nq>;
-  using Cols = BoundedMatrix<double, nq, Eigen::Dynamic, nq, max_rows>;
-  using Solver = MinNormSolver<max_rows>;
 
   // The checks of the constructor's options, before the session is created.
   static const IntegratorOptions& validated(const IntegratorOptions& options);
-
-  // d = M^{-1} G^T (G M^{-1} G^T)^+ b over the first m rows of G_ (evaluated at kin_): the
-  // smallest correction in the kinetic metric with G d = b.
-  void constraint_step(int m, const typename Solver::Vector& b, VecT<double, nq>& d);
 
   // The dense output of the last step on [t_prev, t_n] (see the file comment): CVODE's Nordsieck
   // interpolant for q >= 4, the cubic Hermite interpolant for q <= 3. Updates x_prev_, dx_prev_.
@@ -140,13 +132,8 @@ class CvodeIntegrator : private CvodeProblem {
   State x_prev_ = State::Zero(), dx_prev_ = State::Zero(), x_next_ = State::Zero(), dx_next_ = State::Zero();
   std::array<double, ng> guard_work_{};
 
-  // Projection workspace.
-  Kinematics<S> kin_;
-  Rows G_;
-  Cols MinvGt_;
-  Solver delassus_;
-  typename Solver::Vector residual_, multiplier_;
-  VecT<double, nq> dq_ = VecT<double, nq>::Zero();
+  // The projection onto the closed contacts' constraints (dynamics/constraints.hpp).
+  ConstraintProjection<S> projection_;
 };
 
 }  // namespace saltus

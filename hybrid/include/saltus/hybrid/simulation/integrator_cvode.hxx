@@ -16,13 +16,12 @@ namespace saltus {
 
 template <Scene S>
 const IntegratorOptions& CvodeIntegrator<S>::validated(const IntegratorOptions& options) {
-  SALTUS_DEMAND(options.kind == IntegratorKind::CvodeBdf || options.kind == IntegratorKind::CvodeAdams,
-                InvalidArgument, "CvodeIntegrator needs IntegratorKind::CvodeBdf or CvodeAdams, got '",
+  SALTUS_REQUIRE(options.kind == IntegratorKind::CvodeBdf || options.kind == IntegratorKind::CvodeAdams, "CvodeIntegrator needs IntegratorKind::CvodeBdf or CvodeAdams, got '",
                 to_string(options.kind), "'");
-  SALTUS_DEMAND(options.relative_tolerance > 0 && options.absolute_tolerance > 0, InvalidArgument,
+  SALTUS_REQUIRE(options.relative_tolerance > 0 && options.absolute_tolerance > 0, 
                 "integrator tolerances must be > 0, got relative ", options.relative_tolerance, ", absolute ",
                 options.absolute_tolerance);
-  SALTUS_DEMAND(options.max_step >= 0 && options.max_steps > 0, InvalidArgument,
+  SALTUS_REQUIRE(options.max_step >= 0 && options.max_steps > 0, 
                 "max_step must be >= 0 and max_steps > 0");
   return options;
 }
@@ -47,9 +46,6 @@ CvodeIntegrator<S>::CvodeIntegrator(const IntegratorOptions& options)
   root_direction_.fill(-1);
   session_.set_root_directions(root_direction_.data());
   session_.disable_inactive_root_warning();
-  G_.resize(max_rows, nq);
-  residual_.resize(max_rows);
-  multiplier_.resize(max_rows);
 }
 
 template <Scene S>
@@ -79,7 +75,7 @@ SegmentEndOf<S> CvodeIntegrator<S>::integrate(ModeSystem<S>& sys, double t0, Sta
   x_prev_ = x;
   sys.rhs(t0, x_prev_, dx_prev_);
   while (true) {
-    SALTUS_DEMAND(end.steps < options_.max_steps, NumericalFailure, "CVODE: integration of one segment exceeded ",
+    SALTUS_CHECK_NUMERICS(end.steps < options_.max_steps, "CVODE: integration of one segment exceeded ",
                   options_.max_steps, " steps at t = ", t_prev);
     // Rethrows an exception stored by a callback, then turns a CVODE failure into NumericalFailure.
     const CvodeSession::StepEnd flag = session_.step(t_final, t_ret);
@@ -115,65 +111,7 @@ SegmentEndOf<S> CvodeIntegrator<S>::integrate(ModeSystem<S>& sys, double t0, Sta
 
 template <Scene S>
 void CvodeIntegrator<S>::project_state(const S& scene, const Mode<nc>& mode, State& x, State* error) {
-  VecT<double, nq> q = x.template head<nq>(), v = x.template tail<nq>();
-  const double scale = 1.0 + q.cwiseAbs().maxCoeff();
-  int m = 0;
-  for (int iteration = 0; iteration < 4; ++iteration) {
-    evaluate_kinematics(scene, q, v, kin_);
-    m = 0;
-    for (int i = 0; i < nc; ++i) {
-      if (!mode[i].closed()) continue;
-      G_.row(m) = kin_.contacts[i].wn.transpose();
-      residual_[m] = kin_.contacts[i].gap;
-      ++m;
-    }
-    if (m == 0) return;
-    constraint_step(m, residual_, dq_);
-    q -= dq_;
-    if (dq_.cwiseAbs().maxCoeff() <= 4 * std::numeric_limits<double>::epsilon() * scale) break;
-  }
-  evaluate_kinematics(scene, q, v, kin_);
-  if (error) {  // position part with the final G
-    for (int r = 0; r < m; ++r) residual_[r] = G_.row(r).dot(error->template head<nq>());
-    constraint_step(m, residual_, dq_);
-    error->template head<nq>() -= dq_;
-  }
-  int r = 0;
-  for (int i = 0; i < nc; ++i) {
-    if (!mode[i].closed()) continue;
-    const auto& c = kin_.contacts[i];
-    G_.row(r++) = c.wn.transpose();
-    if (mode[i].mode == ContactMode::Stick)
-      for (int k = 0; k < c.tangents; ++k) G_.row(r++) = c.Wt.col(k).transpose();
-  }
-  for (int k = 0; k < r; ++k) residual_[k] = G_.row(k).dot(v);
-  constraint_step(r, residual_, dq_);
-  v -= dq_;
-  if (error) {
-    for (int k = 0; k < r; ++k) residual_[k] = G_.row(k).dot(error->template tail<nq>());
-    constraint_step(r, residual_, dq_);
-    error->template tail<nq>() -= dq_;
-  }
-  x.template head<nq>() = q;
-  x.template tail<nq>() = v;
-}
-
-template <Scene S>
-void CvodeIntegrator<S>::constraint_step(int m, const typename Solver::Vector& b, VecT<double, nq>& d) {
-  d.setZero();
-  if (m == 0) return;
-  MinvGt_.resize(nq, m);
-  for (int k = 0; k < m; ++k) {
-    VecT<double, nq> col = G_.row(k).transpose();
-    kin_.llt.solveInPlace(col);
-    MinvGt_.col(k) = col;
-  }
-  auto& A = delassus_.matrix(m);
-  A.noalias() = G_.topRows(m) * MinvGt_;
-  delassus_.factorize();
-  multiplier_ = b.head(m);
-  delassus_.solve_in_place(multiplier_);
-  d.noalias() = MinvGt_ * multiplier_;
+  projection_.project(scene, mode, x, nullptr, nullptr, error);
 }
 
 template <Scene S>
@@ -181,7 +119,7 @@ typename CvodeIntegrator<S>::Piece CvodeIntegrator<S>::step_piece(double t_prev)
   Piece p;
   const double h = session_.last_step(), tn = session_.current_time();
   const int q = session_.last_order();
-  SALTUS_DEMAND(q >= 1 && q <= Piece::max_degree, NumericalFailure, "CVODE: step order ", q,
+  SALTUS_CHECK_NUMERICS(q >= 1 && q <= Piece::max_degree, "CVODE: step order ", q,
                 " outside the dense output's degrees 1..", Piece::max_degree);
   p.t0 = t_prev;
   p.t1 = tn;
@@ -269,7 +207,7 @@ void CvodeIntegrator<S>::locate(ModeSystem<S>& sys, const Piece& piece, double t
     }
     if (std::isfinite(root[k]) && (!std::isfinite(first) || forward * (root[k] - first) < 0)) first = root[k];
   }
-  SALTUS_DEMAND(std::isfinite(first), NumericalFailure, "CVODE reported a root at t = ", t_root,
+  SALTUS_CHECK_NUMERICS(std::isfinite(first), "CVODE reported a root at t = ", t_root,
                 " but no active guard crossed");
   // Guards CVODE did not report that cross within the simultaneity window after the first root.
   const double t_window = first + forward * simultaneity;
