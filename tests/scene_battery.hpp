@@ -165,7 +165,8 @@ TYPED_TEST_P(SceneBattery, FlowSatisfiesTheConstraintsOfItsMode) {
           EXPECT_NEAR(c.Wt.col(k).dot(a) + c.kappa_t[k], 0.0, 1e-9 * scale) << "tangential acceleration " << i;
       }
       if (c.tangents > 0 && mode[i].mode == ContactMode::Slip) {
-        const Vec<2> d = slip_direction_of<double>(mode[i], c.tangents, c.zeta_t);
+        const double slip_tolerance = 1e-9 * std::max(1.0, x.template tail<S::nq>().cwiseAbs().maxCoeff());
+        const Vec<2> d = slip_direction_of<double>(mode[i], c.tangents, c.zeta_t, slip_tolerance);
         EXPECT_TRUE(matrices_near(ws.force[i].tangent, Vec<2>(-mu * ws.force[i].normal * d), 1e-12, 1e-12));
       }
     }

@@ -141,12 +141,18 @@ TEST_P(Simulation, PointMassOfExampleThreeImpactsSlidesAndLiftsOff) {
 // The spatial box flat on the ground, sliding along x: all four bottom corners slip (their normal
 // forces are statically indeterminate; the minimum-norm split is equal), the box decelerates at
 // mu g and stops at v0 / (mu g) after v0^2 / (2 mu g).
-TEST_P(Simulation, BoxSlidesToAStopAtTheAnalyticTime) {
-  scenes::SpatialBox box;
-  const double mu = box.parameters().mu, v0 = 1.2;
+// The spatial box resting flat on its four bottom corners, sliding along x at v0.
+Vec<12> sliding_flat(const scenes::SpatialBox& box, double v0) {
   Vec<12> x0 = Vec<12>::Zero();
   x0[2] = 0.5 * box.parameters().size[2];
   x0[6] = v0;
+  return x0;
+}
+
+TEST_P(Simulation, BoxSlidesToAStopAtTheAnalyticTime) {
+  scenes::SpatialBox box;
+  const double mu = box.parameters().mu, v0 = 1.2;
+  const Vec<12> x0 = sliding_flat(box, v0);
   Simulator<scenes::SpatialBox> sim(box, tight());
   const auto traj = sim.run(x0, 0.0, 0.5, zero_input<scenes::SpatialBox>());
   ASSERT_GE(traj.events.size(), 1u);
@@ -165,9 +171,7 @@ TEST_P(Simulation, BoxSlidesToAStopAtTheAnalyticTime) {
 TEST_P(Simulation, BoxSlideStopIsFoundAtALooseTolerance) {
   scenes::SpatialBox box;
   const double mu = box.parameters().mu, v0 = 1.2;
-  Vec<12> x0 = Vec<12>::Zero();
-  x0[2] = 0.5 * box.parameters().size[2];
-  x0[6] = v0;
+  const Vec<12> x0 = sliding_flat(box, v0);
   SimulationOptions o = tight();
   o.integrator.relative_tolerance = 1e-4;
   o.integrator.absolute_tolerance = 1e-5;

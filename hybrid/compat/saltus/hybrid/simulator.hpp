@@ -5,3 +5,4 @@
 #include <saltus/hybrid/reference/reference_spreading.hpp>
 #include <saltus/hybrid/reference/resimulation.hpp>
 #include <saltus/hybrid/simulation/simulator.hpp>
+#include <saltus/hybrid/vocabulary/trajectory_io.hpp>

@@ -82,8 +82,10 @@ auto JumpGainSolver<S>::compute(const Event<S>& event, const InputLaw<S>& law) -
         }
         // dt_k = -(Dgamma_x z_{k-1} + Dgamma_u v) / gamma_dot_k   (C.22, C.29)
         dz_.noalias() = -(dgx_ * Zz_) / info.gamma_dot;
-        dv_.noalias() = -(dgx_ * Zv_) / info.gamma_dot;
-        if constexpr (nu > 0) dv_ -= dgu_ / info.gamma_dot;
+        if constexpr (nu > 0) {
+          dv_.noalias() = -(dgx_ * Zv_) / info.gamma_dot;
+          dv_ -= dgu_ / info.gamma_dot;
+        }
         if (first_guarded) {
           g.dt_dz = dz_;
           g.dt_dv = dv_;
@@ -110,8 +112,10 @@ auto JumpGainSolver<S>::compute(const Event<S>& event, const InputLaw<S>& law) -
     jump_f_ -= f_after_;
     Zz_ = (Dg_ * Zz_).eval();
     Zz_.noalias() += jump_f_ * dz_;
-    Zv_ = (Dg_ * Zv_).eval();
-    if constexpr (nu > 0) Zv_.noalias() += jump_f_ * dv_;
+    if constexpr (nu > 0) {  // (a product with a fixed nx x 0 matrix trips Eigen's GEMM checks)
+      Zv_ = (Dg_ * Zv_).eval();
+      Zv_.noalias() += jump_f_ * dv_;
+    }
   }
   g.G_z = Zz_;
   g.G_v = Zv_;

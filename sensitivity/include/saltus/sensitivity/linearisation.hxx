@@ -128,9 +128,11 @@ bool LinearisedSystem<S>::closed_loop_at(int i, double t) const {
 
 template <Scene S>
 void LinearisedSystem<S>::close_loop(int i, double t, const State& x, Mat<nx, nx>& A, const Mat<nx, nu>& B) const {
-  if (!closed_loop_at(i, t)) return;
-  feedback_gain<S>(reference_.reference().input, t, x, mode(i), options_.gains.feedback_step, probe_, K_);
-  A.noalias() += B * K_;
+  if constexpr (nu > 0) {  // (without inputs there is no loop to close, and no 12 x 0 products)
+    if (!closed_loop_at(i, t)) return;
+    feedback_gain<S>(reference_.reference().input, t, x, mode(i), options_.gains.feedback_step, probe_, K_);
+    A.noalias() += B * K_;
+  }
 }
 
 template <Scene S>

@@ -60,7 +60,7 @@ struct ContactProblem {
   /// Clears the problem and declares its contacts; A and b are sized (not filled).
   void reset() { contacts = 0; }
   int add_contact(int nt, double friction) {
-    SALTUS_INVARIANT(contacts < MaxContacts, "a contact problem holds at most its bound of contacts");
+    SALTUS_INVARIANT(contacts >= 0 && contacts < MaxContacts, "a contact problem holds at most its bound of contacts");
     const int r = rows();
     tangents[contacts] = nt;
     mu[contacts] = friction;

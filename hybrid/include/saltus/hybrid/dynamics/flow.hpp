@@ -76,22 +76,29 @@ struct FlowWorkspace {
 
 /// Direction of the friction force of a slipping contact, opposite to -lambda_t / (mu lambda_n).
 /// Planar: the sign the mode keeps. Spatial: the current direction of zeta_t while the slip goes
-/// on along the mode's direction d (zeta_t . d > 0, the slip->stick guard positive), and d itself
-/// once zeta_t . d <= 0: the mode's flow continued past its stop. Continued with the current
-/// direction instead, the friction would flip with zeta_t at the stop and hold zeta_t at zero
-/// from above: the guard zeta_t . d would approach zero without crossing it, and an integrator
-/// that steps over the stop (CVODE-BDF at rtol 1e-4 on the spatial box) would miss the event.
-/// Continued along d, the guard crosses zero transversally (at the rate d . zeta_t'), as the
-/// planar slip's s zeta_t does; reference spreading uses the same continuation.
+/// on along the mode's direction d, and d itself once the slip speed is at the stop: when
+/// zeta_t . d <= 0 (the mode's flow continued past its stop) or ||zeta_t|| <= slip_tolerance.
+/// Why: continued with the current direction, the friction would flip with zeta_t at the stop and
+/// hold zeta_t at zero from above, so the slip->stick guard zeta_t . d would approach zero without
+/// crossing it, and an integrator that steps over the stop (CVODE-BDF at rtol 1e-4 on the spatial
+/// box) would miss the event. Continued along d, the guard crosses zero transversally (at the rate
+/// d . zeta_t'), as the planar slip's s zeta_t does; reference spreading uses the same
+/// continuation. The tolerance: within round-off of the stop, zeta_t / ||zeta_t|| is the direction
+/// of round-off (a Runge-Kutta stage a few ulps from the stop turned a straight slide sideways),
+/// while the motion spends a time of order slip_tolerance / (its deceleration) there, so taking d
+/// costs O(slip_tolerance) in the state. The flow passes 1e-9 times the largest velocity component
+/// (at least 1e-9 in the scene's velocity units).
 template <class T>
-VecT<T, 2> slip_direction_of(const ContactState& state, int tangents, const VecT<T, 2>& zeta_t) {
+VecT<T, 2> slip_direction_of(const ContactState& state, int tangents, const VecT<T, 2>& zeta_t,
+                             double slip_tolerance = 0.0) {
   VecT<T, 2> d = VecT<T, 2>::Zero();
   if (tangents == 1) {
     d[0] = T(state.slip_direction[0] >= 0 ? 1.0 : -1.0);
   } else if (tangents == 2) {
-    const double along = ad::value_of(zeta_t[0]) * state.slip_direction[0] +
-                         ad::value_of(zeta_t[1]) * state.slip_direction[1];
-    if (along <= 0.0 && state.slip_direction.squaredNorm() > 0.0) {
+    const double z0 = ad::value_of(zeta_t[0]), z1 = ad::value_of(zeta_t[1]);
+    const double along = z0 * state.slip_direction[0] + z1 * state.slip_direction[1];
+    const bool at_stop = along <= 0.0 || z0 * z0 + z1 * z1 <= slip_tolerance * slip_tolerance;
+    if (at_stop && state.slip_direction.squaredNorm() > 0.0) {
       d[0] = T(state.slip_direction[0]);
       d[1] = T(state.slip_direction[1]);
     } else {

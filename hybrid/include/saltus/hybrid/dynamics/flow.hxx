@@ -59,6 +59,10 @@ void evaluate_flow(const S& scene, const Mode<S::nc>& mode, const VecT<T, 2 * S:
   ws.free_force -= kin.h;
   kin.solve_mass(ws.free_force, ws.a_free);
 
+  // A slip speed below this is at the stop (slip_direction_of, flow.hpp).
+  double slip_tolerance = 0.0;
+  for (int k = 0; k < nq; ++k) slip_tolerance = std::max(slip_tolerance, std::abs(ad::value_of(v[k])));
+  slip_tolerance = 1e-9 * std::max(1.0, slip_tolerance);
   // Rows and columns of the closed contacts (delassus.hpp), then the right-hand side -kappa.
   for (int i = 0; i < nc; ++i) {
     ws.force[i] = ContactForce<T>{};
@@ -66,7 +70,7 @@ void evaluate_flow(const S& scene, const Mode<S::nc>& mode, const VecT<T, 2 * S:
     if (!mode[i].closed()) continue;
     const int nt = kin.contacts[i].tangents;
     if (nt > 0 && mode[i].mode == ContactMode::Slip) {
-      ws.slip_direction[i] = slip_direction_of<T>(mode[i], nt, kin.contacts[i].zeta_t);
+      ws.slip_direction[i] = slip_direction_of<T>(mode[i], nt, kin.contacts[i].zeta_t, slip_tolerance);
       ws.layout[i] = ContactRows::Slip;
     } else {
       ws.layout[i] = ContactRows::Stick;  // sticking: the tangential velocity is held at zero

@@ -3,16 +3,14 @@
 // segments and events of a HybridTrajectory as JSON (to_json, write_json; nlohmann-json).
 #pragma once
 
-#include <saltus/hybrid/vocabulary/trajectory.hpp>
-
-#include <nlohmann/json.hpp>
-
 #include <algorithm>
 #include <cmath>
 #include <exception>
 #include <iomanip>
 #include <istream>
+#include <nlohmann/json.hpp>
 #include <ostream>
+#include <saltus/hybrid/vocabulary/trajectory.hpp>
 #include <string>
 #include <vector>
 
@@ -60,22 +58,23 @@ void write_csv(std::ostream& os, const HybridTrajectory<S>& traj, double dt, con
 ///                    of size 2 nq (q then v)
 ///   zeno_time        the predicted accumulation time in s, null when not finite
 ///   steps, rhs_evaluations, wall_seconds   the simulation's statistics
-/// Numbers keep their double values (a dump writes the shortest text that reads back exactly).
+/// Numbers keep their double values (a dump writes the shortest text that reads back exactly);
+/// keys keep this order (nlohmann::ordered_json).
 template <Scene S>
-nlohmann::json to_json(const HybridTrajectory<S>& traj, const S& scene) {
+nlohmann::ordered_json to_json(const HybridTrajectory<S>& traj, const S& scene) {
   constexpr int nx = 2 * S::nq;
   auto state = [](const typename HybridTrajectory<S>::State& x) {
-    auto a = nlohmann::json::array();
+    auto a = nlohmann::ordered_json::array();
     for (int j = 0; j < nx; ++j) a.push_back(x[j]);
     return a;
   };
-  auto segments = nlohmann::json::array();
+  auto segments = nlohmann::ordered_json::array();
   for (const auto& s : traj.segments)
     segments.push_back(
         {{"mode", describe(scene, s.mode)}, {"t_begin", s.t_begin}, {"t_end", s.t_end}, {"steps", s.x.size()}});
-  auto events = nlohmann::json::array();
+  auto events = nlohmann::ordered_json::array();
   for (const auto& ev : traj.events) {
-    auto guards = nlohmann::json::array();
+    auto guards = nlohmann::ordered_json::array();
     for (const Guard& g : ev.guards())
       guards.push_back({{"contact", scene.contact(g.contact).name}, {"kind", to_string(g.kind)}});
     events.push_back({{"t", ev.t},
@@ -86,11 +85,12 @@ nlohmann::json to_json(const HybridTrajectory<S>& traj, const S& scene) {
                       {"x_minus", state(ev.x_minus)},
                       {"x_plus", state(ev.x_plus)}});
   }
-  nlohmann::json j = nlohmann::json::object();
+  nlohmann::ordered_json j = nlohmann::ordered_json::object();
   j["status"] = to_string(traj.status);
   j["segments"] = std::move(segments);
   j["events"] = std::move(events);
-  j["zeno_time"] = std::isfinite(traj.zeno_time) ? nlohmann::json(traj.zeno_time) : nlohmann::json(nullptr);
+  j["zeno_time"] =
+      std::isfinite(traj.zeno_time) ? nlohmann::ordered_json(traj.zeno_time) : nlohmann::ordered_json(nullptr);
   j["steps"] = traj.statistics.steps;
   j["rhs_evaluations"] = traj.statistics.rhs_evaluations;
   j["wall_seconds"] = traj.statistics.wall_seconds;
@@ -143,8 +143,7 @@ ImportedReference<S> read_reference_csv(std::istream& in) {
   detail::split_csv_line(line, fields);
   auto column = [&](const std::string& name, bool required) {
     const auto it = std::find(fields.begin(), fields.end(), name);
-    SALTUS_REQUIRE(it != fields.end() || !required, "reference CSV: no column '", name, "' in header '",
-                  line, "'");
+    SALTUS_REQUIRE(it != fields.end() || !required, "reference CSV: no column '", name, "' in header '", line, "'");
     return it == fields.end() ? -1 : static_cast<int>(it - fields.begin());
   };
   const int t_col = column("t", true), segment_col = column("segment", false);
@@ -167,8 +166,7 @@ ImportedReference<S> read_reference_csv(std::istream& in) {
     } catch (const std::exception&) {
       used = 0;
     }
-    SALTUS_REQUIRE(used == f.size() && !f.empty(), "reference CSV row ", row, ": '", f,
-                  "' is not a number");
+    SALTUS_REQUIRE(used == f.size() && !f.empty(), "reference CSV row ", row, ": '", f, "' is not a number");
     return value;
   };
   while (std::getline(in, line)) {
@@ -176,7 +174,7 @@ ImportedReference<S> read_reference_csv(std::istream& in) {
     if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
     detail::split_csv_line(line, fields);
     SALTUS_REQUIRE(fields.size() == n_columns, "reference CSV row ", row, ": ", fields.size(),
-                  " fields, the header has ", n_columns);
+                   " fields, the header has ", n_columns);
     const double t = number(t_col);
     typename ImportedReference<S>::State x;
     typename ImportedReference<S>::Input u;
