@@ -8,12 +8,14 @@
 #include <saltus/hybrid/dynamics/kinematics.hpp>
 #include <saltus/hybrid/vocabulary/mode.hpp>
 #include <saltus/hybrid/vocabulary/scene.hpp>
+#include <saltus/hybrid/vocabulary/trajectory.hpp>
 
 #include <Eigen/QR>
 
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <random>
 #include <sstream>
 #include <string>
@@ -120,6 +122,22 @@ Vec<2 * S::nq> consistent_with_mode(const S& scene, const Mode<S::nc>& mode, con
 template <Scene S, class Rng>
 Vec<S::nq> generic_configuration(const S& scene, Rng& rng) {
   return scene.touching_configuration(rng) + random_vector<S::nq>(rng, 0.05);
+}
+
+/// The lowest gap of any contact (of the open ones only, with open_contacts_only) at 5 points
+/// of every dense-output piece of every segment of a trajectory.
+template <Scene S>
+double lowest_gap(const S& scene, const HybridTrajectory<S>& traj, bool open_contacts_only) {
+  double lowest = std::numeric_limits<double>::infinity();
+  for (const auto& seg : traj.segments)
+    for (const auto& piece : seg.x.pieces())
+      for (int k = 0; k <= 4; ++k) {
+        const auto x = piece.value(piece.t0 + (piece.t1 - piece.t0) * k / 4.0);
+        for (int i = 0; i < S::nc; ++i)
+          if (!(open_contacts_only && seg.mode[i].closed()))
+            lowest = std::min(lowest, scene.template gap<double>(i, VecT<double, S::nq>(x.template head<S::nq>())));
+      }
+  return lowest;
 }
 
 }  // namespace saltus::testing

@@ -120,10 +120,12 @@ TEST(Impact, BadInputIsRejectedWithANamedProblem) {
 
   scenes::PlankBoxParameters negative_mu;
   negative_mu.mu = -0.1;
-  EXPECT_THROW(ImpactSolver<scenes::PlankBox>{scenes::PlankBox(negative_mu)}, InvalidArgument);
+  const scenes::PlankBox bad_mu(negative_mu);
+  EXPECT_THROW(ImpactSolver<scenes::PlankBox>{bad_mu}, InvalidArgument);
   scenes::BouncingBallParameters superelastic;
   superelastic.restitution = 1.5;
-  EXPECT_THROW(ImpactSolver<scenes::BouncingBall>{scenes::BouncingBall(superelastic)}, InvalidArgument);
+  const scenes::BouncingBall bad_restitution(superelastic);
+  EXPECT_THROW(ImpactSolver<scenes::BouncingBall>{bad_restitution}, InvalidArgument);
 
   scenes::PointMassParameters negative_mass;
   negative_mass.mass = -1.0;

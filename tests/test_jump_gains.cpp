@@ -312,6 +312,13 @@ TEST(JumpGains, SimultaneousTouchdownsAreRefused) {
   ASSERT_EQ(traj.events[0].guards().size(), 2u);
   JumpGainSolver<scenes::PlankBox> solver(plank_box);
   EXPECT_THROW(solver.compute(traj.events[0], traj.input), SimultaneousActivation);
+  // The numerical twin names the cause (perturbations split the event), not the step sizes.
+  try {
+    (void)numerical_jump_gain(plank_box, traj, 0, NumericalJumpGainOptions{});
+    FAIL() << "the twin differenced a simultaneous event";
+  } catch (const SimultaneousActivation& e) {
+    EXPECT_NE(std::string(e.what()).find("split"), std::string::npos) << e.what();
+  }
 }
 
 }  // namespace

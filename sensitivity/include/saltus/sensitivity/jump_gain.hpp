@@ -168,6 +168,7 @@ class JumpGainSolver {
   using Input = Vec<nu>;
 
   explicit JumpGainSolver(const S& scene, JumpGainOptions options = {}, int reserved_transitions = 8);
+  JumpGainSolver(S&&, JumpGainOptions = {}, int = 8) = delete;  // keeps a reference: would dangle
 
   const JumpGainOptions& options() const { return options_; }
 

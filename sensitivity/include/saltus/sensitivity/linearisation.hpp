@@ -78,6 +78,7 @@ class LinearisedSystem {
 
   /// Extends the segments of `traj` and computes the gains of all its events. `traj` and `scene`
   /// must outlive this object. @throws GrazingEvent, SimultaneousActivation (from the gains), InvalidArgument
+  LinearisedSystem(S&&, const HybridTrajectory<S>&, LinearisationOptions = {}) = delete;  // keeps the scene: would dangle
   LinearisedSystem(const S& scene, const HybridTrajectory<S>& traj, LinearisationOptions options = {})
       : scene_(scene),
         options_(options),
@@ -115,6 +116,10 @@ class LinearisedSystem {
   /// The first-order prediction of the motion from x(t0) + eps z0 under u + eps v(t), t0 the
   /// reference's start.
   Prediction<S> predict(const State& z0, InputPerturbation v) const;
+  /// Same without an input perturbation (v = 0; the only one of a scene with nu = 0).
+  Prediction<S> predict(const State& z0) const {
+    return predict(z0, [](double) { return Input::Zero().eval(); });
+  }
 
   /// z(t) on extended segment i from z(t_begin(i)) = z_begin under v.
   State propagate(int i, const State& z_begin, const InputPerturbation& v, double t) const;

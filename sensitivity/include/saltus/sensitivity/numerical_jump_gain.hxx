@@ -25,6 +25,15 @@ NumericalJumpGain<S> numerical_jump_gain(const S& scene, const HybridTrajectory<
                 "NumericalJumpGainOptions: window and steps must be > 0");
   const Event<S>& ev = traj.events[e];
   const double ts = ev.t;
+  // Several guards at one instant: a perturbation splits the event into separate ones in an order
+  // that depends on the perturbation, so no single (two-sided) jump gain exists to difference.
+  for (std::size_t k = 0; k < ev.transitions.size(); ++k)
+    if (ev.transitions[k].guards.size() > 1)
+      throw SimultaneousActivation(detail::concat(
+          "numerical jump gain: transition ", k, " of the event at t = ", ts, " is fired by ",
+          ev.transitions[k].guards.size(), " guards at once; perturbations split it into separate events in an "
+          "order that depends on the perturbation, so the first-order map is conewise and no single gain exists "
+          "to difference"));
   double w = options.window;
   if (e > 0 && ev.t > traj.events[e - 1].t) w = std::min(w, 0.25 * (ev.t - traj.events[e - 1].t));
   if (e + 1 < static_cast<int>(traj.events.size())) w = std::min(w, 0.25 * (traj.events[e + 1].t - ev.t));
@@ -72,9 +81,22 @@ NumericalJumpGain<S> numerical_jump_gain(const S& scene, const HybridTrajectory<
       }
       if (cross) {
         const auto end = integrator.integrate(sys, t, x, tb, options.simulation.simultaneity, nullptr, true);
-        SALTUS_CHECK_NUMERICS(end.at_guard && end.fired[index], 
-                      "numerical jump gain: a replayed run did not ", "reach the ", to_string(tr.guards.front().kind),
-                      " guard of the event at t = ", ts, " within the window (reduce the steps or enlarge the window)");
+        if (end.at_guard && !end.fired[index]) {
+          // Another guard fired first: near this event the perturbed motions order the events
+          // differently (guards active at nearly the same instant), not a step-size matter.
+          std::string others;
+          for (int j = 0; j < sys.guards().count; ++j)
+            if (end.fired[j])
+              others += (others.empty() ? "" : ", ") + std::string(to_string(sys.guards()[j].kind)) + " of contact '" +
+                        scene.contact(sys.guards()[j].contact).name + "'";
+          throw SimultaneousActivation(detail::concat(
+              "numerical jump gain: a perturbed run reached ", others, " at t = ", end.t, " before the ",
+              to_string(tr.guards.front().kind), " guard of the event at t = ", ts,
+              ": the perturbation splits a (nearly) simultaneous event, whose first-order map is conewise"));
+        }
+        SALTUS_CHECK_NUMERICS(end.at_guard, "numerical jump gain: a replayed run did not reach the ",
+                              to_string(tr.guards.front().kind), " guard of the event at t = ", ts,
+                              " within the window [", ta, ", ", tb, "] (reduce the steps or enlarge the window)");
         t = end.t;
         if (k == 0) event_time = t;
       }

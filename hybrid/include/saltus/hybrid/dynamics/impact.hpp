@@ -78,14 +78,18 @@ class ImpactSolver {
   static_assert(S::nc > 0, "an impact needs a scene with contacts");
 
   explicit ImpactSolver(const S& scene, ImpactOptions options = {});
+  ImpactSolver(S&&, ImpactOptions = {}) = delete;  // keeps a reference: would dangle
 
   const ImpactOptions& options() const { return options_; }
 
-  /// Impact at x- with the contacts whose gap is within gap_tolerance.
+  /// Impact at x- with the contacts whose gap is within gap_tolerance. The returned reference is
+  /// the solver's own workspace (so that a solve allocates nothing): the next solve overwrites
+  /// it; copy the result (ImpactResult<S> r = solver.solve(x);) to keep it.
   const ImpactResult<S>& solve(const VecT<double, nx>& x_minus);
 
   /// Impact at x- with an explicit set of contacts taking part; `inelastic[i]` sets e_n = 0 for
-  /// contact i in this impact (the simulator's rest criterion).
+  /// contact i in this impact (the simulator's rest criterion). The same reference as above:
+  /// overwritten by the next solve.
   const ImpactResult<S>& solve(const VecT<double, nx>& x_minus, const std::array<bool, nc>& in_problem,
                                const std::array<bool, nc>& inelastic = {});
 

@@ -44,7 +44,7 @@ void evaluate_dynamics(const S& scene, const VecT<T, S::nq>& q, const VecT<T, S:
     throw NonSpdMassMatrix(detail::concat("mass matrix is not symmetric positive definite at q = [", qd.transpose(), "]"));
   }
   k.h = scene.template bias<T>(q, v);
-  k.S_u = scene.template input_matrix<T>(q);
+  k.S_u = scene_input_matrix<S, T>(scene, q);
 }
 
 template <Scene S, class T>

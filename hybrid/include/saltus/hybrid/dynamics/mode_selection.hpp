@@ -21,6 +21,29 @@
 
 namespace saltus {
 
+/// Which solution select() takes when the acceleration-level problem has several (see
+/// SelectionUniqueness): the solver's (the default, so that a simulation's result does not depend
+/// on whether the enumeration ran; in Painleve's indeterminate case it is the lift-off, where
+/// Lemke's pivoting ends first), or the one with the most or the fewest closed contacts.
+enum class AmbiguityChoice { Solver, MostClosed, FewestClosed };
+
+/// What the last select() found about the uniqueness of its solution. Checked where every
+/// candidate contact is frictionless or already slipping: the problem is then a linear
+/// complementarity problem in the normal forces alone, y = A lambda + b, whose solutions are
+/// enumerated over the 2^m complementary index sets (m <= 12 rows): A_II lambda_I = -b_I,
+/// lambda_I >= 0, y_J >= 0. Solutions count as distinct when their modes differ (redundant
+/// contacts have many force distributions for one mode: not an ambiguity of the mode). A P-matrix A has exactly one; a non-P A (friction folded into the
+/// columns of a slipping contact, Painleve) can have none, two, or more. Problems with a contact
+/// at tangential rest (a cone complementarity problem) are not enumerated (checked = false).
+template <int NC>
+struct SelectionUniqueness {
+  static constexpr int max_kept = 4;
+  bool checked = false;
+  int solutions = 1;  ///< solutions with distinct modes found (1 when not checked)
+  int taken = 0;      ///< which of `modes` select() returned
+  std::array<Mode<NC>, max_kept> modes{};  ///< the first max_kept solutions' modes
+};
+
 struct ModeSelectionOptions {
   /// A contact velocity below velocity_tolerance * max(1, ||v||_inf) counts as zero.
   double velocity_tolerance = 1e-8;
@@ -29,6 +52,7 @@ struct ModeSelectionOptions {
   /// An acceleration below acceleration_tolerance * (acceleration scale) counts as zero.
   double acceleration_tolerance = 1e-9;
   double residual_tolerance = 1e-9;
+  AmbiguityChoice ambiguity = AmbiguityChoice::Solver;
 };
 
 template <Scene S>
@@ -42,6 +66,7 @@ class ModeSelector {
   using Coulomb = CoulombSolver<contact_bound(nc)>;
 
   explicit ModeSelector(const S& scene, ModeSelectionOptions options = {}) : scene_(scene), options_(options) {}
+  ModeSelector(S&&, ModeSelectionOptions = {}) = delete;  // keeps a reference: would dangle
 
   /// The mode of the contacts in `candidates` at (x, u); contacts not in it are open.
   /// `rest[i]` marks a candidate whose tangential velocity is to be taken as zero (the instant a
@@ -51,6 +76,8 @@ class ModeSelector {
                   const std::array<bool, nc>& rest = {});
 
   const Solution& solution() const { return solution_; }
+  /// Uniqueness of the last select()'s solution (see SelectionUniqueness).
+  const SelectionUniqueness<nc>& uniqueness() const { return uniqueness_; }
 
  private:
   const S& scene_;
@@ -61,6 +88,8 @@ class ModeSelector {
   Lemke lemke_;
   Coulomb coulomb_;
   DelassusAssembly<S> assembly_;
+  SelectionUniqueness<nc> uniqueness_;
+
 };
 
 }  // namespace saltus

@@ -31,8 +31,10 @@ struct IntegratorOptions {
   double absolute_tolerance = 1e-12;
   double initial_step = 1e-4;  ///< s (Dormand-Prince; CVODE estimates its own first step)
   double max_step = 0.0;       ///< s; 0: unlimited
-  /// Interior guard checks per step besides its end point (Dormand-Prince), so that a guard that
-  /// dips below zero and back within one step is still seen.
+  /// Interior guard checks per step besides its end point (both backends). Between check points
+  /// a touchdown that dips below zero and back is found from the gap's exact rate, and one that
+  /// starts at round-off below zero from its penetration (simulation/guard_scan.hxx); the other
+  /// guards need a sign change at a check point.
   int guard_samples = 2;
   /// Event times are located to root_tolerance * max(1, |t|) on the dense output of the step
   /// (both backends: CVODE's own root, about 100 unit round-offs of t on its interpolant, is

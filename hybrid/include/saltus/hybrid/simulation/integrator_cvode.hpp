@@ -102,6 +102,12 @@ class CvodeIntegrator : private CvodeProblem {
   /// is projected with the linearised operators. Exposed for tests.
   void project_state(const S& scene, const Mode<nc>& mode, State& x, State* error);
 
+  /// m: an open contact's gap below -gap_tolerance is a penetration, hence a missed touchdown.
+  /// Besides CVODE's sign-change roots, every step's dense output is scanned for touchdowns that
+  /// dip and come back within the step, or start below zero (guard_scan.hxx). The simulator sets
+  /// it to its impact options' gap tolerance.
+  void set_gap_tolerance(double gap_tolerance) { gap_tolerance_ = gap_tolerance; }
+
  private:
   using Piece = PolynomialPiece<nx>;
 
@@ -122,6 +128,7 @@ class CvodeIntegrator : private CvodeProblem {
   void project(double t, const double* x, double* correction, double* error) override;
 
   IntegratorOptions options_;
+  double gap_tolerance_ = 1e-9;
   CvodeSession session_;
   std::array<int, ng> root_direction_{}, roots_found_{};
 

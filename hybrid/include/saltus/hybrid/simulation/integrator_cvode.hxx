@@ -4,6 +4,7 @@
 // it from compiling them again. Include this file where CvodeIntegrator<S> is instantiated.
 #pragma once
 
+#include <saltus/hybrid/simulation/guard_scan.hxx>
 #include <saltus/hybrid/simulation/integrator_cvode.hpp>
 
 #include <boost/math/tools/roots.hpp>
@@ -74,6 +75,10 @@ SegmentEndOf<S> CvodeIntegrator<S>::integrate(ModeSystem<S>& sys, double t0, Sta
   double t_prev = t0, t_ret = t0;
   x_prev_ = x;
   sys.rhs(t0, x_prev_, dx_prev_);
+  using Values = typename ModeSystem<S>::GuardValues;
+  Values ga{}, ra{};
+  if (n_guards_ > 0) sys.guard_values(t0, x, ga, &ra);
+  const auto scan = detail::GuardScanSettings::of(options_, gap_tolerance_, simultaneity);
   while (true) {
     SALTUS_CHECK_NUMERICS(end.steps < options_.max_steps, "CVODE: integration of one segment exceeded ",
                   options_.max_steps, " steps at t = ", t_prev);
@@ -95,6 +100,20 @@ SegmentEndOf<S> CvodeIntegrator<S>::integrate(ModeSystem<S>& sys, double t0, Sta
     const bool at_stop = flag == CvodeSession::StepEnd::Stop || direction * (t_ret - t_final) >= 0;
     Piece step = piece;
     if (at_stop) step.t1 = t_final;
+    // What CVODE's sign-change roots cannot see: a touchdown dipping and back within the step, or
+    // starting below zero (guard_scan.hxx).
+    if (n_guards_ > 0 && direction > 0 && step.t1 > step.t0) {
+      auto state_at = [&step](double t, State& y) { y = step.value(t); };
+      if (detail::scan_step_for_events(sys, state_at, step.t0, step.t1, ga, ra, scan, end)) {
+        Piece last = step;
+        last.t1 = end.t_first_crossing;
+        if (out && last.t1 != last.t0) out->append(last);
+        x = step.value(end.t_first_crossing);
+        end.at_guard = true;
+        end.t = end.t_first_crossing;
+        break;
+      }
+    }
     if (out) out->append(step);
     t_prev = step.t1;
     if (at_stop) {

@@ -26,8 +26,13 @@ class DormandPrinceIntegrator {
   SegmentEndOf<S> integrate(ModeSystem<S>& sys, double t0, State& x, double t_final, double simultaneity,
                             DenseOutput<nx>* out, bool detect_events = true);
 
+  /// m: an open contact's gap below -gap_tolerance is a penetration, hence a missed touchdown
+  /// (guard_scan.hxx); the simulator sets it to its impact options' gap tolerance.
+  void set_gap_tolerance(double gap_tolerance) { gap_tolerance_ = gap_tolerance; }
+
  private:
   IntegratorOptions options_;
+  double gap_tolerance_ = 1e-9;
 };
 
 }  // namespace saltus

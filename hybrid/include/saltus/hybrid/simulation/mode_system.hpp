@@ -24,7 +24,9 @@ class ModeSystem {
   /// One value per guard of the mode, in the order of guards() (at most 2 nc + 1).
   using GuardValues = std::array<double, 2 * S::nc + 1>;
 
+  /// The scene must outlive the mode system (a temporary scene does not compile).
   ModeSystem(const S& scene, const InputLaw<S>& input) : scene_(scene), input_(input) {}
+  ModeSystem(S&&, const InputLaw<S>&) = delete;  // keeps a reference: would dangle
 
   void set_mode(const Mode<nc>& mode);
   const Mode<nc>& mode() const { return mode_; }
@@ -37,8 +39,10 @@ class ModeSystem {
   /// x' at (t, x).
   void rhs(double t, const State& x, State& xdot);
 
-  /// All guard values at (t, x), in the order of guards().
-  void guard_values(double t, const State& x, GuardValues& g);
+  /// All guard values at (t, x), in the order of guards(). With `rates`, also the exact rate
+  /// d/dt gamma of every touchdown guard (the gap's rate, the normal velocity zeta_n = w_n^T v;
+  /// q' = v); the other guards' slots are NaN (their rates need the force's derivative).
+  void guard_values(double t, const State& x, GuardValues& g, GuardValues* rates = nullptr);
 
   /// Rate of a guard along the flow, d/dt gamma(t, x(t)), by a central difference along the
   /// flow over +-dt (the input law included). Only its sign is used, to decide whether a guard

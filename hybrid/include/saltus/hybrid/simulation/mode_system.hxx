@@ -1,6 +1,7 @@
 // Definitions of mode_system.hpp.
 #pragma once
 
+#include <limits>
 #include <saltus/hybrid/simulation/mode_system.hpp>
 
 namespace saltus {
@@ -34,10 +35,15 @@ double ModeSystem<S>::guard_rate(double t, const State& x, const Guard& g, doubl
 }
 
 template <Scene S>
-void ModeSystem<S>::guard_values(double t, const State& x, GuardValues& g) {
+void ModeSystem<S>::guard_values(double t, const State& x, GuardValues& g, GuardValues* rates) {
   const Input u = input(t, x);
   evaluate_flow(scene_, mode_, x, u, flow_);
   for (int k = 0; k < guards_.count; ++k) g[k] = guard_value(scene_, mode_, guards_[k], flow_);
+  if (rates) {
+    for (int k = 0; k < guards_.count; ++k)
+      (*rates)[k] = guards_[k].kind == GuardKind::Touchdown ? flow_.kin.contacts[guards_[k].contact].zeta_n
+                                                            : std::numeric_limits<double>::quiet_NaN();
+  }
 }
 
 }  // namespace saltus

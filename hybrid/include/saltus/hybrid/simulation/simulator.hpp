@@ -6,11 +6,26 @@
 // within `simultaneity` of each other form one simultaneous event, resolved jointly (one impact
 // problem for all touchdowns).
 //
-// Zeno. Accumulating impacts (a bouncing ball with e_n > 0) end the run with status Zeno and the
-// predicted accumulation time, detected when one contact's flight times shrink geometrically
-// over `zeno_bounces` consecutive touchdowns: with ratio r the remaining bounces last
-// delta_last r / (1 - r). With `rest_velocity` > 0, an impact slower than it is taken as
-// inelastic (e_n = 0): the contact comes to rest and the motion continues in contact.
+// Zeno. Accumulating impacts end the run with status Zeno and the predicted accumulation time.
+// They are detected on the times of all touchdown events, whichever contacts they close or
+// bounce (a bouncing ball: one contact; a rocking block: its two corners in turn): when the
+// intervals between consecutive touchdowns shrink geometrically over `zeno_bounces` intervals,
+// with one ratio r (period 1), or with one ratio r between intervals two apart (period 2, an
+// asymmetric alternation), the remaining ones last (sum of the last p intervals) r / (1 - r).
+// With `rest_velocity` > 0, an impact slower than it is taken as inelastic (e_n = 0): a bouncing
+// contact comes to rest and the motion continues in contact. Zeno is then declared only once an
+// impact slower than rest_velocity has not ended the accumulation (alternating contacts with
+// e_n = 0, which the rest criterion cannot stop), so that the documented rest criterion works
+// with the default zeno_bounces.
+//
+// Invariants. Every accepted step is scanned for touchdowns that dip and come back, or start at
+// round-off below the surface (guard_scan.hxx); at the end of every segment no open contact is
+// below -gap_tolerance unless it started the segment lower (a contact released below the
+// surface, rising): a violation is a missed event, NumericalFailure, never a `completed` run.
+// More than max_chain consecutive events at one instant (zero-length segments) stop the run with
+// NumericalFailure naming the guard: a cycle the chain check of one event cannot see.
+// A given initial mode is checked against the state and the contact forces it implies
+// (check_initial_mode).
 //
 // Definitions in simulator.hxx, compiled once per scene (saltus/hybrid/instantiate.hpp): a
 // program that includes this header and links the scene's instantiation does not compile the
@@ -50,22 +65,42 @@ class Simulator {
   /// that penetrates a contact; NumericalFailure, ContactProblemFailure, NonSpdMassMatrix from
   /// the integration and the event physics.
   HybridTrajectory<S> run(const State& x0, double t0, double t_final, const InputLaw<S>& input);
+  /// Same for a scene without inputs (nu = 0).
+  HybridTrajectory<S> run(const State& x0, double t0, double t_final)
+    requires(S::nu == 0)
+  {
+    return run(x0, t0, t_final, zero_input<S>());
+  }
   /// Same, from a given initial mode.
+  /// @throws InvalidArgument if mode0 is inconsistent with x0 (check_initial_mode).
   HybridTrajectory<S> run(const State& x0, const Mode<nc>& mode0, double t0, double t_final,
                           const InputLaw<S>& input);
+
+  /// Checks that `mode` is a consistent mode at (t, x) under u: a closed contact touches (|gap|
+  /// within the impact's gap tolerance) without normal velocity, and its normal force in that
+  /// mode is >= 0 (a negative one: the mode is not admissible, e.g. a slip into a Painleve
+  /// configuration whose acceleration-level problem has no solution); a sticking contact has
+  /// zero tangential velocity and its force inside the friction cone; a slipping contact with a
+  /// tangential velocity slides along its slip direction; an open contact is not below the
+  /// surface. @throws InvalidArgument naming the first inconsistent contact and why.
+  void check_initial_mode(const State& x, const Mode<nc>& mode, const Input& u) const;
 
  private:
   HybridTrajectory<S> run_impl(const State& x0, std::optional<Mode<nc>> mode0, double t0, double t_final,
                                const InputLaw<S>& input);
-  /// Records a touchdown of contact i that bounced; true when a Zeno accumulation is detected.
-  bool record_touchdown(int i, double t, HybridTrajectory<S>& traj);
+  /// Records a touchdown event at t; true when a Zeno accumulation is detected (file comment).
+  bool record_touchdown(double t, bool slower_than_rest, HybridTrajectory<S>& traj);
+  /// The end-of-segment invariant (file comment). @throws NumericalFailure on a missed event.
+  void check_no_penetration(const State& x_begin, const State& x_end, const Mode<nc>& mode, double t) const;
 
   const S& scene_;
   SimulationOptions options_;
   TransitionResolver<S> transitions_;
   DormandPrinceIntegrator<S> dopri_;
   std::unique_ptr<CvodeIntegrator<S>> cvode_;  ///< null with Dormand-Prince
-  std::array<std::vector<double>, nc> touchdown_times_;
+  std::vector<double> touchdown_times_;
+  bool rest_impact_seen_ = false;
+  int same_instant_events_ = 0;  ///< consecutive events at one instant (stall check)
 };
 
 }  // namespace saltus

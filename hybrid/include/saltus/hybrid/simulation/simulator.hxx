@@ -15,6 +15,8 @@ Simulator<S>::Simulator(const S& scene, SimulationOptions options)
   // The backend: Dormand-Prince (member, always there) or CVODE (BDF/Adams), created once here.
   if (options_.integrator.kind != IntegratorKind::DormandPrince)
     cvode_ = std::make_unique<CvodeIntegrator<S>>(options_.integrator);
+  dopri_.set_gap_tolerance(options_.impact.gap_tolerance);
+  if (cvode_) cvode_->set_gap_tolerance(options_.impact.gap_tolerance);
 }
 
 template <Scene S>
@@ -42,16 +44,20 @@ HybridTrajectory<S> Simulator<S>::run_impl(const State& x0, std::optional<Mode<n
   HybridTrajectory<S> traj;
   traj.input = input;
   ModeSystem<S> sys(scene_, input);
-  touchdown_times_.fill({});
+  touchdown_times_.clear();
+  rest_impact_seen_ = false;
+  same_instant_events_ = 0;
 
   double t = t0;
   State x = x0;
   Mode<nc> mode;
   if (mode0) {
+    check_initial_mode(x0, *mode0, sys.input(t0, x0));
     mode = *mode0;
   } else {
     auto start = transitions_.start(sys, t, x);
     mode = start.mode;
+    if (start.selection_solutions > 1) ++traj.statistics.ambiguous_selections;
     if (start.impact) {
       x = start.impact->x_plus;
       traj.events.push_back(std::move(*start.impact));
@@ -66,6 +72,7 @@ HybridTrajectory<S> Simulator<S>::run_impl(const State& x0, std::optional<Mode<n
     seg.mode = mode;
     seg.t_begin = t;
     const long rhs_before = sys.rhs_evaluations();
+    const State x_begin = x;
     SegmentEndOf<S> end;
     while (true) {
       // Integrate up to the next breakpoint of the input, or t_final.
@@ -81,6 +88,7 @@ HybridTrajectory<S> Simulator<S>::run_impl(const State& x0, std::optional<Mode<n
       if (end.at_guard || t_stop == t_final) break;
     }
     stats.rhs_evaluations += sys.rhs_evaluations() - rhs_before;
+    check_no_penetration(x_begin, x, mode, end.t);
     seg.t_end = end.t;
     traj.segments.push_back(std::move(seg));
     if (!end.at_guard) break;
@@ -89,13 +97,34 @@ HybridTrajectory<S> Simulator<S>::run_impl(const State& x0, std::optional<Mode<n
     for (int k = 0; k < sys.guards().count; ++k)
       if (end.fired[k]) fired.push_back(sys.guards()[k]);
     Event<S> ev = transitions_.resolve(sys, t, x, mode, fired);
+    for (const auto& tr : ev.transitions)
+      if (tr.selection_solutions > 1) ++traj.statistics.ambiguous_selections;
+    // Zeno bookkeeping on every touchdown event (file comment).
+    bool zeno = false;
+    bool touchdown = false, slower_than_rest = false;
+    Kinematics<S> kin_minus;
+    for (const Guard& g : ev.guards()) {
+      if (g.kind != GuardKind::Touchdown) continue;
+      if (!touchdown)
+        evaluate_kinematics(scene_, VecT<double, nq>(x.template head<nq>()), VecT<double, nq>(x.template tail<nq>()),
+                            kin_minus);
+      touchdown = true;
+      if (options_.rest_velocity > 0 && -kin_minus.contacts[g.contact].zeta_n < options_.rest_velocity)
+        slower_than_rest = true;
+    }
+    if (touchdown) zeno = record_touchdown(t, slower_than_rest, traj);
+    // Events that follow each other at one instant without the motion advancing: a cycle of
+    // transitions the chain check did not catch (e.g. a contact that the mode selection opens but
+    // the flow drives into the surface). Stop with the cause rather than spin to max_events.
+    same_instant_events_ = (!traj.events.empty() && traj.events.back().t == t) ? same_instant_events_ + 1 : 0;
+    SALTUS_CHECK_NUMERICS(same_instant_events_ < options_.max_chain, "events stall at t = ", t, ": ",
+                          same_instant_events_ + 1, " consecutive events at this instant, the last fired by ",
+                          ev.guards().empty() ? std::string("no guard")
+                                              : std::string(to_string(ev.guards().front().kind)) + " of contact '" +
+                                                    scene_.contact(ev.guards().front().contact).name + "'",
+                          " (mode after: ", describe(scene_, ev.mode_after), ")");
     x = ev.x_plus;
     mode = ev.mode_after;
-    // Zeno bookkeeping on touchdowns that bounced (the contact is open again afterwards).
-    bool zeno = false;
-    for (const Guard& g : ev.guards())
-      if (g.kind == GuardKind::Touchdown && !mode[g.contact].closed())
-        zeno = zeno || record_touchdown(g.contact, t, traj);
     traj.events.push_back(std::move(ev));
     if (zeno) {
       traj.status = SimulationStatus::Zeno;
@@ -112,27 +141,115 @@ HybridTrajectory<S> Simulator<S>::run_impl(const State& x0, std::optional<Mode<n
 }
 
 template <Scene S>
-bool Simulator<S>::record_touchdown(int i, double t, HybridTrajectory<S>& traj) {
-  auto& times = touchdown_times_[i];
+bool Simulator<S>::record_touchdown(double t, bool slower_than_rest, HybridTrajectory<S>& traj) {
+  auto& times = touchdown_times_;
   times.push_back(t);
+  // The rest criterion ends a bouncing accumulation by itself: Zeno only if touchdowns go on
+  // after an impact it made inelastic (the impact that brings a ball to rest is not one).
+  const bool rest_acted_before = rest_impact_seen_;
+  rest_impact_seen_ = rest_impact_seen_ || slower_than_rest;
+  if (options_.rest_velocity > 0 && !rest_acted_before) return false;
   const int n = options_.zeno_bounces;
-  if (static_cast<int>(times.size()) < n + 2) return false;
-  // Flight times between the last n + 2 touchdowns, and their ratios.
   const std::size_t m = times.size();
-  double r_min = 1.0, r_max = 0.0, last_flight = 0.0;
-  for (int k = 0; k < n; ++k) {
-    const double f1 = times[m - 1 - k] - times[m - 2 - k];
-    const double f0 = times[m - 2 - k] - times[m - 3 - k];
-    if (!(f0 > 0 && f1 > 0)) return false;
-    const double r = f1 / f0;
-    r_min = std::min(r_min, r);
-    r_max = std::max(r_max, r);
-    if (k == 0) last_flight = f1;
+  for (int period = 1; period <= 2; ++period) {
+    // n ratios of intervals `period` apart need n + period intervals, n + period + 1 times.
+    if (static_cast<int>(m) < n + period + 1) continue;
+    auto interval = [&](int back) { return times[m - 1 - back] - times[m - 2 - back]; };  // back = 0: last
+    double r_min = 1.0, r_max = 0.0;
+    bool positive = true;
+    for (int k = 0; k < n && positive; ++k) {
+      const double f1 = interval(k), f0 = interval(k + period);
+      positive = f0 > 0 && f1 > 0;
+      if (!positive) break;
+      const double r = f1 / f0;
+      r_min = std::min(r_min, r);
+      r_max = std::max(r_max, r);
+    }
+    if (!positive || !(r_max < 1.0 && r_max - r_min < 0.05)) continue;
+    const double ratio = 0.5 * (r_min + r_max);
+    double last = 0.0;
+    for (int k = 0; k < period; ++k) last += interval(k);
+    traj.zeno_time = t + last * ratio / (1.0 - ratio);
+    return true;
   }
-  if (!(r_max < 1.0 && r_max - r_min < 0.05)) return false;
-  const double ratio = 0.5 * (r_min + r_max);
-  traj.zeno_time = t + last_flight * ratio / (1.0 - ratio);
-  return true;
+  return false;
+}
+
+template <Scene S>
+void Simulator<S>::check_no_penetration(const State& x_begin, const State& x_end, const Mode<nc>& mode,
+                                        double t) const {
+  Kinematics<S> k0, k1;
+  evaluate_kinematics(scene_, VecT<double, nq>(x_begin.template head<nq>()),
+                      VecT<double, nq>(x_begin.template tail<nq>()), k0);
+  evaluate_kinematics(scene_, VecT<double, nq>(x_end.template head<nq>()), VecT<double, nq>(x_end.template tail<nq>()),
+                      k1);
+  const double tol = options_.impact.gap_tolerance;
+  for (int i = 0; i < nc; ++i) {
+    if (mode[i].closed()) continue;
+    const double gap = k1.contacts[i].gap;
+    SALTUS_CHECK_NUMERICS(gap >= -tol || gap >= k0.contacts[i].gap, "missed touchdown: open contact '",
+                          scene_.contact(i).name, "' is at gap ", gap, " < -", tol, " at t = ", t,
+                          " (it started the segment at gap ", k0.contacts[i].gap,
+                          "); reduce the integrator's max_step or raise guard_samples");
+  }
+}
+
+template <Scene S>
+void Simulator<S>::check_initial_mode(const State& x, const Mode<nc>& mode, const Input& u) const {
+  require_finite(x, "initial state x0");
+  FlowWorkspace<S> ws;
+  evaluate_flow(scene_, mode, x, u, ws);
+  const auto& kin = ws.kin;
+  const double gap_tol = options_.impact.gap_tolerance;
+  const double v_tol = options_.selection.velocity_tolerance * std::max(1.0, x.template tail<nq>().cwiseAbs().maxCoeff());
+  double force_scale = (kin.M * ws.a_free).cwiseAbs().maxCoeff();
+  for (int i = 0; i < nc; ++i)
+    force_scale = std::max({force_scale, std::abs(ws.force[i].normal), ws.force[i].tangent.cwiseAbs().maxCoeff()});
+  const double f_tol = options_.guard_tolerance * std::max(1.0, force_scale);
+  for (int i = 0; i < nc; ++i) {
+    const auto& c = kin.contacts[i];
+    const std::string& name = scene_.contact(i).name;
+    const ContactState& st = mode[i];
+    if (!st.closed()) {
+      SALTUS_REQUIRE(c.gap >= -gap_tol, "initial mode: contact '", name, "' is given open but penetrates (gap ",
+                     c.gap, ")");
+      continue;
+    }
+    // Below the surface by a little is the drift of a stance phase (a state taken from an earlier
+    // run); above it, the contact does not touch.
+    SALTUS_REQUIRE(c.gap <= gap_tol && c.gap >= -100 * gap_tol, "initial mode: contact '", name,
+                   "' is given closed but its gap is ", c.gap, " (accepted: [", -100 * gap_tol, ", ", gap_tol, "])");
+    SALTUS_REQUIRE(std::abs(c.zeta_n) <= v_tol, "initial mode: contact '", name,
+                   "' is given closed but its normal velocity is ", c.zeta_n, " (an impact or a lift-off, not a mode)");
+    const auto& f = ws.force[i];
+    SALTUS_REQUIRE(f.normal >= -f_tol, "initial mode: contact '", name, "' is given ", to_string(st.mode),
+                   " but the normal force it implies is ", f.normal,
+                   " < 0: the mode is inconsistent (if it slides, the acceleration-level contact problem may have "
+                   "no solution with it: a Painleve configuration)");
+    const int nt = c.tangents;
+    if (nt == 0) continue;
+    const double mu = scene_.contact(i).mu;
+    double speed2 = 0.0, along = 0.0;
+    for (int k = 0; k < nt && k < 2; ++k) {
+      speed2 += c.zeta_t[k] * c.zeta_t[k];
+      along += c.zeta_t[k] * st.slip_direction[k];
+    }
+    const double speed = std::sqrt(speed2);
+    if (st.mode == ContactMode::Stick) {
+      SALTUS_REQUIRE(speed <= v_tol, "initial mode: contact '", name, "' is given sticking but slides at ", speed,
+                     " m/s");
+      double tangential2 = 0.0;  // over the contact's nt <= 2 tangents
+      for (int k = 0; k < nt && k < 2; ++k) tangential2 += f.tangent[k] * f.tangent[k];
+      const double tangential = std::sqrt(tangential2);
+      SALTUS_REQUIRE(tangential <= mu * f.normal + f_tol, "initial mode: contact '", name,
+                     "' is given sticking but its force leaves the friction cone (|lambda_t| = ", tangential,
+                     " > mu lambda_n = ", mu * f.normal, ")");
+    } else if (speed > v_tol) {
+      SALTUS_REQUIRE(along >= (1 - 1e-6) * speed, "initial mode: contact '", name,
+                     "' is given slipping along a direction that is not its sliding velocity (zeta_t . d = ", along,
+                     ", |zeta_t| = ", speed, ")");
+    }
+  }
 }
 
 }  // namespace saltus

@@ -53,6 +53,7 @@ class TransitionResolver {
   struct Start {
     Mode<nc> mode;
     std::optional<Event<S>> impact;  ///< the initial impact (guards: the touchdowns), if any
+    int selection_solutions = 1;     ///< of the initial mode selection (SelectionUniqueness)
   };
   /// Touching contacts (gap within the impact's gap tolerance) that approach impact at t0; those
   /// at rest are candidates for the acceleration-level mode selection; the others are open.

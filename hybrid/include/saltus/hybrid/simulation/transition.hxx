@@ -39,6 +39,7 @@ auto TransitionResolver<S>::start(ModeSystem<S>& sys, double t0, const State& x0
   }
   Start start;
   start.mode = selector_.select(x0, sys.input(t0, x0), candidates);
+  start.selection_solutions = selector_.uniqueness().solutions;
   if (!initial_touchdowns.empty()) {
     start.impact = resolve(sys, t0, x0, start.mode, initial_touchdowns);
     start.mode = start.impact->mode_after;
@@ -187,6 +188,7 @@ void TransitionResolver<S>::apply(ModeSystem<S>& sys, double t, State& x, Mode<n
     std::array<bool, nc> candidates{};
     for (int i = 0; i < nc; ++i) candidates[i] = next[i].closed();
     const Mode<nc> chosen = selector_.select(x, u, candidates, at_rest);
+    tr.selection_solutions = selector_.uniqueness().solutions;
     for (int i = 0; i < nc; ++i)
       if (at_rest[i]) next[i] = chosen[i];
   }
@@ -215,6 +217,7 @@ void TransitionResolver<S>::apply_impact(ModeSystem<S>& sys, double t, State& x,
   for (int i = 0; i < nc; ++i) candidates[i] = r.post_mode[i].closed();
   sys.set_mode(mode);
   mode = selector_.select(x, sys.input(t, x), candidates);
+  tr.selection_solutions = selector_.uniqueness().solutions;
 }
 
 template <Scene S>

@@ -72,8 +72,11 @@ std::string describe(const S& scene, const Mode<S::nc>& mode) {
   os.precision(3);
   for (int i = 0; i < S::nc; ++i) {
     if (i) os << ' ';
-    os << scene.contact(i).name << ':' << to_string(mode[i].mode);
-    if (mode[i].mode == ContactMode::Slip) {
+    // A closed frictionless contact is stored as Slip (its flow has no tangential rows) but it is
+    // neither sliding nor sticking: it is reported as "closed".
+    const bool frictionless = scene.contact(i).tangents() == 0;
+    os << scene.contact(i).name << ':' << (frictionless && mode[i].closed() ? "closed" : to_string(mode[i].mode));
+    if (mode[i].mode == ContactMode::Slip && !frictionless) {
       if (scene.contact(i).tangents() == 1)
         os << (mode[i].slip_direction[0] > 0 ? '+' : '-');
       else if (scene.contact(i).tangents() == 2)

@@ -69,7 +69,7 @@ inline void validate(const ContactSpec& c) {
 ///  - `mass_matrix<T>(q)`   M(q), nq x nq, symmetric positive definite;
 ///  - `bias<T>(q, v)`       h(q, v): Coriolis, centrifugal, gravity, springs and dampers, with
 ///                          M v' = S u - h + sum W lambda;
-///  - `input_matrix<T>(q)`  S(q), nq x nu;
+///  - `input_matrix<T>(q)`  S(q), nq x nu (optional when nu = 0: zero-size);
 ///  - `gap<T>(i, q)`        normal distance h_n of contact i (>= 0 when open);
 ///  - `tangent_position<T>(i, q)`  coordinates of contact i along its tangents, whose time
 ///                          derivative is the relative tangential velocity (only the first
@@ -87,10 +87,22 @@ concept Scene = requires(const S& s, const VecT<double, S::nq>& q, const VecT<do
   { s.contact(0) } -> std::convertible_to<const ContactSpec&>;
   { s.template mass_matrix<double>(q) } -> std::convertible_to<MatT<double, S::nq, S::nq>>;
   { s.template bias<double>(q, v) } -> std::convertible_to<VecT<double, S::nq>>;
-  { s.template input_matrix<double>(q) } -> std::convertible_to<MatT<double, S::nq, S::nu>>;
+  requires S::nu == 0 || requires {
+    { s.template input_matrix<double>(q) } -> std::convertible_to<MatT<double, S::nq, S::nu>>;
+  };
   { s.template gap<double>(0, q) } -> std::convertible_to<double>;
   { s.template tangent_position<double>(0, q) } -> std::convertible_to<VecT<double, 2>>;
 };
+
+/// S(q) of a scene (nq x nu): its input_matrix, or the zero-size matrix of a scene without
+/// inputs that does not define one.
+template <Scene S, class T>
+MatT<T, S::nq, S::nu> scene_input_matrix(const S& scene, const VecT<T, S::nq>& q) {
+  if constexpr (requires { scene.template input_matrix<T>(q); })
+    return scene.template input_matrix<T>(q);
+  else
+    return MatT<T, S::nq, S::nu>();
+}
 
 /// Compile-time dimensions of a scene, named as in the math.
 template <Scene S>

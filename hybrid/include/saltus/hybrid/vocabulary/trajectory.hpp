@@ -36,6 +36,10 @@ struct Transition {
   bool impact = false;           ///< an impulse was applied (x_after != x_before in v)
   ImpactMode<S::nc> impulse_mode;  ///< who took an impulse, how
   std::array<ContactForce<double>, S::nc> impulse{};
+  /// Solutions of the acceleration-level mode selection of this transition (ModeSelector's
+  /// SelectionUniqueness): 1 when unique or not checked, > 1 when another mode was possible
+  /// (the one taken follows ModeSelectionOptions::ambiguity).
+  int selection_solutions = 1;
 };
 
 template <Scene S>
@@ -71,6 +75,9 @@ inline const char* to_string(SimulationStatus s) {
 struct SimulationStatistics {
   long steps = 0, rejected_steps = 0, rhs_evaluations = 0;
   double wall_seconds = 0.0;
+  /// Mode selections (the initial one included) whose acceleration-level problem had several
+  /// solutions (see Transition::selection_solutions).
+  int ambiguous_selections = 0;
 };
 
 template <Scene S>

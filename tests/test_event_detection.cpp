@@ -1,0 +1,371 @@
+// No silent wrong result from the event detection: touchdowns after flights shorter than a step
+// (a rocking block near its accumulation of impacts), a guard that dips below zero and back
+// within one step (a point mass skimming a table), the accumulation of impacts that alternate
+// between two contacts (Zeno, detected on all touchdowns), the no-penetration invariant over
+// every scene's reference motions, and an inconsistent initial mode (a Painleve rod) refused with
+// the contact named. Each case has its closed-form value.
+#include "support.hpp"
+
+#include "scenes/all_scenes.hpp"
+#include "scenes/references.hpp"
+
+#include <saltus/hybrid/header_only.hpp>
+
+#include <cmath>
+#include <sstream>
+
+namespace saltus::testing {
+namespace {
+
+constexpr double g = 9.81;
+
+// A uniform rectangular block in the vertical plane, q = (x, y, theta) of its centre [m, m,
+// rad], both bottom corners as planar-friction contacts; no inputs.
+class RockingBlock {
+ public:
+  static constexpr int nq = 3, nu = 0, nc = 2;
+  static constexpr const char* name = "rocking_block";
+  RockingBlock(double width, double height, double mu)
+      : w_(width), h_(height), corners_{ContactSpec{"left", Friction::Planar, mu, 0.0},
+                                        ContactSpec{"right", Friction::Planar, mu, 0.0}} {}
+  const ContactSpec& contact(int i) const { return corners_[i]; }
+  double width() const { return w_; }
+  double height() const { return h_; }
+  template <class T>
+  MatT<T, nq, nq> mass_matrix(const VecT<T, nq>&) const {
+    MatT<T, nq, nq> M = MatT<T, nq, nq>::Zero();
+    M(0, 0) = M(1, 1) = T(1.0);
+    M(2, 2) = T((w_ * w_ + h_ * h_) / 12.0);
+    return M;
+  }
+  template <class T>
+  VecT<T, nq> bias(const VecT<T, nq>&, const VecT<T, nq>&) const {
+    return VecT<T, nq>(T(0), T(g), T(0));
+  }
+  template <class T>
+  MatT<T, nq, nu> input_matrix(const VecT<T, nq>&) const {
+    return MatT<T, nq, nu>::Zero();
+  }
+  // Corner i at body coordinates (-+w/2, -h/2).
+  template <class T>
+  VecT<T, 2> corner(int i, const VecT<T, nq>& q) const {
+    using std::cos;
+    using std::sin;
+    const double bx = i == 0 ? -w_ / 2 : w_ / 2, by = -h_ / 2;
+    return VecT<T, 2>(q[0] + cos(q[2]) * bx - sin(q[2]) * by, q[1] + sin(q[2]) * bx + cos(q[2]) * by);
+  }
+  template <class T>
+  T gap(int i, const VecT<T, nq>& q) const {
+    return corner(i, q)[1];
+  }
+  template <class T>
+  VecT<T, 2> tangent_position(int i, const VecT<T, nq>& q) const {
+    return VecT<T, 2>(corner(i, q)[0], T(0));
+  }
+  /// At rest on the left corner, tilted by `tilt` (rad) so that the right corner is lifted.
+  Vec<6> resting_on_left_corner(double tilt) const {
+    // Centre = left corner + R(tilt) (w/2, h/2), left corner at the origin.
+    const double cx = std::cos(tilt) * w_ / 2 - std::sin(tilt) * h_ / 2;
+    const double cy = std::sin(tilt) * w_ / 2 + std::cos(tilt) * h_ / 2;
+    Vec<6> x = Vec<6>::Zero();
+    x << cx, cy, tilt, 0, 0, 0;
+    return x;
+  }
+  /// Housner's ratio of the angular velocities after and before an impact on a corner of a
+  /// uniform block (e_n = 0, no slip): 1 - (3/2) sin^2(alpha), alpha = atan(w / h).
+  double housner_ratio() const {
+    const double s = std::sin(std::atan(w_ / h_));
+    return 1.0 - 1.5 * s * s;
+  }
+
+ private:
+  double w_, h_;
+  std::array<ContactSpec, 2> corners_;
+};
+
+// A uniform rod of length 1 m and mass 1 kg, q = (x, y, theta) of its centre, its lower end
+// (centre - (L/2)(cos theta, sin theta)) as a planar-friction contact.
+class PainleveRod {
+ public:
+  static constexpr int nq = 3, nu = 0, nc = 1;
+  static constexpr const char* name = "painleve_rod";
+  explicit PainleveRod(double mu) : end_{"end", Friction::Planar, mu, 0.0} {}
+  const ContactSpec& contact(int) const { return end_; }
+  template <class T>
+  MatT<T, nq, nq> mass_matrix(const VecT<T, nq>&) const {
+    MatT<T, nq, nq> M = MatT<T, nq, nq>::Identity();
+    M(2, 2) = T(1.0 / 12.0);
+    return M;
+  }
+  template <class T>
+  VecT<T, nq> bias(const VecT<T, nq>&, const VecT<T, nq>&) const {
+    return VecT<T, nq>(T(0), T(g), T(0));
+  }
+  // No input_matrix: optional for a scene without inputs.
+  template <class T>
+  T gap(int, const VecT<T, nq>& q) const {
+    using std::sin;
+    return q[1] - T(0.5) * sin(q[2]);
+  }
+  template <class T>
+  VecT<T, 2> tangent_position(int, const VecT<T, nq>& q) const {
+    using std::cos;
+    return VecT<T, 2>(q[0] - T(0.5) * cos(q[2]), T(0));
+  }
+
+ private:
+  ContactSpec end_;
+};
+
+InputLaw<RockingBlock> no_input() {
+  return [](double, const Vec<6>&, const Mode<2>&) { return Vec<0>(); };
+}
+
+struct RockingCase {
+  IntegratorKind kind;
+  double rtol;
+};
+
+class RockingBlockSettles : public ::testing::TestWithParam<RockingCase> {};
+
+// Issue cases 1 and 2: a tall block (0.2 m x 0.6 m, mu = 2) released on one corner, tilted by
+// 0.05 rad, rocks with impacts alternating between its corners; the intervals between impacts
+// shrink by Housner's ratio 0.85. The run ends with status Zeno at the accumulation time, never
+// below the ground.
+TEST_P(RockingBlockSettles, ZenoOfAlternatingCornersNeverBelowTheGround) {
+  const RockingBlock block(0.2, 0.6, 2.0);
+  SimulationOptions o;
+  o.integrator.kind = GetParam().kind;
+  o.integrator.relative_tolerance = GetParam().rtol;
+  o.integrator.absolute_tolerance = GetParam().rtol * 1e-2;
+  Simulator<RockingBlock> sim(block, o);
+  const auto traj = sim.run(block.resting_on_left_corner(0.05), 0.0, 5.0);  // nu = 0: no input law
+  ASSERT_EQ(traj.status, SimulationStatus::Zeno) << "events: " << traj.events.size();
+  EXPECT_GE(lowest_gap(block, traj, true), -o.impact.gap_tolerance);
+  EXPECT_GE(lowest_gap(block, traj, false), -1e-8);
+  // The touchdowns alternate between the corners, and the intervals shrink towards Housner's
+  // ratio (the rocking is not small against the block's slenderness angle, so the first ratios
+  // differ from it).
+  std::vector<double> times;
+  std::vector<int> corner;
+  std::ostringstream summary;
+  for (const auto& ev : traj.events) {
+    summary << ev.t << ":";
+    for (const auto& gd : ev.guards()) summary << ' ' << to_string(gd.kind) << gd.contact;
+    summary << " -> " << describe(block, ev.mode_after) << "\n";
+    for (const auto& gd : ev.guards())
+      if (gd.kind == GuardKind::Touchdown) {
+        times.push_back(ev.t);
+        corner.push_back(gd.contact);
+        break;
+      }
+  }
+  ASSERT_GE(times.size(), 10u) << summary.str();
+  const std::size_t m = times.size();
+  const double ratio = (times[m - 1] - times[m - 2]) / (times[m - 2] - times[m - 3]);
+  EXPECT_NEAR(ratio, block.housner_ratio(), 2e-3) << summary.str();
+  // The predicted accumulation lies within the geometric tail of the last interval.
+  const double tail = (times[m - 1] - times[m - 2]) * ratio / (1 - ratio);
+  EXPECT_GT(traj.zeno_time, times.back() + 0.5 * tail);
+  EXPECT_LT(traj.zeno_time, times.back() + 1.5 * tail);
+  for (std::size_t k = 1; k < m; ++k) EXPECT_NE(corner[k], corner[k - 1]) << "touchdown " << k << "\n" << summary.str();
+}
+
+INSTANTIATE_TEST_SUITE_P(Integrators, RockingBlockSettles,
+                         ::testing::Values(RockingCase{IntegratorKind::DormandPrince, 1e-8},
+                                           RockingCase{IntegratorKind::DormandPrince, 1e-12},
+                                           RockingCase{IntegratorKind::CvodeBdf, 1e-8},
+                                           RockingCase{IntegratorKind::CvodeBdf, 1e-12},
+                                           RockingCase{IntegratorKind::CvodeAdams, 1e-10}),
+                         [](const auto& info) {
+                           return std::string(to_string(info.param.kind) == std::string("dopri5") ? "Dopri5"
+                                              : info.param.kind == IntegratorKind::CvodeBdf   ? "CvodeBdf"
+                                                                                              : "CvodeAdams") +
+                                  "_rtol" + std::to_string(static_cast<int>(-std::log10(info.param.rtol)));
+                         });
+
+// Issue case 9: a block 0.2 m x 0.4 m (mu = 0.8) tilted by 0.1 rad rocks with ratio 0.7 per
+// impact and ends in a detected accumulation, not in a chain that does not settle.
+TEST(RockingBlock, SquatBlockReachesItsAccumulationWithHousnersRatio) {
+  const RockingBlock block(0.2, 0.4, 0.8);
+  EXPECT_NEAR(block.housner_ratio(), 0.7, 1e-12);
+  Simulator<RockingBlock> sim(block, SimulationOptions{});
+  const auto traj = sim.run(block.resting_on_left_corner(0.1), 0.0, 5.0, no_input());
+  ASSERT_EQ(traj.status, SimulationStatus::Zeno);
+  EXPECT_GE(lowest_gap(block, traj, true), -1e-9);
+  // Angular velocities just before consecutive impacts shrink by the ratio.
+  const auto& e = traj.events;
+  ASSERT_GE(e.size(), 4u);
+  for (std::size_t k = 1; k < 4; ++k) EXPECT_NEAR(e[k].x_minus[5] / e[k - 1].x_minus[5], -0.7, 1e-6) << k;
+}
+
+// Issue case 7: a unit point mass at vx = 1 above a table (mu = 0.5, e_n = 0) under a thrust
+// that makes its free height y(t) = 0.5 (t - 1)^2 + delta. For delta < 0 it touches the table at
+// t* = 1 - sqrt(-2 delta) with vy = -sqrt(-2 delta), the inelastic impact slides (friction
+// impulse mu sqrt(-2 delta)), and the net upward force lifts it off at once:
+// y(t) = 0.5 (t - t*)^2, x(t) = t* + (1 - mu s)(t - t*) after it, s = sqrt(-2 delta).
+// For delta >= 0 (grazing the table at t = 1, or missing it) the motion is the free parabola and
+// there is no event (a jump gain at a grazing touch is refused: test_jump_gains.cpp).
+class SkimmingPointMass : public ::testing::TestWithParam<double> {};
+
+TEST_P(SkimmingPointMass, TouchdownInsideOneStepIsFound) {
+  const double delta = GetParam();
+  scenes::PointMassParameters p;
+  p.friction = Friction::Planar;
+  p.mu = 0.5;
+  const scenes::PointMass mass(p);
+  const InputLaw<scenes::PointMass> thrust = [](double, const Vec<4>&, const Mode<1>&) {
+    return Vec<2>(0.0, g + 1.0);
+  };
+  Vec<4> x0;
+  x0 << 0.0, 0.5 + delta, 1.0, -1.0;
+  const double T = 2.0;
+  Simulator<scenes::PointMass> sim(mass, SimulationOptions{});
+  const auto traj = sim.run(x0, 0.0, T, thrust);
+  EXPECT_EQ(traj.status, SimulationStatus::Completed);
+  Vec<4> expected;
+  if (delta < 0) {
+    const double s = std::sqrt(-2 * delta), ts = 1 - s;
+    ASSERT_EQ(traj.events.size(), 1u);
+    EXPECT_NEAR(traj.events[0].t, ts, 1e-10);
+    expected << ts + (1 - p.mu * s) * (T - ts), 0.5 * (T - ts) * (T - ts), 1 - p.mu * s, T - ts;
+  } else {
+    expected << T, 0.5 * (T - 1) * (T - 1) + delta, 1.0, T - 1;
+    EXPECT_TRUE(traj.events.empty());  // grazing (delta = 0) or missing the table
+  }
+  EXPECT_LT((traj.final_state() - expected).cwiseAbs().maxCoeff(), 1e-9) << traj.final_state().transpose();
+  EXPECT_GE(lowest_gap(mass, traj, true), -1e-9);
+}
+
+INSTANTIATE_TEST_SUITE_P(Depths, SkimmingPointMass, ::testing::Values(-1e-3, -1e-4, -1e-6, -1e-8, 0.0, 1e-8),
+                         [](const auto& info) {
+                           const double d = info.param;
+                           if (d == 0) return std::string("grazing");
+                           return std::string(d < 0 ? "below_1e" : "above_1e") +
+                                  std::to_string(static_cast<int>(std::round(-std::log10(std::abs(d)))));
+                         });
+
+// Issue case 3: over every scene's reference motions, no open contact is below -gap_tolerance
+// at any point of the dense output, and no closed one drifts below 1e-8.
+TEST(NoPenetration, EveryReferenceMotionStaysAboveTheGround) {
+  auto check = [](const auto& ref) {
+    SCOPED_TRACE(ref.name);
+    EXPECT_GE(lowest_gap(ref.scene, ref.trajectory, true), -ref.options.impact.gap_tolerance);
+    EXPECT_GE(lowest_gap(ref.scene, ref.trajectory, false), -1e-8);
+  };
+  const auto example3 = references::example3();
+  check(example3);
+  // Its frictionless sliding segment is reported as closed, not as a slip.
+  EXPECT_EQ(describe(example3.scene, example3.trajectory.segments.at(1).mode), "table:closed");
+  check(references::point_mass_with_friction());
+  check(references::hopper());
+  check(references::hopper_push_off());
+  check(references::plank_box());
+  // The elastic ball to its accumulation.
+  scenes::BouncingBallParameters bp;
+  bp.restitution = 0.8;
+  const scenes::BouncingBall ball(bp);
+  Simulator<scenes::BouncingBall> sim(ball, SimulationOptions{});
+  Vec<2> x0(1.0, 0.0);
+  const auto traj = sim.run(x0, 0.0, 5.0, [](double, const Vec<2>&, const Mode<1>&) { return Vec<0>(); });
+  EXPECT_EQ(traj.status, SimulationStatus::Zeno);
+  EXPECT_GE(lowest_gap(ball, traj, true), -1e-9);
+}
+
+// The rest criterion works with the default zeno_bounces: a ball with e_n = 0.7 dropped from
+// 1 m comes to rest (status completed, at rest on the floor at T).
+TEST(RestCriterion, BouncingBallComesToRestWithDefaultOptions) {
+  scenes::BouncingBallParameters bp;
+  bp.restitution = 0.7;
+  const scenes::BouncingBall ball(bp);
+  SimulationOptions o;
+  o.rest_velocity = 0.05;
+  Simulator<scenes::BouncingBall> sim(ball, o);
+  const auto traj = sim.run(Vec<2>(1.0, 0.0), 0.0, 5.0, [](double, const Vec<2>&, const Mode<1>&) { return Vec<0>(); });
+  EXPECT_EQ(traj.status, SimulationStatus::Completed);
+  EXPECT_NEAR(traj.final_state()[0], 0.0, 1e-9);
+  EXPECT_NEAR(traj.final_state()[1], 0.0, 1e-9);
+}
+
+// Issue case 4: the rod at 45 degrees, its end on the ground sliding at 1 m/s towards -x (away
+// from under its centre), mu = 2, no rotation. With the end slipping, the normal acceleration of
+// the end is -g + (N / m) (1 + 3 c (c - mu s)) = -g - N / (2 m) (c = s = 1/sqrt 2): only N = -2 m g
+// keeps the contact, so the slipping mode is inconsistent and the run refuses it, naming the
+// contact and the negative force. Sliding towards +x the same mode is consistent.
+TEST(InitialMode, PainleveSlipWithNegativeNormalForceIsRefused) {
+  const PainleveRod rod(2.0);
+  const double c = std::sqrt(0.5);
+  Vec<6> x0;
+  x0 << 0.5 * c, 0.5 * c, M_PI / 4, -1.0, 0.0, 0.0;
+  Simulator<PainleveRod> sim(rod, SimulationOptions{});
+  auto no_u = [](double, const Vec<6>&, const Mode<1>&) { return Vec<0>(); };
+  const Mode<1> slipping_back{ContactState::slip_planar(-1)};
+  try {
+    (void)sim.run(x0, slipping_back, 0.0, 0.1, no_u);
+    FAIL() << "the inconsistent initial mode was accepted";
+  } catch (const InvalidArgument& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("'end'"), std::string::npos) << what;
+    EXPECT_NE(what.find("normal force"), std::string::npos) << what;
+  }
+  // A slip direction against the sliding velocity, and a stick while sliding, are refused too.
+  EXPECT_THROW((void)sim.run(x0, Mode<1>{ContactState::slip_planar(1)}, 0.0, 0.1, no_u), InvalidArgument);
+  EXPECT_THROW((void)sim.run(x0, Mode<1>{ContactState::stick()}, 0.0, 0.1, no_u), InvalidArgument);
+  // A closed contact above the ground, and an open one below it.
+  Vec<6> above = x0;
+  above[1] += 1e-3;
+  EXPECT_THROW((void)sim.run(above, Mode<1>{ContactState::stick()}, 0.0, 0.1, no_u), InvalidArgument);
+  Vec<6> below = x0;
+  below[1] -= 1e-3;
+  EXPECT_THROW((void)sim.run(below, Mode<1>{ContactState::open()}, 0.0, 0.1, no_u), InvalidArgument);
+  // Sliding towards +x: 1 + 3 c (c + mu s) > 0, a positive force; the run goes ahead.
+  Vec<6> forward = x0;
+  forward[3] = 1.0;
+  const auto traj = sim.run(forward, Mode<1>{ContactState::slip_planar(1)}, 0.0, 0.05, no_u);
+  EXPECT_EQ(traj.status, SimulationStatus::Completed);
+}
+
+// Issue case 5: the rod at 45 degrees, its end sliding at 1 m/s towards -x with zero normal
+// velocity while the rod turns at -8 rad/s (the centre's velocity follows). With the end
+// slipping, the acceleration-level problem is y = d lambda + b with d = 1 + 3 c (c - mu s) =
+// -1/2 (per unit mass) and b = -g + (L/2) s theta'^2 = -9.81 + 16 sqrt(1/2) > 0: two solutions,
+// lift-off (lambda = 0, y = b) and a contact force lambda = 2 b with y = 0. Both are found and
+// reported; the default is the solver's (lift-off), MostClosed takes the other.
+TEST(ModeSelection, PainleveIndeterminacyReportsBothSolutions) {
+  const PainleveRod rod(2.0);
+  const double c = std::sqrt(0.5), w = -8.0;
+  Vec<6> x;
+  // End velocity: (xG' + (L/2) s w, yG' - (L/2) c w) = (-1, 0).
+  x << 0.5 * c, 0.5 * c, M_PI / 4, -1.0 - 0.5 * c * w, 0.5 * c * w, w;
+  const Vec<0> u;
+  ModeSelector<PainleveRod> selector(rod);
+  const Mode<1> taken = selector.select(x, u, {true});
+  const auto& report = selector.uniqueness();
+  ASSERT_TRUE(report.checked);
+  EXPECT_EQ(report.solutions, 2);
+  EXPECT_FALSE(taken[0].closed()) << "the default is the solver's solution: lift-off";
+  const double b = -g + 0.5 * c * w * w;
+  EXPECT_NEAR(selector.solution().y[0], b, 1e-9 * b);
+  bool closed_alternative = false;
+  for (int k = 0; k < report.solutions; ++k) closed_alternative = closed_alternative || report.modes[k][0].closed();
+  EXPECT_TRUE(closed_alternative);
+  ModeSelectionOptions prefer_contact;
+  prefer_contact.ambiguity = AmbiguityChoice::MostClosed;
+  ModeSelector<PainleveRod> other(rod, prefer_contact);
+  const Mode<1> with_force = other.select(x, u, {true});
+  ASSERT_TRUE(with_force[0].closed());
+  EXPECT_EQ(with_force[0].slip_direction[0], -1.0);
+  EXPECT_NEAR(other.solution().lambda[0], 2 * b, 1e-9 * b);
+  // Unique when the end slides the other way (d = 1 + 3 c (c + mu s) > 0, a P-matrix).
+  Vec<6> forward = x;
+  forward[3] = 1.0 - 0.5 * c * w;
+  (void)selector.select(forward, u, {true});
+  EXPECT_EQ(selector.uniqueness().solutions, 1);
+  // The simulator reports the ambiguity of its initial mode selection.
+  Simulator<PainleveRod> sim(rod, SimulationOptions{});
+  const auto traj = sim.run(x, 0.0, 0.01);
+  EXPECT_EQ(traj.statistics.ambiguous_selections, 1);
+}
+
+}  // namespace
+}  // namespace saltus::testing
