@@ -10,6 +10,7 @@
 // of this that is detectable at compile time, so that a future Eigen which fixes it is noticed.
 #include <saltus/ad/autodiff.hpp>
 #include <saltus/hybrid/contact/linear_solve.hpp>
+#include <saltus/hybrid/dynamics/kinematics.hxx>
 
 #include <Eigen/Dense>
 #include <gtest/gtest.h>
@@ -289,6 +290,116 @@ TEST(AutoDiff, ValueFactorisationSolveGivesSecondDerivatives) {
     EXPECT_NEAR(x2[i].derivatives()[0].derivatives()[0], (xp - 2 * x0 + xm) / (h * h), 1e-5)
         << "second derivative, entry " << i;
   }
+}
+
+}  // namespace
+
+// GCC 12.2 -O3 wrong code in the nested-dual contact kinematics (the reason Release was -O2).
+// The reduced reproducer: a box corner over a tilting plank (the plank-box's contact C_L, down to
+// what the miscompilation needs), planar friction, evaluate_contact instantiated in this
+// translation unit for a scene of its own (with external linkage: in the anonymous namespace
+// GCC's inlining differs and the loop below compiled correctly), called directly and its results
+// read back. evaluate_contact had:
+//
+//   const int nt = scene.contact(i).tangents();            // 1 here, unknown to the compiler
+//   const VecT<Outer, 2> tp = scene.tangent_position<Outer>(i, qs);
+//   for (int k = 0; k < nt; ++k) {
+//     out.Wt.col(k) = tp[k].value().derivatives();          // stride 4 doubles
+//     out.zeta_t[k] = tp[k].derivatives()[0].value();       // stride 1 double
+//     out.kappa_t[k] = tp[k].derivatives()[0].derivatives().dot(v);
+//   }
+//
+// IVOPTs gives the three stores one induction variable iv = &out + 8 k and writes the W_t store
+// as MEM[(__m128d *)0B + 64 + (-3 &out) + 4 iv] (a TARGET_MEM_REF whose base is the constant 0).
+// The late modref pass (-fdump-tree-modref2) takes that for a null dereference ("NULL memory
+// access; terminating BB"), stops analysing the loop body there, and records a summary in which
+// evaluate_contact stores none of W_t, zeta_t, kappa_t. The caller's value numbering trusts the
+// summary and reads back the zeros ContactKinematics' constructor wrote: W_t = 0, zeta_t = 0,
+// kappa_t = 0 (at run time the stores did happen). Here W_t(q +- h v) was read back as 0, so the
+// central difference of W_t^T v came out exactly 0, as in the scene battery. No undefined
+// behaviour is involved: UBSan and ASan builds are correct, -fno-strict-aliasing does not cure it;
+// -fno-ipa-modref, -fno-tree-fre or -fno-tree-pre do, and GCC 12.2 -O2 and clang 14 -O3 are
+// correct. Without the gap evaluation before the loop, or with the loop unrolled by hand, the
+// null-based reference is not formed. evaluate_contact (kinematics.hxx) now stores the two
+// tangents without a loop; with the loop put back this test fails at -O3 (GCC 12.2) unless
+// -fno-ipa-modref is given, which saltus::hybrid now passes on (hybrid/CMakeLists.txt).
+namespace gcc_modref_repro {
+
+struct TiltedCorner {
+  static constexpr int nq = 4, nu = 0, nc = 1;  // box x, y, angle; plank angle
+  saltus::ContactSpec spec{"corner", saltus::Friction::Planar, 0.4, 0.0};
+  const saltus::ContactSpec& contact(int) const { return spec; }
+  template <class T>
+  saltus::MatT<T, nq, nq> mass_matrix(const saltus::VecT<T, nq>&) const {
+    return saltus::MatT<T, nq, nq>::Identity();
+  }
+  template <class T>
+  saltus::VecT<T, nq> bias(const saltus::VecT<T, nq>&, const saltus::VecT<T, nq>&) const {
+    return saltus::VecT<T, nq>::Zero();
+  }
+  template <class T>
+  saltus::MatT<T, nq, nu> input_matrix(const saltus::VecT<T, nq>&) const {
+    return {};
+  }
+  double length = 0.3, height = 0.1, thickness = 0.02;
+  /// The box's bottom-left corner in world coordinates.
+  template <class T>
+  saltus::VecT<T, 2> corner(int i, const saltus::VecT<T, nq>& q) const {
+    using std::cos;
+    using std::sin;
+    const double rx = (i == 0 ? -0.5 : 0.5) * length, ry = -0.5 * height;
+    const T c = cos(q[2]), s = sin(q[2]);
+    return saltus::VecT<T, 2>(q[0] + c * rx - s * ry, q[1] + s * rx + c * ry);
+  }
+  /// The corner in the frame of the plank tilted by q[3].
+  template <class T>
+  saltus::VecT<T, 2> in_plank(int i, const saltus::VecT<T, nq>& q) const {
+    using std::cos;
+    using std::sin;
+    const saltus::VecT<T, 2> p = corner(i, q);
+    const T c = cos(q[3]), s = sin(q[3]);
+    return saltus::VecT<T, 2>(c * p[0] + s * p[1], -s * p[0] + c * p[1]);
+  }
+  template <class T>
+  T gap(int i, const saltus::VecT<T, nq>& q) const {
+    return in_plank(i, q)[1] - 0.5 * thickness;
+  }
+  template <class T>
+  saltus::VecT<T, 2> tangent_position(int i, const saltus::VecT<T, nq>& q) const {
+    return saltus::VecT<T, 2>(in_plank(i, q)[0], T(0));
+  }
+};
+
+}  // namespace gcc_modref_repro
+
+namespace {
+
+using gcc_modref_repro::TiltedCorner;
+
+TEST(GccModrefNullBaseLoop, ContactTangentTermsSurviveO3) {
+  const TiltedCorner scene;
+  const Eigen::Vector4d q(0.1, 0.2, 0.3, 0.4), v(0.5, -0.7, 1.1, 0.9);
+  saltus::ContactKinematics<TiltedCorner> c;
+  saltus::evaluate_contact(scene, 0, q, v, c);
+  ASSERT_EQ(c.tangents, 1);
+  const double h = 1e-6;
+  auto tangent = [&](const Eigen::Vector4d& p) { return scene.tangent_position<double>(0, p)[0]; };
+  Eigen::Vector4d wt_fd;
+  for (int k = 0; k < 4; ++k) {
+    const Eigen::Vector4d e = h * Eigen::Vector4d::Unit(k);
+    wt_fd[k] = (tangent(q + e) - tangent(q - e)) / (2 * h);
+  }
+  EXPECT_TRUE(c.Wt.col(0).isApprox(wt_fd, 1e-8)) << "W_t = " << c.Wt.col(0).transpose() << ", expected "
+                                                  << wt_fd.transpose();
+  EXPECT_NEAR(c.zeta_t[0], wt_fd.dot(v), 1e-8);
+  // kappa_t = d/ds (W_t(q + s v) . v) at s = 0, against a central difference of AD Jacobians.
+  saltus::ContactKinematics<TiltedCorner> cp, cm;
+  saltus::evaluate_contact(scene, 0, Eigen::Vector4d(q + h * v), v, cp);
+  saltus::evaluate_contact(scene, 0, Eigen::Vector4d(q - h * v), v, cm);
+  const double kappa_fd = (cp.Wt.col(0).dot(v) - cm.Wt.col(0).dot(v)) / (2 * h);
+  EXPECT_NE(kappa_fd, 0.0);
+  EXPECT_NEAR(c.kappa_t[0], kappa_fd, 1e-7 * (1 + std::abs(kappa_fd)));
+  EXPECT_EQ(c.Wt.col(1), Eigen::Vector4d::Zero());
 }
 
 }  // namespace

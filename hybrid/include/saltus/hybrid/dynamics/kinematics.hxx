@@ -24,11 +24,27 @@ void evaluate_contact(const S& scene, int i, const VecT<T, S::nq>& q, const VecT
   out.tangents = nt;
   if (nt > 0) {
     const VecT<Outer, 2> tp = scene.template tangent_position<Outer>(i, qs);
-    for (int k = 0; k < nt; ++k) {
+    // Straight-line code for the (at most two) tangents, not `for (k = 0; k < nt; ++k)`: GCC 12.2
+    // at -O3 miscompiled that loop. IVOPTs gave its stores one induction variable iv = &out + 8 k
+    // (the stride of zeta_t) and wrote the store to out.Wt.col(k) (stride nq doubles; nq = 4) as
+    // MEM[0B + (-3 &out) + 4 iv], a reference with the literal base 0; the modref pass takes that
+    // for a null dereference, stops analysing the block there ("NULL memory access; terminating
+    // BB" in -fdump-tree-modref2) and publishes a summary in which evaluate_contact
+    // never writes W_t, zeta_t or kappa_t, so a caller that trusts it reads back what was there
+    // before the call (ContactKinematics' zeros): a central difference of W_t^T v came out exactly
+    // 0 in the scene battery. Not undefined behaviour in Saltus (UBSan and ASan builds are silent,
+    // -Wall -Wextra -Wstrict-aliasing=1 -Wmaybe-uninitialized too, -fno-strict-aliasing does not
+    // cure it; -fno-ipa-modref, -fno-tree-fre or -fno-tree-pre do; clang 14 -O3 is correct). The
+    // same null-based references appear elsewhere (at -O2 too), so saltus::hybrid also passes
+    // -fno-ipa-modref to GCC >= 12 (hybrid/CMakeLists.txt). Reduced reproducer: tests/test_dual.cpp,
+    // GccModrefNullBaseLoop.
+    const auto store = [&](int k) {
       out.Wt.col(k) = tp[k].value().derivatives();
       out.zeta_t[k] = tp[k].derivatives()[0].value();
       out.kappa_t[k] = tp[k].derivatives()[0].derivatives().dot(v);
-    }
+    };
+    store(0);
+    if (nt > 1) store(1);
   }
 }
 
