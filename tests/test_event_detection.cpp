@@ -141,7 +141,9 @@ TEST_P(RockingBlockSettles, ZenoOfAlternatingCornersNeverBelowTheGround) {
   Simulator<RockingBlock> sim(block, o);
   const auto traj = sim.run(block.resting_on_left_corner(0.05), 0.0, 5.0);  // nu = 0: no input law
   ASSERT_EQ(traj.status, SimulationStatus::Zeno) << "events: " << traj.events.size();
-  EXPECT_GE(lowest_gap(block, traj, true), -o.impact.gap_tolerance);
+  // The scan keeps every check point above -gap_tolerance; between check points the dense output
+  // may sit lower by its own error (about the absolute tolerance: 1.1e-9 at rtol 1e-8 with BDF).
+  EXPECT_GE(lowest_gap(block, traj, true), -(o.impact.gap_tolerance + 10 * o.integrator.absolute_tolerance));
   EXPECT_GE(lowest_gap(block, traj, false), -1e-8);
   // The touchdowns alternate between the corners, and the intervals shrink towards Housner's
   // ratio (the rocking is not small against the block's slenderness angle, so the first ratios

@@ -119,7 +119,8 @@ class CvodeIntegrator : private CvodeProblem {
   Piece step_piece(double t_prev);
 
   // Polished roots of the guards (see the file comment); sets end.t_first_crossing and end.fired.
-  void locate(ModeSystem<S>& sys, const Piece& piece, double t_prev, double t_root, double simultaneity,
+  // False when no guard fires (a touchdown's round-off sign change while leaving the surface).
+  bool locate(ModeSystem<S>& sys, const Piece& piece, double t_prev, double t_root, double simultaneity,
               SegmentEndOf<S>& end);
 
   // ---- CvodeProblem: CVODE's callbacks, on the mode system of the running integrate() ----
