@@ -2,7 +2,7 @@
 // height 1 onto a frictionless table, pushed sideways by u1 = 7 and, from t = 1, lifted by
 // u2 = 2 g (t - 1). It lands at t = sqrt(2/g) (inelastic impact), slides, and lifts off at t = 1.5
 // when the normal force m g - u2 reaches zero: a state-input guard.
-#include "report.hpp"
+#include <saltus/hybrid/vocabulary/trajectory_report.hpp>
 #include "scenes/all_scenes.hpp"
 
 #include <cmath>
@@ -23,13 +23,13 @@ int main() {
   const auto traj = simulator.run(Vec<4>(0.0, 1.0, 0.0, 0.0), 0.0, 2.0, thrust);
 
   std::printf("guiding example (time-freezing paper, Example 3)\n");
-  examples::print_events(mass, traj);
+  print_events(mass, traj);
   // Closed form at t = 2: q1 = 3.5 t^2, v1 = 7 t; after lift-off q2 = g (t - 1.5)^3 / 3, v2 = g (t - 1.5)^2.
   const Vec<4> exact(14.0, g * 0.125 / 3.0, 14.0, g * 0.25);
   const double error = (traj.final_state() - exact).cwiseAbs().maxCoeff();
   std::printf("  impact at %.15f (closed form %.15f), lift-off at %.15f (closed form 1.5)\n", traj.events.at(0).t,
               std::sqrt(2 / g), traj.events.at(1).t);
   std::printf("  final state error against the closed form: %.2e\n", error);
-  examples::write_trajectory(mass, traj, "guiding_example", 0.01);
+  write_trajectory_files(mass, traj, "guiding_example", 0.01);
   return error < 1e-8 ? 0 : 1;
 }

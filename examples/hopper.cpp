@@ -8,7 +8,7 @@
 // normal force reaches zero and the foot lifts off (the state-input release guard).
 // The controller is a feedback law u(t, x, mode); the simulator evaluates it inside the flow, and
 // the gains and the linearisation are closed-loop: d u / dx enters them (jump_gain.hpp).
-#include "report.hpp"
+#include <saltus/hybrid/vocabulary/trajectory_report.hpp>
 #include "scenes/all_scenes.hpp"
 
 #include <saltus/sensitivity/sensitivity.hpp>
@@ -49,8 +49,8 @@ int main() {
   const auto traj = simulator.run(x0, 0.0, t_end, controller);
 
   std::printf("hopper: landing and one hop under a joint PD controller\n");
-  examples::print_events(hopper, traj);
-  examples::write_trajectory(hopper, traj, "hopper", 0.005);
+  print_events(hopper, traj);
+  write_trajectory_files(hopper, traj, "hopper", 0.005);
   bool lift_off = false;
   for (const auto& ev : traj.events)
     for (const Guard& g : ev.guards()) lift_off = lift_off || g.kind == GuardKind::Release;
@@ -82,7 +82,7 @@ int main() {
                      {"G_v_max", number(g.G_v.cwiseAbs().maxCoeff())},
                      {"dt_dz_norm", number(g.dt_dz.norm())}});
   }
-  std::ofstream json(examples::report_dir() / "hopper_gains.json");
+  std::ofstream json(report_directory() / "hopper_gains.json");
   json << nlohmann::ordered_json{{"events", gains}}.dump() << "\n";
 
   // A perturbed hop: initial state x0 + eps z0, torques + eps v(t). The reference-spreading

@@ -2,7 +2,7 @@
 // bottom corners touch at the same instant (a planned simultaneous impact with a singular
 // Delassus matrix: two contacts, redundant tangentially), the box sticks and the plank rocks on
 // its spring. The box is held by a force slightly below its weight, so it descends at 2 m/s^2.
-#include "report.hpp"
+#include <saltus/hybrid/vocabulary/trajectory_report.hpp>
 #include "scenes/all_scenes.hpp"
 
 #include <cstdio>
@@ -21,10 +21,10 @@ int main() {
   const auto traj = simulator.run(x0, 0.0, 1.0, hold);
 
   std::printf("plank-box: box lowered flat onto the plank\n");
-  examples::print_events(plank_box, traj);
+  print_events(plank_box, traj);
   const auto& landing = traj.events.at(0);
   std::printf("  landing: %zu guards at once, box velocity after (%.3e, %.3e) m/s, plank rate %.4f rad/s\n",
               landing.guards().size(), landing.x_plus[4], landing.x_plus[5], landing.x_plus[7]);
-  examples::write_trajectory(plank_box, traj, "plank_box", 0.005);
+  write_trajectory_files(plank_box, traj, "plank_box", 0.005);
   return landing.guards().size() == 2 ? 0 : 1;
 }

@@ -2,7 +2,7 @@
 // (12 contact rows for 6 degrees of freedom: a singular Delassus matrix), the impact takes
 // mu times the normal impulse off the sliding speed, the box slides and comes to rest at
 // t_stop = t_impact + (v_x - mu v_n) / (mu g).
-#include "report.hpp"
+#include <saltus/hybrid/vocabulary/trajectory_report.hpp>
 #include "scenes/all_scenes.hpp"
 
 #include <cmath>
@@ -24,11 +24,11 @@ int main() {
   const auto traj = simulator.run(x0, 0.0, 1.0, zero_input<Box>());
 
   std::printf("spatial box: flat landing on four corners while sliding\n");
-  examples::print_events(box, traj);
+  print_events(box, traj);
   const double vn = std::sqrt(2 * g * drop), t_impact = std::sqrt(2 * drop / g);
   const double t_stop = t_impact + (vx - mu * vn) / (mu * g);
   std::printf("  stop at %.12f s (closed form %.12f, error %.2e)\n", traj.events.at(1).t, t_stop,
               std::abs(traj.events.at(1).t - t_stop));
-  examples::write_trajectory(box, traj, "spatial_box", 0.01);
+  write_trajectory_files(box, traj, "spatial_box", 0.01);
   return std::abs(traj.events.at(1).t - t_stop) < 1e-8 ? 0 : 1;
 }

@@ -3,9 +3,16 @@
 // Coulomb conditions and energy over 10,000 random pre-impact states per scene (redundant
 // contacts included), and bad input.
 #include "scenes/sampling.hpp"
+
 #include "support.hpp"
+#include "three_point_block.hpp"
 
 #include <saltus/hybrid/dynamics/impact.hpp>
+#include <saltus/hybrid/header_only.hpp>  // the test-local Kane pendulum below
+
+#include <numbers>
+#include <optional>
+#include <random>
 
 namespace saltus::testing {
 namespace {
@@ -111,6 +118,176 @@ TEST(Impact, FlatLandingSplitsTheImpulseEqually) {
   EXPECT_EQ(r.post_mode[1].mode, ContactMode::Stick);
 }
 
+// Kane and Levinson's example: a planar double pendulum (two 1 kg point masses on 1 m massless
+// links, absolute angles q = (theta1, theta2) from the downward vertical [rad]) whose tip hits
+// the floor with planar friction. Newton's kinematic law (e_t = 0) with e_n > 0 gains energy on
+// part of the random impacts; the default, energy-consistent law (impact_law.hpp) never does.
+class KaneDoublePendulum {
+ public:
+  static constexpr int nq = 2, nu = 0, nc = 1;
+  static constexpr const char* name = "kane_double_pendulum";
+  KaneDoublePendulum(double mu, double e_n, std::optional<double> e_t)
+      : tip_{"tip", Friction::Planar, mu, e_n, e_t} {}
+  const ContactSpec& contact(int) const { return tip_; }
+  template <class T>
+  MatT<T, nq, nq> mass_matrix(const VecT<T, nq>& q) const {
+    using std::cos;
+    MatT<T, nq, nq> M;
+    M(0, 0) = T(2.0);
+    M(0, 1) = M(1, 0) = cos(q[0] - q[1]);
+    M(1, 1) = T(1.0);
+    return M;
+  }
+  template <class T>
+  VecT<T, nq> bias(const VecT<T, nq>& q, const VecT<T, nq>& v) const {
+    using std::sin;
+    const T s = sin(q[0] - q[1]);
+    return VecT<T, nq>(s * v[1] * v[1] + T(2 * 9.81) * sin(q[0]), -s * v[0] * v[0] + T(9.81) * sin(q[1]));
+  }
+  template <class T>
+  MatT<T, nq, nu> input_matrix(const VecT<T, nq>&) const {
+    return MatT<T, nq, nu>::Zero();
+  }
+  template <class T>
+  T gap(int, const VecT<T, nq>& q) const {  // floor 1.5 m below the pivot
+    using std::cos;
+    return T(1.5) - cos(q[0]) - cos(q[1]);
+  }
+  template <class T>
+  VecT<T, 2> tangent_position(int, const VecT<T, nq>& q) const {
+    using std::sin;
+    return VecT<T, 2>(sin(q[0]) + sin(q[1]), T(0));
+  }
+
+ private:
+  ContactSpec tip_;
+};
+
+struct EnergyCount {
+  int impacts = 0, gains = 0;
+  double worst_ratio = 0.0;
+};
+
+EnergyCount random_frictional_impacts(const KaneDoublePendulum& pendulum, int impacts) {
+  ImpactSolver<KaneDoublePendulum> solver(pendulum);
+  std::mt19937 rng(2026);
+  std::uniform_real_distribution<double> angle(-std::numbers::pi, std::numbers::pi);
+  std::normal_distribution<double> speed(0.0, 2.0);
+  EnergyCount count;
+  while (count.impacts < impacts) {
+    Vec<4> x(angle(rng), angle(rng), speed(rng), speed(rng));
+    Kinematics<KaneDoublePendulum> kin;
+    evaluate_kinematics(pendulum, Vec<2>(x.head<2>()), Vec<2>(x.tail<2>()), kin);
+    if (!(kin.contacts[0].zeta_n < -1e-3)) continue;  // approaching the floor
+    // Away from the singular configurations (links aligned or folded, theta1 = theta2 mod pi):
+    // there the tip moves along one line only, w_n and W_t are parallel, the Delassus matrix has
+    // rank 1, and Newton's kinematic law jams with unbounded impulses (KE+/KE- up to 1e9 at
+    // |sin(theta1 - theta2)| < 0.01 in this sample, with Signorini residuals of 1e-7).
+    if (std::abs(std::sin(x[0] - x[1])) < 0.1) continue;
+    const auto& r = solver.solve(x, {true});
+    const double ratio = r.kinetic_energy_plus / r.kinetic_energy_minus;
+    EXPECT_LE(r.signorini_residual, 1e-12) << "x- = " << x.transpose();
+    EXPECT_LE(r.coulomb_residual, 1e-12) << "x- = " << x.transpose();
+    EXPECT_GE(r.normal_velocity_plus[0], -1e-12 * r.velocity_scale);
+    ++count.impacts;
+    if (ratio > 1.0 + 1e-12) ++count.gains;
+    count.worst_ratio = std::max(count.worst_ratio, ratio);
+  }
+  return count;
+}
+
+TEST(Impact, KaneDoublePendulumGainsEnergyOnlyUnderTheKinematicLaw) {
+  struct Case {
+    double mu, e_n;
+  };
+  for (const Case c : {Case{0.5, 0.5}, Case{0.3, 1.0}}) {
+    const EnergyCount kinematic = random_frictional_impacts(KaneDoublePendulum(c.mu, c.e_n, 0.0), 40000);
+    const EnergyCount consistent = random_frictional_impacts(KaneDoublePendulum(c.mu, c.e_n, std::nullopt), 40000);
+    std::printf("mu %.1f e_n %.1f: kinematic law (e_t = 0) %d / %d impacts gain energy, worst KE+/KE- %.3f; "
+                "energy-consistent law %d gains, worst KE+/KE- %.6f\n",
+                c.mu, c.e_n, kinematic.gains, kinematic.impacts, kinematic.worst_ratio, consistent.gains,
+                consistent.worst_ratio);
+    EXPECT_GT(kinematic.gains, 100) << "the kinematic law's known defect must show on this example";
+    EXPECT_GT(kinematic.worst_ratio, 1.5);
+    EXPECT_EQ(consistent.gains, 0);
+    EXPECT_LE(consistent.worst_ratio, 1.0 + 1e-12);
+  }
+  // Frictionless, e_n = 1: the energy is conserved exactly, and the default law is the same.
+  const EnergyCount elastic = random_frictional_impacts(KaneDoublePendulum(0.0, 1.0, std::nullopt), 2000);
+  EXPECT_EQ(elastic.gains, 0);
+  EXPECT_NEAR(elastic.worst_ratio, 1.0, 1e-12);
+}
+
+// The jump map of the energy-consistent law (tangential restitution on sticking rows, the slip
+// direction of xi_t) is differentiated like the rest: its Jacobian against central differences,
+// on sticking and slipping impacts.
+TEST(Impact, EnergyConsistentJumpMapJacobianMatchesCentralDifferences) {
+  const KaneDoublePendulum pendulum(0.5, 0.5, std::nullopt);
+  ImpactSolver<KaneDoublePendulum> solver(pendulum);
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> angle(-std::numbers::pi, std::numbers::pi);
+  std::normal_distribution<double> speed(0.0, 2.0);
+  int stick = 0, slip = 0;
+  auto derivative_ws = std::make_unique<DerivativeWorkspace<KaneDoublePendulum>>();
+  JumpWorkspace<KaneDoublePendulum> ws;
+  while (stick < 20 || slip < 20) {
+    Vec<4> x(angle(rng), angle(rng), speed(rng), speed(rng));
+    Kinematics<KaneDoublePendulum> kin;
+    evaluate_kinematics(pendulum, Vec<2>(x.head<2>()), Vec<2>(x.tail<2>()), kin);
+    if (!(kin.contacts[0].zeta_n < -1e-2)) continue;
+    const auto r = solver.solve(x, {true});
+    const bool is_stick = r.impulse_mode[0].role == ImpulseRole::Stick;
+    if ((is_stick && stick >= 20) || (!is_stick && slip >= 20)) continue;
+    (is_stick ? stick : slip) += 1;
+    Vec<4> xp;
+    Mat<4, 4> G;
+    jump_map_jacobian(pendulum, r.impulse_mode, x, *derivative_ws, xp, G);
+    EXPECT_TRUE(matrices_near(xp, r.x_plus, 1e-12, 1e-12)) << "the map reproduces the solver's v+";
+    auto g = [&](const Vec<4>& y) {
+      Vec<4> out;
+      apply_jump_map(pendulum, r.impulse_mode, y, ws, out);
+      return out;
+    };
+    EXPECT_TRUE(matrices_near(G, central_jacobian<4, 4>(g, x), 2e-6, 1e-7)) << to_string(r.impulse_mode[0].role);
+  }
+}
+
+// Landing flat while sliding (vx = 1, vy = -1 m/s, mu = 0.3): the velocity is unique, vx+ = 0.7,
+// vy+ = omega+ = 0, while the normal impulses only have to add up to 1 N s with their moment
+// balancing that of friction. The result says that the split is not unique (singular_delassus)
+// and what the returned split is (minimum_norm_impulse: the minimum norm within the mode found).
+TEST(Impact, CollinearContactsReportANonUniqueSplit) {
+  const ThreePointBlock block(0.3, 0.0);
+  ImpactSolver<ThreePointBlock> solver(block);
+  Vec<6> x;
+  x << 0.0, 0.1, 0.0, 1.0, -1.0, 0.0;  // flat, all three points on the ground
+  const auto& r = solver.solve(x);
+  EXPECT_TRUE(r.singular_delassus) << "three collinear contacts are redundant";
+  EXPECT_NEAR(r.x_plus[3], 0.7, 1e-12);
+  EXPECT_NEAR(r.x_plus[4], 0.0, 1e-12);
+  EXPECT_NEAR(r.x_plus[5], 0.0, 1e-12);
+  double total = 0.0, moment = 0.0;
+  int with_impulse = 0;
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_GE(r.impulse[i].normal, 0.0);
+    total += r.impulse[i].normal;
+    moment += 0.2 * (i - 1) * r.impulse[i].normal;
+    with_impulse += r.impulse_mode[i].role != ImpulseRole::None;
+  }
+  EXPECT_NEAR(total, 1.0, 1e-12);
+  EXPECT_NEAR(moment, 0.1 * 0.3 * total, 1e-12) << "the normal impulses' moment balances friction's";
+  EXPECT_LE(r.signorini_residual, 1e-12);
+  EXPECT_LE(r.coulomb_residual, 1e-12);
+  // minimum_norm_impulse means "within the identified mode": with every point in the mode the
+  // returned split is the minimum-norm solution of the two balances above.
+  if (r.minimum_norm_impulse && with_impulse == 3) {
+    // min ||P|| s.t. sum P = 1, sum x_i P_i = 0.03: P = 1/3 + x_i * 0.03 / sum x_i^2.
+    for (int i = 0; i < 3; ++i) EXPECT_NEAR(r.impulse[i].normal, 1.0 / 3 + 0.2 * (i - 1) * 0.03 / 0.08, 1e-12);
+  }
+  std::printf("collinear split %.4f / %.4f / %.4f, contacts in the mode %d, minimum_norm_impulse %d\n",
+              r.impulse[0].normal, r.impulse[1].normal, r.impulse[2].normal, with_impulse, r.minimum_norm_impulse);
+}
+
 TEST(Impact, BadInputIsRejectedWithANamedProblem) {
   scenes::PlankBox plank_box;
   ImpactSolver<scenes::PlankBox> solver(plank_box);
@@ -126,6 +303,18 @@ TEST(Impact, BadInputIsRejectedWithANamedProblem) {
   superelastic.restitution = 1.5;
   const scenes::BouncingBall bad_restitution(superelastic);
   EXPECT_THROW(ImpactSolver<scenes::BouncingBall>{bad_restitution}, InvalidArgument);
+
+  // Tangential restitution outside [0, 1], or NaN: refused, naming the contact and e_t.
+  for (const double e_t : {-0.1, 1.5, std::numeric_limits<double>::quiet_NaN()}) {
+    try {
+      const KaneDoublePendulum pendulum(0.5, 0.5, e_t);
+      ImpactSolver<KaneDoublePendulum> solver(pendulum);
+      ADD_FAILURE() << "e_t = " << e_t << " accepted";
+    } catch (const InvalidArgument& e) {
+      EXPECT_NE(std::string(e.what()).find("tangential restitution e_t"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("'tip'"), std::string::npos) << e.what();
+    }
+  }
 
   scenes::PointMassParameters negative_mass;
   negative_mass.mass = -1.0;

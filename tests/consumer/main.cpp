@@ -18,6 +18,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <string>
 
 /// A box corner over a plank tilted by q[3] (q = box x, y, angle; plank angle), planar friction:
 /// only its contact is used.
@@ -99,6 +100,20 @@ int main() {
   const double expected = std::sqrt(2 * 2.0 / 9.81);
   std::printf("impact at %.12f (expected %.12f)\n", traj.events.at(0).t, expected);
   int failures = std::abs(traj.events.at(0).t - expected) < 1e-9 ? 0 : 1;
+
+  // This project links saltus::hybrid only (no component cvode, no SUNDIALS): asking for CVODE is
+  // refused with InvalidArgument naming the component.
+  try {
+    saltus::SimulationOptions options;
+    options.integrator.kind = saltus::IntegratorKind::CvodeBdf;
+    saltus::Simulator<FallingMass> cvode(scene, options);
+    std::printf("CVODE was accepted without the component saltus::cvode\n");
+    ++failures;
+  } catch (const saltus::InvalidArgument& e) {
+    const bool names_component = std::string(e.what()).find("saltus::cvode") != std::string::npos;
+    std::printf("CVODE without the component: %s\n", e.what());
+    failures += names_component ? 0 : 1;
+  }
 
   failures += check_contact("falling mass", scene, saltus::Vec<1>(0.7), saltus::Vec<1>(-1.3));
   const TiltedCorner corner;

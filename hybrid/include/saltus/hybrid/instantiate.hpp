@@ -22,7 +22,8 @@
 // What is compiled per scene: the kernels of one state for T = double and for the dual number of
 // the derivatives (StateInputDual<S>: evaluate_contact, evaluate_dynamics, evaluate_kinematics,
 // evaluate_flow, apply_jump_map), ImpactSolver, ModeSelector, ConstraintProjection,
-// flow_jacobian, guard_gradient, jump_map_jacobian, ModeSystem, both integrators,
+// flow_jacobian, guard_gradient, jump_map_jacobian, ModeSystem, both integrators (CVODE's where
+// SALTUS_WITH_CVODE is defined: the component saltus::cvode),
 // TransitionResolver, Simulator, ExtendedReference and polish. The scene-free contact numerics
 // are compiled once in the library.
 #pragma once
@@ -37,6 +38,15 @@
 #include <saltus/hybrid/reference/reference_spreading.hpp>
 #include <saltus/hybrid/reference/resimulation.hpp>
 #include <saltus/hybrid/simulation/simulator.hpp>
+
+// CVODE (BDF and Adams) is the optional component saltus::cvode: linking that target defines
+// SALTUS_WITH_CVODE=1, and only then is CvodeIntegrator<S> compiled into a scene's machinery
+// (without it, asking the simulator for CVODE throws InvalidArgument saying so).
+#if defined(SALTUS_WITH_CVODE) && SALTUS_WITH_CVODE
+#define SALTUS_DETAIL_CVODE_TEMPLATES(prefix, S) prefix template class saltus::CvodeIntegrator<S>;
+#else
+#define SALTUS_DETAIL_CVODE_TEMPLATES(prefix, S)
+#endif
 
 /// The kernels of one state for scalar T (double, or saltus::StateInputDual<S>).
 #define SALTUS_HYBRID_KERNEL_TEMPLATES(prefix, S, T)                                                             \
@@ -77,7 +87,7 @@
 #define SALTUS_HYBRID_SIMULATION_TEMPLATES(prefix, S)                                                  \
   prefix template class saltus::ModeSystem<S>;                                                         \
   prefix template class saltus::DormandPrinceIntegrator<S>;                                            \
-  prefix template class saltus::CvodeIntegrator<S>;                                                    \
+  SALTUS_DETAIL_CVODE_TEMPLATES(prefix, S)                                                             \
   prefix template class saltus::TransitionResolver<S>;                                                 \
   prefix template class saltus::Simulator<S>;                                                          \
   prefix template class saltus::ExtendedReference<S>;                                                  \

@@ -13,7 +13,9 @@
 #include <saltus/hybrid/dynamics/mode_selection.hxx>
 #include <saltus/hybrid/reference/reference_spreading.hxx>
 #include <saltus/hybrid/reference/resimulation.hxx>
-#include <saltus/hybrid/simulation/integrator_cvode.hxx>
+#if defined(SALTUS_WITH_CVODE) && SALTUS_WITH_CVODE
+#include <saltus/hybrid/simulation/integrator_cvode.hxx>  // the optional component saltus::cvode
+#endif
 #include <saltus/hybrid/simulation/integrator_dopri.hxx>
 #include <saltus/hybrid/simulation/mode_system.hxx>
 #include <saltus/hybrid/simulation/simulator.hxx>

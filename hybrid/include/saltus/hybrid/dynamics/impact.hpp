@@ -1,10 +1,11 @@
 // The impact problem (thesis 2.27-2.32): the post-impact velocity, the impulses and the
 // post-impact mode of every contact, for any set of impacting and already-closed contacts,
-// with Newton's restitution on the normal (2.10) and Coulomb's law on the impulses (2.29-2.30).
+// with Newton-type restitution (2.10, and tangential restitution: impact_law.hpp, energy-consistent
+// by default) and Coulomb's law on the impulses (2.29-2.30).
 //
 // In Delassus form, with W stacking w_n^T and W_t^T of the contacts at the impact and
-// y = W v+ + e min(W_n v-, 0) (the Newton-law velocity):
-//     y = (W M^{-1} W^T) Lambda + W v- + e min(W_n v-, 0)
+// y = xi = W v+ + (e_n min(w_n^T v-, 0), e_t W_t^T v-) (the impact law's velocity):
+//     y = (W M^{-1} W^T) Lambda + W v- + (e_n min(w_n^T v-, 0), e_t W_t^T v-)
 // and the Signorini-Coulomb conditions on (y, Lambda) of contact_problem.hpp.
 //  - All contacts planar or frictionless: the exact LCP of lemke.hpp (finite, exact up to
 //    round-off; Lemke processes this LCP, Anitescu & Potra 1997). Complete enumeration would cost
@@ -14,14 +15,22 @@
 // The solution fixes the impulse mode (who takes an impulse, sticking or slipping along which
 // post-impact direction); the jump map of that mode (jump_map.hpp) then recomputes v+ and the
 // minimum-norm impulse, so that the value and the derivative used by the jump gains are those of
-// one and the same map. Redundant contacts (a box landing flat) give a singular Delassus matrix:
-// the velocity is unique, and the impulse returned is the minimum-Euclidean-norm impulse of the
-// identified mode (equal shares for a symmetric box) whenever it satisfies the contact laws;
-// otherwise the solver's own (vertex) impulse is returned and `minimum_norm_impulse` is false.
+// one and the same map. Redundant contacts (a box landing flat, or three points along one edge)
+// give a singular Delassus matrix (`singular_delassus`: the matrix of every contact in the
+// problem, normal and tangential rows): the velocity is unique, the impulses are not. The
+// impulse returned is then the minimum-Euclidean-norm impulse WITHIN the identified impulse
+// mode (the contacts the solver gave an impulse, their stick/slip roles and slip directions;
+// equal shares for a symmetric box) whenever it satisfies the contact laws, and
+// `minimum_norm_impulse` says so; otherwise the solver's own impulse is returned and the flag
+// is false. It is not the minimum-norm impulse over all admissible splits: the solver may give
+// a redundant contact no impulse at all (three collinear points: 0 / 0.891 / 0.099 of the total
+// is a valid answer), and the mode it identifies fixes the split. A caller who needs a
+// particular split among the admissible ones must choose it with their own criterion.
 #pragma once
 
 #include <saltus/hybrid/contact/contact_problem.hpp>
 #include <saltus/hybrid/contact/coulomb_solver.hpp>
+#include <saltus/hybrid/dynamics/impact_law.hpp>
 #include <saltus/hybrid/dynamics/jump_map.hpp>
 #include <saltus/hybrid/contact/lemke.hpp>
 
@@ -50,11 +59,12 @@ struct ImpactResult {
   static constexpr int nx = 2 * S::nq, nc = S::nc;
   VecT<double, nx> x_plus;
   ImpactMode<nc> impulse_mode;  ///< who takes an impulse, and how
+  ImpactCoefficients<nc> coefficients;  ///< restitution of this impact (impact_law.hpp)
   Mode<nc> post_mode;           ///< velocity level: open if separating, else stick / slip
   std::array<bool, nc> in_problem{};
   std::array<ContactForce<double>, nc> impulse{};
   std::array<double, nc> normal_velocity_minus{}, normal_velocity_plus{};
-  std::array<Eigen::Vector2d, nc> tangent_velocity_plus{};
+  std::array<Eigen::Vector2d, nc> tangent_velocity_plus{};  ///< zeta_t^+ (physical, not xi_t)
   double kinetic_energy_minus = 0.0, kinetic_energy_plus = 0.0;
   double residual = 0.0;            ///< natural-map residual of the contact problem (relative)
   double signorini_residual = 0.0;  ///< of the returned (y, Lambda), relative (see below)
@@ -62,8 +72,12 @@ struct ImpactResult {
   double velocity_scale = 0.0, impulse_scale = 0.0;
   int iterations = 0;
   bool used_lemke = false;
+  /// The impulse is the minimum-norm one among the impulses of the identified impulse mode
+  /// (see the file comment: not the minimum over all admissible splits).
   bool minimum_norm_impulse = false;
-  bool singular_delassus = false;  ///< the Delassus matrix of the impact was rank deficient
+  /// The Delassus matrix of every contact in the impact problem (normal and tangential rows) is
+  /// rank deficient: redundant contacts, the impulse split is not unique (the velocity is).
+  bool singular_delassus = false;
 };
 
 template <Scene S>
@@ -94,8 +108,9 @@ class ImpactSolver {
                                const std::array<bool, nc>& inelastic = {});
 
   const ImpactResult<S>& result() const { return result_; }
-  /// Restitution used by the last solve (the scene's, or 0 where made inelastic).
-  const std::array<double, nc>& restitution() const { return restitution_; }
+  /// Restitution coefficients of the last solve (impact_law.hpp: the energy-consistent common
+  /// coefficient by default, 0 where made inelastic).
+  const ImpactCoefficients<nc>& coefficients() const { return coefficients_; }
   const Problem& problem() const { return problem_; }
 
  private:
@@ -123,7 +138,9 @@ class ImpactSolver {
   DelassusAssembly<S> assembly_;
   std::array<VecT<double, 2>, nc> no_slip_directions_{};  ///< unused: every contact is Stick
   VecT<double, nx> x_jump_;
-  std::array<double, nc> restitution_{};
+  ImpactCoefficients<nc> coefficients_{};
+  MinNormSolver<DelassusAssembly<S>::max_rows> problem_delassus_;  ///< for the rank of the problem
+  int problem_rank_ = 0;
   ImpactResult<S> result_;
   double velocity_scale_ = 1.0, impulse_scale_ = 1.0;
 };

@@ -16,11 +16,11 @@ ImpactSolver<S>::ImpactSolver(const S& scene, ImpactOptions options) : scene_(sc
 template <Scene S>
 auto ImpactSolver<S>::solve(const VecT<double, nx>& x_minus) -> const ImpactResult<S>& {
   require_finite(x_minus, "pre-impact state x-");
-  for (int i = 0; i < nc; ++i) restitution_[i] = scene_.contact(i).restitution;
   evaluate_kinematics(scene_, VecT<double, nq>(x_minus.template head<nq>()),
                       VecT<double, nq>(x_minus.template tail<nq>()), jump_.kin);
   std::array<bool, nc> in_problem{};
   for (int i = 0; i < nc; ++i) in_problem[i] = jump_.kin.contacts[i].gap <= options_.gap_tolerance;
+  coefficients_ = impact_coefficients(scene_, jump_.kin, in_problem);
   return solve_evaluated(x_minus, in_problem);
 }
 
@@ -28,9 +28,9 @@ template <Scene S>
 auto ImpactSolver<S>::solve(const VecT<double, nx>& x_minus, const std::array<bool, nc>& in_problem,
                             const std::array<bool, nc>& inelastic) -> const ImpactResult<S>& {
   require_finite(x_minus, "pre-impact state x-");
-  for (int i = 0; i < nc; ++i) restitution_[i] = inelastic[i] ? 0.0 : scene_.contact(i).restitution;
   evaluate_kinematics(scene_, VecT<double, nq>(x_minus.template head<nq>()),
                       VecT<double, nq>(x_minus.template tail<nq>()), jump_.kin);
+  coefficients_ = impact_coefficients(scene_, jump_.kin, in_problem, inelastic);
   return solve_evaluated(x_minus, in_problem);
 }
 
@@ -41,6 +41,7 @@ auto ImpactSolver<S>::solve_evaluated(const VecT<double, nx>& x_minus, const std
   const auto& kin = jump_.kin;
   const VecT<double, nq> v_minus = x_minus.template tail<nq>();
   r.in_problem = in_problem;
+  r.coefficients = coefficients_;
   r.kinetic_energy_minus = kinetic_energy(kin.M, v_minus);
 
   // Contact problem y = W M^{-1} W^T Lambda + b.
@@ -64,14 +65,25 @@ auto ImpactSolver<S>::solve_evaluated(const VecT<double, nx>& x_minus, const std
   SALTUS_INVARIANT(assembly_.rows == m, "the Delassus assembly has the contact problem's rows");
   assembly_.form(kin);
   if (m > 0) problem_.A = assembly_.D;
+  // Rank of the whole problem's Delassus matrix (every contact in the problem, normal and
+  // tangential rows): deficient for redundant contacts, whose impulse split is then not unique.
+  problem_rank_ = 0;
+  if (m > 0) {
+    problem_delassus_.matrix(m) = assembly_.D.topLeftCorner(m, m);
+    problem_delassus_.factorize();
+    problem_rank_ = problem_delassus_.rank();
+  }
   const auto W = assembly_.J.topRows(m);
   const auto MinvWt = assembly_.MinvF.leftCols(m);
   problem_.b.noalias() = W * v_minus;
   for (int k = 0; k < m; ++k) velocity_scale_ = std::max(velocity_scale_, std::abs(problem_.b[k]));
+  // The impact law's velocities (impact_law.hpp): y = xi = W v+ + (e_n min(zeta_n-, 0), e_t zeta_t-).
   for (int i = 0; i < nc; ++i) {
     if (index[i] < 0) continue;
-    const double zn = kin.contacts[i].zeta_n;
-    problem_.b[problem_.row[index[i]]] += restitution_[i] * std::min(zn, 0.0);
+    const auto& c = kin.contacts[i];
+    const int row = problem_.row[index[i]];
+    problem_.b[row] += coefficients_.normal[i] * std::min(c.zeta_n, 0.0);
+    for (int k = 0; k < c.tangents; ++k) problem_.b[row + 1 + k] += coefficients_.tangential[i] * c.zeta_t[k];
   }
   velocity_scale_ = std::max(velocity_scale_, 1e-300);
 
@@ -112,10 +124,16 @@ auto ImpactSolver<S>::solve_evaluated(const VecT<double, nx>& x_minus, const std
     const int row = problem_.row[index[i]];
     const int nt = kin.contacts[i].tangents;
     const double ln = solution_.lambda[row];
+    // xi_t decides the impulse's role (the law acts on it); zeta_t^+ = xi_t - e_t zeta_t^-, the
+    // velocity after the impact, decides the post-impact mode of a contact that stays closed.
     Eigen::Vector2d yt = Eigen::Vector2d::Zero();
     for (int k = 0; k < nt; ++k) yt[k] = solution_.y[row + 1 + k];
     const bool tangential_rest = yt.norm() <= options_.velocity_tolerance * velocity_scale_;
     const Eigen::Vector2d dir = tangential_rest ? Eigen::Vector2d::Zero() : Eigen::Vector2d(yt / yt.norm());
+    Eigen::Vector2d zt_plus = yt;
+    for (int k = 0; k < nt; ++k) zt_plus[k] -= coefficients_.tangential[i] * kin.contacts[i].zeta_t[k];
+    const bool post_rest = zt_plus.norm() <= options_.velocity_tolerance * velocity_scale_;
+    const Eigen::Vector2d post_dir = post_rest ? Eigen::Vector2d::Zero() : Eigen::Vector2d(zt_plus / zt_plus.norm());
     if (ln > options_.impulse_tolerance * impulse_scale_) {
       if (nt == 0)
         r.impulse_mode[i].role = ImpulseRole::Stick;  // frictionless: the normal row only
@@ -125,14 +143,15 @@ auto ImpactSolver<S>::solve_evaluated(const VecT<double, nx>& x_minus, const std
         r.impulse_mode[i] =
             ImpulseMode{ImpulseRole::Slip, nt == 1 ? Eigen::Vector2d(dir[0] > 0 ? 1.0 : -1.0, 0.0) : dir};
     }
-    const double yn_plus = solution_.y[row] - restitution_[i] * std::min(kin.contacts[i].zeta_n, 0.0);
+    const double yn_plus = solution_.y[row] - coefficients_.normal[i] * std::min(kin.contacts[i].zeta_n, 0.0);
     if (yn_plus > options_.velocity_tolerance * velocity_scale_) continue;  // separating: open
     if (nt == 0)
       r.post_mode[i] = ContactState::slip(Eigen::Vector2d::Zero());
-    else if (tangential_rest)
+    else if (post_rest)
       r.post_mode[i] = ContactState::stick();
     else
-      r.post_mode[i] = nt == 1 ? ContactState::slip_planar(dir[0] > 0 ? 1 : -1) : ContactState::slip(dir);
+      r.post_mode[i] =
+          nt == 1 ? ContactState::slip_planar(post_dir[0] > 0 ? 1 : -1) : ContactState::slip(post_dir);
   }
 
   // The jump map of that mode gives v+ and the minimum-norm impulse. Where slipping contacts
@@ -141,12 +160,12 @@ auto ImpactSolver<S>::solve_evaluated(const VecT<double, nx>& x_minus, const std
   // solver's own impulse is returned.
   bool jump_map_ok = true;
   try {
-    jump_.restitution = &restitution_;
+    jump_.coefficients = &coefficients_;
     apply_jump_map(scene_, r.impulse_mode, x_minus, jump_, x_jump_);
   } catch (const NumericalFailure&) {
     jump_map_ok = false;
   }
-  r.singular_delassus = m > 0 && jump_.assembly.rows > 0 && jump_.delassus.rank() < jump_.assembly.rows;
+  r.singular_delassus = m > 0 && problem_rank_ < m;
   r.minimum_norm_impulse = false;
   if (jump_map_ok) {
     const double v_scale = std::max(v_minus.cwiseAbs().maxCoeff(), v_plus_solver.cwiseAbs().maxCoeff());
@@ -208,12 +227,13 @@ void ImpactSolver<S>::compute_law_residuals(const VecT<double, nx>& x_minus, con
     if (index[i] < 0) continue;
     const ContactSpec& spec = scene_.contact(i);
     const double ln = r.impulse[i].normal;
-    const double yn = r.normal_velocity_plus[i] + restitution_[i] * std::min(c.zeta_n, 0.0);
+    const double yn = r.normal_velocity_plus[i] + coefficients_.normal[i] * std::min(c.zeta_n, 0.0);
     r.signorini_residual =
         std::max({r.signorini_residual, std::max(-ln, 0.0) / L, std::max(-yn, 0.0) / V, std::abs(ln * yn) / (L * V)});
     if (c.tangents == 0) continue;
     const Eigen::Vector2d lt = r.impulse[i].tangent;
-    const Eigen::Vector2d yt = r.tangent_velocity_plus[i];
+    Eigen::Vector2d yt = r.tangent_velocity_plus[i];  // xi_t of the impact law
+    for (int k = 0; k < c.tangents; ++k) yt[k] += coefficients_.tangential[i] * c.zeta_t[k];
     r.coulomb_residual = std::max(r.coulomb_residual, std::max(lt.norm() - spec.mu * ln, 0.0) / L);
     if (yt.norm() > options_.velocity_tolerance * V)
       r.coulomb_residual = std::max(r.coulomb_residual, (lt + spec.mu * ln * yt / yt.norm()).norm() / L);

@@ -3,16 +3,18 @@
 // for sticking ones) and impulse columns F (w_n, or w_n - mu W_t d for slip along d; W_t for
 // sticking tangents):
 //     M (v+ - v-) = F Lambda,    J v+ = target,
-//     target_n = -e_n min(zeta_n^-, 0) (Newton's law, 2.10),  target_t = 0 (stick, 2.57),
+//     target_n = -e_n min(zeta_n^-, 0) (Newton's law, 2.10),
+//     target_t = -e_t zeta_t^- (stick, 2.57, with the tangential restitution of impact_law.hpp),
 // hence (J M^{-1} F) Lambda = target - J v-,  v+ = v- + M^{-1} F Lambda.
 //
 // Slip direction. Saltus follows Coulomb's law on impulses (thesis 2.29-2.30): a slipping
-// contact's tangential impulse opposes its POST-impact tangential velocity, d = zeta_t^+/||zeta_t^+||.
+// contact's tangential impulse opposes its POST-impact tangential velocity of the impact law,
+// d = xi_t/||xi_t|| with xi_t = zeta_t^+ + e_t zeta_t^- (= zeta_t^+ when e_t = 0).
 // The thesis' explicit map A.36-A.39 uses the ante-impact direction instead, which violates 2.30
 // whenever the impulse turns the slip (spatial friction, or coupled contacts). For planar
 // contacts the direction is the sign s stored in the impulse mode and the map is linear in v-;
 // for spatial contacts d is defined implicitly and solved for by Newton's method on
-// R(y) = zeta_t^+(d(y)) - y. The Newton matrix is a central difference of R (it affects only the
+// R(y) = xi_t(d(y)) - y. The Newton matrix is a central difference of R (it affects only the
 // rate of convergence); iterating in the scalar type T until the value has converged, plus two
 // more steps, makes the derivatives those of the implicit function (each step contracts their
 // error like the value's).
@@ -23,6 +25,7 @@
 
 #include <saltus/hybrid/dynamics/delassus.hpp>
 #include <saltus/hybrid/dynamics/flow.hpp>
+#include <saltus/hybrid/dynamics/impact_law.hpp>
 #include <saltus/hybrid/contact/linear_solve.hpp>
 #include <saltus/hybrid/vocabulary/impact_mode.hpp>
 
@@ -46,8 +49,11 @@ struct JumpWorkspace {
   Assembly assembly;
   RowsVector target, lambda;
   MinNormSolve<T, max_rows> delassus;  ///< D, factorised by value
-  /// Restitution per contact overriding the scene's when set (an impact taken as inelastic).
-  const std::array<double, nc>* restitution = nullptr;
+  /// The impact's restitution coefficients when set (the impact solver's, which knows the
+  /// contacts in its problem and those made inelastic); when null, the map takes those of
+  /// impact_coefficients() over the contacts the mode gives an impulse (own_coefficients).
+  const ImpactCoefficients<nc>* coefficients = nullptr;
+  ImpactCoefficients<nc> own_coefficients{};
   std::array<ContactRows, nc> layout{};
   std::array<VecT<T, 2>, nc> slip_direction{};
   VecT<T, nq> v_plus;

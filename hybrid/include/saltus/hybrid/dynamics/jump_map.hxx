@@ -7,12 +7,19 @@ namespace saltus {
 
 namespace detail {
 
+/// xi_t = zeta_t^+ + e_t zeta_t^- of contact i after a solve of the jump system (ws.kin at x-).
+template <Scene S, class T>
+VecT<T, 2> tangential_law_velocity(const JumpWorkspace<S, T>& ws, int i) {
+  const auto& c = ws.kin.contacts[i];
+  const double et = (ws.coefficients ? *ws.coefficients : ws.own_coefficients).tangential[i];
+  return VecT<T, 2>(c.Wt.transpose() * ws.v_plus) + T(et) * c.zeta_t;
+}
+
 /// Solves the linear jump system for fixed slip directions (ws.slip_direction of spatial slip
 /// contacts already set); requires ws.kin evaluated at (q, v-).
 template <Scene S, class T>
 void solve_jump_system(const S& scene, const ImpactMode<S::nc>& mode, const VecT<T, S::nq>& v_minus,
                        JumpWorkspace<S, T>& ws) {
-  const auto restitution = [&](int i) { return ws.restitution ? (*ws.restitution)[i] : scene.contact(i).restitution; };
   constexpr int nc = S::nc;
   for (int i = 0; i < nc; ++i) {
     if (mode[i].role == ImpulseRole::None)
@@ -20,16 +27,23 @@ void solve_jump_system(const S& scene, const ImpactMode<S::nc>& mode, const VecT
     else
       ws.layout[i] = mode[i].role == ImpulseRole::Slip ? ContactRows::Slip : ContactRows::Stick;
   }
+  if (!ws.coefficients) {
+    std::array<bool, nc> taking_part{};
+    for (int i = 0; i < nc; ++i) taking_part[i] = mode[i].role != ImpulseRole::None;
+    ws.own_coefficients = impact_coefficients(scene, ws.kin, taking_part);
+  }
+  const ImpactCoefficients<nc>& e = ws.coefficients ? *ws.coefficients : ws.own_coefficients;
   auto& as = ws.assembly;
   as.assemble(scene, ws.kin, ws.layout, ws.slip_direction);
   const int m = as.rows;
-  // Newton's law on the normal rows (2.10), tangential rest on the sticking ones (2.57).
+  // The impact law (impact_law.hpp): xi_n = 0 on the normal rows (Newton, 2.10), xi_t = 0 on the
+  // sticking tangents (2.57 with tangential restitution: zeta_t^+ = -e_t zeta_t^-).
   for (int i = 0; i < nc; ++i) {
     if (as.normal_row[i] < 0) continue;
     const auto& c = ws.kin.contacts[i];
-    ws.target[as.normal_row[i]] = c.zeta_n < T(0) ? T(-restitution(i)) * c.zeta_n : T(0);
+    ws.target[as.normal_row[i]] = c.zeta_n < T(0) ? T(-e.normal[i]) * c.zeta_n : T(0);
     if (as.tangent_row[i] >= 0)
-      for (int k = 0; k < c.tangents; ++k) ws.target[as.tangent_row[i] + k] = T(0);
+      for (int k = 0; k < c.tangents; ++k) ws.target[as.tangent_row[i] + k] = T(-e.tangential[i]) * c.zeta_t[k];
   }
   ws.v_plus = v_minus;
   if (m == 0) return;
@@ -42,7 +56,8 @@ void solve_jump_system(const S& scene, const ImpactMode<S::nc>& mode, const VecT
   ws.v_plus.noalias() += as.MinvF * ws.lambda;
 }
 
-/// R(y) = zeta_t^+(d(y)) - y for the spatial slip contacts, stacked two per contact.
+/// R(y) = xi_t(d(y)) - y for the spatial slip contacts, stacked two per contact, with
+/// xi_t = zeta_t^+ + e_t zeta_t^- the velocity the impact law's friction opposes.
 template <Scene S, class T, class VecIn, class VecOut>
 void spatial_slip_residual(const S& scene, const ImpactMode<S::nc>& mode, const VecT<T, S::nq>& v_minus, const VecIn& y,
                            JumpWorkspace<S, T>& ws, VecOut& out) {
@@ -59,7 +74,7 @@ void spatial_slip_residual(const S& scene, const ImpactMode<S::nc>& mode, const 
   k = 0;
   for (int i = 0; i < S::nc; ++i) {
     if (mode[i].role != ImpulseRole::Slip || ws.kin.contacts[i].tangents != 2) continue;
-    const VecT<T, 2> zt = ws.kin.contacts[i].Wt.transpose() * ws.v_plus;
+    const VecT<T, 2> zt = tangential_law_velocity(ws, i);
     out[k] = zt[0] - y[k];
     out[k + 1] = zt[1] - y[k + 1];
     k += 2;
@@ -102,7 +117,7 @@ void apply_jump_map(const S& scene, const ImpactMode<S::nc>& mode, const VecT<T,
     int k = 0;
     for (int i = 0; i < nc; ++i) {
       if (mode[i].role != ImpulseRole::Slip || ws.kin.contacts[i].tangents != 2) continue;
-      const VecT<T, 2> zt = ws.kin.contacts[i].Wt.transpose() * ws.v_plus;
+      const VecT<T, 2> zt = detail::tangential_law_velocity(ws, i);
       ws.y[k] = zt[0];
       ws.y[k + 1] = zt[1];
       k += 2;

@@ -78,7 +78,7 @@
 namespace saltus {
 
 template <Scene S>
-class CvodeIntegrator : private CvodeProblem {
+class CvodeIntegrator final : private CvodeProblem {
  public:
   static constexpr int nq = S::nq, nx = 2 * S::nq, nc = S::nc, ng = 2 * S::nc + 1;
   using State = VecT<double, nx>;

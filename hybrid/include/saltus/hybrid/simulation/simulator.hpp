@@ -97,7 +97,10 @@ class Simulator {
   SimulationOptions options_;
   TransitionResolver<S> transitions_;
   DormandPrinceIntegrator<S> dopri_;
-  std::unique_ptr<CvodeIntegrator<S>> cvode_;  ///< null with Dormand-Prince
+  /// CVODE backend, null with Dormand-Prince. The deleter is a function pointer set where the
+  /// integrator is made, so that a scene instantiated without CVODE (SALTUS_WITH_CVODE unset)
+  /// never references CvodeIntegrator's code.
+  std::unique_ptr<CvodeIntegrator<S>, void (*)(CvodeIntegrator<S>*)> cvode_{nullptr, nullptr};
   std::vector<double> touchdown_times_;
   bool rest_impact_seen_ = false;
   int same_instant_events_ = 0;  ///< consecutive events at one instant (stall check)

@@ -13,10 +13,21 @@ Simulator<S>::Simulator(const S& scene, SimulationOptions options)
   validate_scene(scene);
   SALTUS_REQUIRE(options_.integrator.relative_tolerance > 0 && options_.integrator.absolute_tolerance > 0, "integrator tolerances must be > 0");
   // The backend: Dormand-Prince (member, always there) or CVODE (BDF/Adams), created once here.
-  if (options_.integrator.kind != IntegratorKind::DormandPrince)
-    cvode_ = std::make_unique<CvodeIntegrator<S>>(options_.integrator);
+  // CVODE is the optional component saltus::cvode: its code is compiled into a scene's
+  // instantiation only where SALTUS_WITH_CVODE is defined (the target saltus::cvode sets it).
+#if defined(SALTUS_WITH_CVODE) && SALTUS_WITH_CVODE
+  if (options_.integrator.kind != IntegratorKind::DormandPrince) {
+    cvode_ = decltype(cvode_)(new CvodeIntegrator<S>(options_.integrator), [](CvodeIntegrator<S>* p) { delete p; });
+    cvode_->set_gap_tolerance(options_.impact.gap_tolerance);
+  }
+#else
+  SALTUS_REQUIRE(options_.integrator.kind == IntegratorKind::DormandPrince, "integrator '",
+                 to_string(options_.integrator.kind),
+                 "': this scene's machinery was compiled without CVODE; link the component saltus::cvode "
+                 "(find_package(Saltus COMPONENTS cvode)) to the target that instantiates the scene, or use "
+                 "Dormand-Prince");
+#endif
   dopri_.set_gap_tolerance(options_.impact.gap_tolerance);
-  if (cvode_) cvode_->set_gap_tolerance(options_.impact.gap_tolerance);
 }
 
 template <Scene S>
@@ -80,8 +91,12 @@ HybridTrajectory<S> Simulator<S>::run_impl(const State& x0, std::optional<Mode<n
       for (double b : options_.breakpoints)
         if (b > t * (1 + 1e-15) + 1e-300 && b < t_stop) t_stop = b;
       DenseOutput<nx>* dense = options_.record_dense_output ? &seg.x : nullptr;
+#if defined(SALTUS_WITH_CVODE) && SALTUS_WITH_CVODE
       end = cvode_ ? cvode_->integrate(sys, t, x, t_stop, options_.simultaneity, dense)
                    : dopri_.integrate(sys, t, x, t_stop, options_.simultaneity, dense);
+#else
+      end = dopri_.integrate(sys, t, x, t_stop, options_.simultaneity, dense);
+#endif
       stats.steps += end.steps;
       stats.rejected_steps += end.rejected_steps;
       t = end.t;

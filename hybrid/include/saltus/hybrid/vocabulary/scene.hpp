@@ -10,6 +10,7 @@
 #include <array>
 #include <cmath>
 #include <concepts>
+#include <optional>
 #include <string>
 
 namespace saltus {
@@ -52,6 +53,11 @@ struct ContactSpec {
   Friction friction = Friction::None;
   double mu = 0.0;                ///< Coulomb coefficient, >= 0 (ignored when frictionless)
   double restitution = 0.0;       ///< Newton normal restitution e_n in [0, 1] (thesis 2.10)
+  /// Tangential restitution e_t in [0, 1]. Unset (the default): the energy-consistent impact law,
+  /// one coefficient for the normal and tangential rows of an impact (dynamics/impact_law.hpp);
+  /// set it (0 gives the thesis' kinematic Newton law) for per-contact coefficients, which can
+  /// create energy with friction and e_n > 0.
+  std::optional<double> tangential_restitution{};
 
   int tangents() const { return tangent_count(friction); }
 };
@@ -62,6 +68,11 @@ inline void validate(const ContactSpec& c) {
                 "': friction coefficient mu must be finite and >= 0, got ", c.mu);
   SALTUS_REQUIRE(std::isfinite(c.restitution) && c.restitution >= 0.0 && c.restitution <= 1.0, "contact '", c.name,
                 "': restitution e_n must lie in [0, 1], got ", c.restitution);
+  if (c.tangential_restitution)
+    SALTUS_REQUIRE(std::isfinite(*c.tangential_restitution) && *c.tangential_restitution >= 0.0 &&
+                       *c.tangential_restitution <= 1.0,
+                   "contact '", c.name, "': tangential restitution e_t must lie in [0, 1], got ",
+                   *c.tangential_restitution);
 }
 
 /// A scene: compile-time sizes and templated functions of the configuration q and velocity v.
