@@ -304,6 +304,19 @@ TEST(Impact, BadInputIsRejectedWithANamedProblem) {
   const scenes::BouncingBall bad_restitution(superelastic);
   EXPECT_THROW(ImpactSolver<scenes::BouncingBall>{bad_restitution}, InvalidArgument);
 
+  // A state whose square overflows (found by fuzzing: |v| = 4.5e279 gave an infinite ||zeta_t||
+  // and a zero slip direction): refused up front.
+  {
+    const ThreePointBlock block(0.2, 0.1);
+    ImpactSolver<ThreePointBlock> solver(block);
+    try {
+      (void)solver.solve(Vec<6>(0, 0, 0, -4.5e279, -2.0, 0));
+      ADD_FAILURE() << "an overflowing state was accepted";
+    } catch (const InvalidArgument& e) {
+      EXPECT_NE(std::string(e.what()).find("larger than 1e150"), std::string::npos) << e.what();
+    }
+  }
+
   // Tangential restitution outside [0, 1], or NaN: refused, naming the contact and e_t.
   for (const double e_t : {-0.1, 1.5, std::numeric_limits<double>::quiet_NaN()}) {
     try {

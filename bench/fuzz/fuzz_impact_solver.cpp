@@ -94,14 +94,26 @@ void check_impact(const S& scene, Bytes& in) {
     }
   }
   ImpactSolver<S> solver(scene);
+  // On a finding, the input it came from is printed (a finding aborts right after).
+  struct Describe {
+    const S& scene;
+    const VecT<double, nx>& x;
+    void print() const {
+      const ContactSpec& c = scene.contact(0);
+      std::fprintf(stderr, "scene %s, mu %.17g, e_n %.17g, e_t %s%.17g, x- =", S::name, c.mu, c.restitution,
+                   c.tangential_restitution ? "" : "unset ", c.tangential_restitution.value_or(-1.0));
+      for (int k = 0; k < nx; ++k) std::fprintf(stderr, " %.17g", x[k]);
+      std::fprintf(stderr, "\n");
+    }
+  } describe{scene, x};
   try {
     const auto& r = solver.solve(x);
-    if (!(r.signorini_residual <= 1e-9)) finding("Signorini residual", r.signorini_residual);
-    if (!(r.coulomb_residual <= 1e-9)) finding("Coulomb residual", r.coulomb_residual);
+    if (!(r.signorini_residual <= 1e-9)) describe.print(), finding("Signorini residual", r.signorini_residual);
+    if (!(r.coulomb_residual <= 1e-9)) describe.print(), finding("Coulomb residual", r.coulomb_residual);
     if (r.coefficients.energy_consistent && r.kinetic_energy_plus > r.kinetic_energy_minus * (1 + 1e-9) + 1e-300)
-      finding("energy gain", r.kinetic_energy_plus / r.kinetic_energy_minus);
+      describe.print(), finding("energy gain", r.kinetic_energy_plus / r.kinetic_energy_minus);
     for (int k = 0; k < nx; ++k)
-      if (!std::isfinite(r.x_plus[k])) finding("non-finite post-impact state", r.x_plus[k]);
+      if (!std::isfinite(r.x_plus[k])) describe.print(), finding("non-finite post-impact state", r.x_plus[k]);
   } catch (const InvalidArgument&) {
   } catch (const ContactProblemFailure&) {
   } catch (const NumericalFailure&) {
