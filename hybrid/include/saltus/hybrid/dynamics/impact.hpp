@@ -122,7 +122,9 @@ class ImpactSolver {
                         const VecT<double, nq>& v_plus);
 
   /// Signorini and Coulomb residuals of the returned (v+, Lambda), relative to the impulse scale
-  /// (largest impulse component) and the velocity scale (largest pre-impact contact velocity):
+  /// L (the largest impulse component, or V / max|D| if larger: the impulse that changes a
+  /// contact velocity by V, below which impulses are round-off of the solve) and the velocity
+  /// scale V (largest pre-impact contact velocity):
   ///   Signorini: max(-Lambda_n, 0)/L, max(-y_n, 0)/V, |Lambda_n y_n|/(L V)
   ///   Coulomb:   max(||Lambda_t|| - mu Lambda_n, 0)/L and, where y_t != 0,
   ///              ||Lambda_t + mu Lambda_n y_t/||y_t|| || / L.
