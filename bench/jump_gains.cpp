@@ -40,6 +40,7 @@ struct Row {
   std::string scene, kind;
   double fd_rel_error = 0, dt_rel_error = 0, slope = 0, gain_us = 0, twin_us = 0;
   int slope_points = 0;
+  std::vector<double> remainders;  ///< r(eps) for eps = 1e-2..1e-6
 };
 
 template <class F>
@@ -97,6 +98,7 @@ void measure(const references::Reference<S>& ref, const Vec<2 * S::nq>& z0, std:
       e_above.push_back(fit.eps[k]);
       r_above.push_back(fit.remainder[k]);
     }
+    row.remainders = fit.remainder;
     row.slope_points = static_cast<int>(e_above.size());
     row.slope = fit.structure_matched && e_above.size() >= 2 ? fitted_log_slope(e_above, r_above) : std::nan("");
     rows.push_back(row);
@@ -139,6 +141,11 @@ int main(int argc, char** argv) {
                             {"dt_rel_error", number(r.dt_rel_error)},
                             {"slope", number(r.slope)},
                             {"slope_points", r.slope_points},
+                            {"remainders", [&] {
+                               nlohmann::ordered_json a = nlohmann::ordered_json::array();
+                               for (const double x : r.remainders) a.push_back(number(x));
+                               return a;
+                             }()},
                             {"gain_us", number(r.gain_us)},
                             {"numerical_twin_us", number(r.twin_us)}};
     }

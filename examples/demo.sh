@@ -15,7 +15,7 @@ for example in bouncing_ball guiding_example plank_box hopper spatial_box; do
   echo
   "$build/examples/$example"
 done
-for bench in contact_properties simulation_accuracy jump_gains; do
+for bench in contact_properties simulation_accuracy jump_gains simultaneous_impact; do
   if [ -x "$build/bench/$bench" ]; then
     echo
     echo "== $bench =="

@@ -288,6 +288,47 @@ TEST(Impact, CollinearContactsReportANonUniqueSplit) {
               r.impulse[0].normal, r.impulse[1].normal, r.impulse[2].normal, with_impulse, r.minimum_norm_impulse);
 }
 
+// The impact problem is positively homogeneous of degree one in v- (impact.hxx): the same
+// impact at 1e-156 m/s or 1e140 m/s as at 1 m/s gives the same mode, and impulses and v+ scaled
+// by the same factor, with the law residuals at round-off (fuzz finding: velocities of 1e-156
+// squared to subnormals and left a Coulomb residual of 1.2e-9).
+TEST(Impact, ImpactScalesWithThePreImpactVelocity) {
+  std::mt19937 rng(20261130);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  const ThreePointBlock block(0.7, 0.4);
+  ImpactSolver<ThreePointBlock> solver(block);
+  int compared = 0;
+  for (int trial = 0; trial < 200; ++trial) {
+    Vec<6> x;
+    x << u(rng), 0.1, 0.0, u(rng), -0.2 - std::abs(u(rng)), 0.3 * u(rng);  // flat: redundant contacts
+    if (trial % 2) {  // tilted, the lower corner on the ground
+      x[2] = 0.05 * u(rng);
+      x[1] = -std::min(block.point(0, Vec<3>(0, 0, x[2]))[1], block.point(2, Vec<3>(0, 0, x[2]))[1]);
+    }
+    const ImpactResult<ThreePointBlock> unit = solver.solve(x);
+    for (const double scale : {0x1p-520, 0x1p-90, 0x1p70, 0x1p460}) {
+      Vec<6> xs = x;
+      xs.tail<3>() *= scale;  // a power of two: exact
+      const auto& r = solver.solve(xs);
+      ASSERT_LE(r.signorini_residual, 1e-12) << "scale " << scale;
+      ASSERT_LE(r.coulomb_residual, 1e-12) << "scale " << scale;
+      for (int i = 0; i < 3; ++i) {
+        EXPECT_EQ(r.impulse_mode[i].role, unit.impulse_mode[i].role);
+        EXPECT_TRUE(r.post_mode[i] == unit.post_mode[i]) << "contact " << i << ", scale " << scale;
+        EXPECT_NEAR(r.impulse[i].normal / scale, unit.impulse[i].normal, 1e-12);
+      }
+      for (int k = 3; k < 6; ++k) EXPECT_NEAR(r.x_plus[k] / scale, unit.x_plus[k], 1e-12);
+      EXPECT_EQ(r.x_plus.head<3>(), x.head<3>());
+      // Kinetic energies scale with scale^2: at 2^-520 that is below the normal range (subnormal,
+      // digits lost), so they are compared where scale^2 is a normal number.
+      if (std::isnormal(scale * scale) && std::isnormal(unit.kinetic_energy_plus * scale * scale))
+        EXPECT_NEAR(r.kinetic_energy_plus / (scale * scale), unit.kinetic_energy_plus, 1e-12);
+      ++compared;
+    }
+  }
+  EXPECT_EQ(compared, 800);
+}
+
 TEST(Impact, BadInputIsRejectedWithANamedProblem) {
   scenes::PlankBox plank_box;
   ImpactSolver<scenes::PlankBox> solver(plank_box);

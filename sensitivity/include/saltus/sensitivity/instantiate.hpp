@@ -10,11 +10,12 @@
 //   #include <saltus/sensitivity/instantiate.hxx>
 //   SALTUS_INSTANTIATE_SCENE_SENSITIVITY(MyScene)
 //
-// Compiled per scene: feedback_gain, JumpGainSolver, jump_gains, LinearisedSystem,
-// numerical_jump_gain and prediction_remainder. The hybrid machinery they call must be
+// Compiled per scene: feedback_gain, JumpGainSolver, jump_gains, ConewiseJumpGain, LinearisedSystem,
+// numerical_jump_gain, prediction_remainder and piece_remainder. The hybrid machinery they call must be
 // instantiated too (SALTUS_INSTANTIATE_SCENE). <saltus/sensitivity/header_only.hpp> is the header-only path.
 #pragma once
 
+#include <saltus/sensitivity/conewise_gain.hpp>
 #include <saltus/sensitivity/jump_gain.hpp>
 #include <saltus/sensitivity/linearisation.hpp>
 #include <saltus/sensitivity/numerical_jump_gain.hpp>
@@ -27,12 +28,17 @@
   prefix template class saltus::JumpGainSolver<S>;                                                               \
   prefix template std::vector<saltus::JumpGain<S>> saltus::jump_gains<S>(                                        \
       const S&, const saltus::HybridTrajectory<S>&, const saltus::JumpGainOptions&);                             \
+  prefix template struct saltus::ConewisePiece<S>;                                                               \
+  prefix template class saltus::ConewiseJumpGain<S>;                                                             \
   prefix template class saltus::LinearisedSystem<S>;                                                             \
   prefix template saltus::NumericalJumpGain<S> saltus::numerical_jump_gain<S>(                                   \
       const S&, const saltus::HybridTrajectory<S>&, int, const saltus::NumericalJumpGainOptions&);             \
   prefix template saltus::RemainderFit saltus::prediction_remainder<S>(                                          \
       const saltus::LinearisedSystem<S>&, const saltus::SimulationOptions&, const saltus::Vec<2 * S::nq>&,       \
-      const std::function<saltus::Vec<S::nu>(double)>&, const std::vector<double>&, const std::vector<double>&);
+      const std::function<saltus::Vec<S::nu>(double)>&, const std::vector<double>&, const std::vector<double>&); \
+  prefix template saltus::RemainderFit saltus::piece_remainder<S>(                                               \
+      const saltus::LinearisedSystem<S>&, const saltus::SimulationOptions&, int, const saltus::Vec<2 * S::nq>&, \
+      const saltus::ConewisePiece<S>&, double, const std::vector<double>&);
 
 /// In the scene's header, after SALTUS_DECLARE_SCENE: its sensitivity machinery is compiled elsewhere.
 #define SALTUS_DECLARE_SCENE_SENSITIVITY(S) SALTUS_SENSITIVITY_TEMPLATES(extern, S)

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <saltus/sensitivity/instantiate.hpp>
+#include <saltus/sensitivity/conewise_gain.hxx>
 #include <saltus/sensitivity/jump_gain.hxx>
 #include <saltus/sensitivity/linearisation.hxx>
 #include <saltus/sensitivity/numerical_jump_gain.hxx>

@@ -52,6 +52,14 @@
 // An event without guards (the initial impact at t0 of a simulation started in contact) has a
 // fixed time: dt = 0, G_z = Dg, G_v = 0.
 //
+// Coincident guards. A transition fired by several guards at once is conewise in general
+// (conewise_gain.hpp). When the guards' first-order crossing-time shifts are the same linear
+// function of (z-, v) (relative difference <= coincidence_tolerance), no perturbation separates
+// them: they fire together in every nearby motion and the gain is linear, computed with the first
+// guard. Redundant contacts do this: both bottom corners of a box sliding flat on the ground have
+// the same tangential velocity x' + b theta' whatever the state, so their stop guards coincide and
+// a flat box sliding to a stop has an ordinary jump gain.
+//
 // Feedback. When the input law depends on the state, u = kappa(t, x, mode) (a tracking
 // controller), a state deviation z- also moves the input by K z-, K = d kappa / dx at
 // (t*, alpha-(t*), mode-), and the guard sees it: in C.22 Dgamma_x becomes the closed-loop
@@ -95,8 +103,9 @@ class GrazingEvent : public Error {
   double gamma_dot_, rate_scale_;
 };
 
-/// A transition fired by several guards at once (e.g. both corners of a box landing flat): its
-/// first-order gain is conewise linear (one gain per activation order), not computed here.
+/// A transition fired by several guards at once whose crossings a perturbation separates (e.g.
+/// both corners of a box landing flat): its first-order gain is conewise linear (one gain per
+/// activation order: ConewiseJumpGain), not computed by JumpGainSolver.
 class SimultaneousActivation : public Error {
  public:
   using Error::Error;
@@ -124,6 +133,9 @@ struct JumpGainOptions {
   /// s: a chained transition whose guard is below -chain_time_tolerance * (rate scale) when the
   /// previous transition ends is immediate (dt_k = dt_{k-1}); otherwise it is at zero and crosses.
   double chain_time_tolerance = 1e-8;
+  /// Guards of one transition whose first-order crossing-time shifts differ by at most this
+  /// (relative) coincide: the gain is linear (see "Coincident guards"), else SimultaneousActivation.
+  double coincidence_tolerance = 1e-10;
 };
 
 /// K = d kappa / dx of an input law at (t, x, mode) by central differences with steps
@@ -139,6 +151,22 @@ struct TransitionGainInfo {
   double gamma = 0.0;      ///< guard value at the transition's state
   double gamma_dot = 0.0;  ///< C.24 along the flow of the mode before
   double rate_scale = 0.0;
+};
+
+/// The first-order crossing of one guard at a state of a mode (C.22-C.24): the shift of its
+/// crossing time is dt = -(dgamma_x z + dgamma_u v) / gamma_dot for a state deviation z from the
+/// mode's extended flow through x and an input deviation v.
+template <Scene S>
+struct GuardCrossing {
+  static constexpr int nx = 2 * S::nq, nu = S::nu;
+  double gamma = 0.0;       ///< the guard's value at x
+  double gamma_dot = 0.0;   ///< C.24 along the mode's flow, the input rate included
+  double state_rate = 0.0;  ///< dgamma_x f (open loop)
+  double input_rate = 0.0;  ///< dgamma_u mu'
+  double rate_scale = 0.0;  ///< |dgamma_x| |f| + |dgamma_u| |mu'|: grazing when |gamma_dot| is small against it
+  /// dgamma_x, closed loop (dgamma_x + dgamma_u K) with FeedbackTreatment::ClosedLoop, and dgamma_u.
+  Eigen::Matrix<double, 1, nx> dgamma_x = Eigen::Matrix<double, 1, nx>::Zero();
+  Eigen::Matrix<double, 1, nu> dgamma_u = Eigen::Matrix<double, 1, nu>::Zero();
 };
 
 /// The gain of one event: z+ = G_z z- + G_v v-, and the first-order shift of its (first) event
@@ -175,8 +203,27 @@ class JumpGainSolver {
   /// The gain of `event` under the input law that drove the trajectory.
   /// @throws GrazingEvent, SimultaneousActivation, InvalidArgument (an event without transitions)
   const JumpGain<S>& compute(const Event<S>& event, const InputLaw<S>& law);
+  /// The same for a deviation that reaches the event as z = incoming_z z0 + incoming_v v (nx x n0
+  /// maps of an outer deviation z0, e.g. the micro-events before it in a conewise gain): G_z and
+  /// dt_dz come out composed, in terms of z0 (G_z = gain incoming_z, G_v = gain incoming_v + G_v),
+  /// and coincident guards are judged on the deviations the maps can reach.
+  const JumpGain<S>& compute(const Event<S>& event, const InputLaw<S>& law, const Mat<nx, nx>& incoming_z,
+                             const Mat<nx, nu>& incoming_v);
+
+  /// The first-order crossing of `guard` at (t, x) in `mode` under `law` (the same quantities
+  /// compute() uses for a guarded transition; the guard must be one of the mode's). No check of
+  /// transversality: the caller compares |gamma_dot| with grazing_threshold * rate_scale.
+  const GuardCrossing<S>& crossing(const InputLaw<S>& law, double t, const State& x, const Mode<nc>& mode,
+                                   const Guard& guard);
 
  private:
+  // True if the first-order crossing-time shifts of tr's guards coincide (given Zz_, Zv_ of the
+  // transitions before); `mismatch` gets their largest relative difference.
+  bool coincident_guards(const InputLaw<S>& law, double t, const Transition<S>& tr, double& mismatch);
+  // The crossing of `guard` at (t, x) in `mode`, whose flow there is f (into crossing_).
+  void evaluate_crossing(const InputLaw<S>& law, double t, const State& x, const Mode<nc>& mode, const Guard& guard,
+                         const State& f);
+
   // (u(t + h, x + h f) - u(t - h, x - h f)) / 2h along the flow f_before_ of the mode before.
   void input_rate(const InputLaw<S>& law, double t, const State& x, const Mode<nc>& mode, double h, Input& out);
 
@@ -185,12 +232,13 @@ class JumpGainSolver {
   std::unique_ptr<DerivativeWorkspace<S>> ws_;  // dual-number matrices: large, made once
   FlowWorkspace<S> flow_;
   JumpGain<S> gain_;
+  GuardCrossing<S> crossing_;
   Mat<nx, nx> Zz_, A_, Dg_;
   Mat<nx, nu> Zv_, B_;
   Mat<nu, nx> K_;
   Eigen::Matrix<double, 1, nx> dz_, dgx_;
   Eigen::Matrix<double, 1, nu> dv_, dgu_;
-  State f_before_, f_after_, x_probe_, x_jump_, jump_f_;
+  State f_before_, f_after_, x_probe_, x_jump_, jump_f_, f_crossing_;
   Input u_before_, u_after_, u_dot_, u_rate_half_;
 };
 

@@ -16,6 +16,12 @@ JumpGainSolver<S>::JumpGainSolver(const S& scene, JumpGainOptions options, int r
 
 template <Scene S>
 auto JumpGainSolver<S>::compute(const Event<S>& event, const InputLaw<S>& law) -> const JumpGain<S>& {
+  return compute(event, law, Mat<nx, nx>::Identity(), Mat<nx, nu>::Zero());
+}
+
+template <Scene S>
+auto JumpGainSolver<S>::compute(const Event<S>& event, const InputLaw<S>& law, const Mat<nx, nx>& incoming_z,
+                                const Mat<nx, nu>& incoming_v) -> const JumpGain<S>& {
   SALTUS_REQUIRE(!event.transitions.empty(), "jump gain: the event at t = ", event.t,
                 " has no transitions");
   SALTUS_REQUIRE(static_cast<bool>(law), "jump gain: the input law is empty");
@@ -25,8 +31,8 @@ auto JumpGainSolver<S>::compute(const Event<S>& event, const InputLaw<S>& law) -
   g.info.resize(event.transitions.size());
   g.jump_map_residual = 0.0;
   // Z_z, Z_v: z_k = Z_z z- + Z_v v;  d_z, d_v: dt_k = d_z z- + d_v v (C.40-C.42 recursion).
-  Zz_.setIdentity();
-  Zv_.setZero();
+  Zz_ = incoming_z;
+  Zv_ = incoming_v;
   dz_.setZero();
   dv_.setZero();
   bool first_guarded = true;
@@ -40,26 +46,25 @@ auto JumpGainSolver<S>::compute(const Event<S>& event, const InputLaw<S>& law) -
     if (k == 0) g.f_minus = f_before_;
 
     if (!tr.guards.empty()) {
-      if (tr.guards.size() != 1)
-        throw SimultaneousActivation(detail::concat("jump gain: transition ", k,
-                    " of the event at t = ", t, " is fired by ", tr.guards.size(),
-                    " guards at once; its first-order gain is conewise (one per activation order) and is "
-                    "not computed by JumpGainSolver"));
+      if (tr.guards.size() != 1) {
+        // Guards that fire together in every nearby motion (their first-order crossing-time
+        // shifts are the same function of (z-, v), see "Coincident guards" in jump_gain.hpp)
+        // have a linear gain: any one of them gives it. Otherwise the gain is conewise.
+        double mismatch = 0.0;
+        if (!coincident_guards(law, t, tr, mismatch))
+          throw SimultaneousActivation(detail::concat("jump gain: transition ", k,
+                      " of the event at t = ", t, " is fired by ", tr.guards.size(),
+                      " guards at once whose crossing times split under perturbation (relative difference ",
+                      mismatch, " of their first-order shifts); its first-order gain is conewise (one per activation "
+                      "order, ConewiseJumpGain in conewise_gain.hpp), not computed by JumpGainSolver"));
+      }
       const Guard& guard = tr.guards.front();
       info.guarded = true;
-      info.gamma = guard_gradient(scene_, tr.mode_before, guard, tr.x_before, u_before_, *ws_, dgx_, dgu_);
-      // mu'-: total derivative of the input law along the flow of the mode before (C.24), a
-      // Richardson-extrapolated central difference (4 D(h/2) - D(h)) / 3, O(h^4): laws that
-      // blend gains over a few ms (references::hopper_push_off) have large third derivatives,
-      // and the plain O(h^2) difference cost 1e-5 relative in the event time there.
-      const double h = options_.input_rate_step * std::max(1.0, std::abs(t));
-      input_rate(law, t, tr.x_before, tr.mode_before, h, u_dot_);
-      input_rate(law, t, tr.x_before, tr.mode_before, 0.5 * h, u_rate_half_);
-      u_dot_ = (4.0 * u_rate_half_ - u_dot_) / 3.0;
-      const double state_rate = dgx_.dot(f_before_);
-      const double input_rate = nu > 0 ? dgu_.dot(u_dot_) : 0.0;
-      info.gamma_dot = state_rate + (options_.include_input_rate ? input_rate : 0.0);
-      info.rate_scale = dgx_.norm() * f_before_.norm() + (nu > 0 ? dgu_.norm() * u_dot_.norm() : 0.0);
+      evaluate_crossing(law, t, tr.x_before, tr.mode_before, guard, f_before_);
+      const GuardCrossing<S>& c = crossing_;
+      info.gamma = c.gamma;
+      info.gamma_dot = c.gamma_dot;
+      info.rate_scale = c.rate_scale;
       info.immediate = !first_guarded && info.gamma < -options_.chain_time_tolerance * info.rate_scale;
       if (!info.immediate) {
         if (!(std::abs(info.gamma_dot) > options_.grazing_threshold * info.rate_scale) ||
@@ -68,18 +73,12 @@ auto JumpGainSolver<S>::compute(const Event<S>& event, const InputLaw<S>& law) -
               detail::concat("jump gain: near-grazing ", to_string(guard.kind), " of contact '",
                              scene_.contact(guard.contact).name, "' at t = ", t, " (transition ", k,
                              "): |gamma_dot| = ", std::abs(info.gamma_dot), " <= ", options_.grazing_threshold,
-                             " * rate scale ", info.rate_scale, " (Dgamma_x f = ", state_rate,
-                             ", Dgamma_u u' = ", input_rate, options_.include_input_rate ? "" : ", left out", ")"),
+                             " * rate scale ", info.rate_scale, " (Dgamma_x f = ", c.state_rate,
+                             ", Dgamma_u u' = ", c.input_rate, options_.include_input_rate ? "" : ", left out", ")"),
               t, guard, info.gamma_dot, info.rate_scale);
         }
-        // Closed loop: the input moves with the state deviation (see "Feedback" above). Only
-        // here: gamma_dot and the rate scale use the open-loop Dgamma_x (mu'- holds K f).
-        if constexpr (nu > 0) {
-          if (options_.feedback == FeedbackTreatment::ClosedLoop) {
-            feedback_gain<S>(law, t, tr.x_before, tr.mode_before, options_.feedback_step, x_probe_, K_);
-            dgx_.noalias() += dgu_ * K_;
-          }
-        }
+        dgx_ = c.dgamma_x;  // closed loop where asked (see "Feedback" above)
+        dgu_ = c.dgamma_u;
         // dt_k = -(Dgamma_x z_{k-1} + Dgamma_u v) / gamma_dot_k   (C.22, C.29)
         dz_.noalias() = -(dgx_ * Zz_) / info.gamma_dot;
         if constexpr (nu > 0) {
@@ -120,6 +119,69 @@ auto JumpGainSolver<S>::compute(const Event<S>& event, const InputLaw<S>& law) -
   g.G_z = Zz_;
   g.G_v = Zv_;
   return g;
+}
+
+template <Scene S>
+bool JumpGainSolver<S>::coincident_guards(const InputLaw<S>& law, double t, const Transition<S>& tr,
+                                          double& mismatch) {
+  // dt_g = -(dgamma_x (Z_z z- + Z_v v) + dgamma_u v) / gamma_dot for each guard g, as rows in (z-, v).
+  using Row = Eigen::Matrix<double, 1, nx + nu>;
+  Row first = Row::Zero();
+  mismatch = 0.0;
+  for (std::size_t i = 0; i < tr.guards.size(); ++i) {
+    evaluate_crossing(law, t, tr.x_before, tr.mode_before, tr.guards[i], f_before_);
+    const GuardCrossing<S>& c = crossing_;
+    if (!(std::abs(c.gamma_dot) > options_.grazing_threshold * c.rate_scale)) return false;
+    Row row;
+    row.template head<nx>() = -(c.dgamma_x * Zz_) / c.gamma_dot;
+    if constexpr (nu > 0) row.template tail<nu>() = -(c.dgamma_x * Zv_ + c.dgamma_u) / c.gamma_dot;
+    if (i == 0) {
+      first = row;
+      continue;
+    }
+    const double scale = std::max({first.norm(), row.norm(), 1e-300});
+    mismatch = std::max(mismatch, (row - first).norm() / scale);
+  }
+  return mismatch <= options_.coincidence_tolerance;
+}
+
+template <Scene S>
+auto JumpGainSolver<S>::crossing(const InputLaw<S>& law, double t, const State& x, const Mode<nc>& mode,
+                                 const Guard& guard) -> const GuardCrossing<S>& {
+  SALTUS_REQUIRE(static_cast<bool>(law), "guard crossing: the input law is empty");
+  evaluate_flow(scene_, mode, x, law(t, x, mode), flow_);
+  f_crossing_ = flow_.xdot;
+  evaluate_crossing(law, t, x, mode, guard, f_crossing_);
+  return crossing_;
+}
+
+template <Scene S>
+void JumpGainSolver<S>::evaluate_crossing(const InputLaw<S>& law, double t, const State& x, const Mode<nc>& mode,
+                                          const Guard& guard, const State& f) {
+  GuardCrossing<S>& c = crossing_;
+  f_before_ = f;  // input_rate() differences the law along f_before_
+  const Input u = law(t, x, mode);
+  c.gamma = guard_gradient(scene_, mode, guard, x, u, *ws_, c.dgamma_x, c.dgamma_u);
+  // mu'-: total derivative of the input law along the flow of the mode (C.24), a
+  // Richardson-extrapolated central difference (4 D(h/2) - D(h)) / 3, O(h^4): laws that
+  // blend gains over a few ms (references::hopper_push_off) have large third derivatives,
+  // and the plain O(h^2) difference cost 1e-5 relative in the event time there.
+  const double h = options_.input_rate_step * std::max(1.0, std::abs(t));
+  input_rate(law, t, x, mode, h, u_dot_);
+  input_rate(law, t, x, mode, 0.5 * h, u_rate_half_);
+  u_dot_ = (4.0 * u_rate_half_ - u_dot_) / 3.0;
+  c.state_rate = c.dgamma_x.dot(f);
+  c.input_rate = nu > 0 ? c.dgamma_u.dot(u_dot_) : 0.0;
+  c.gamma_dot = c.state_rate + (options_.include_input_rate ? c.input_rate : 0.0);
+  c.rate_scale = c.dgamma_x.norm() * f.norm() + (nu > 0 ? c.dgamma_u.norm() * u_dot_.norm() : 0.0);
+  // Closed loop: the input moves with the state deviation (see "Feedback" in jump_gain.hpp).
+  // Only here: gamma_dot and the rate scale use the open-loop Dgamma_x (mu'- holds K f).
+  if constexpr (nu > 0) {
+    if (options_.feedback == FeedbackTreatment::ClosedLoop) {
+      feedback_gain<S>(law, t, x, mode, options_.feedback_step, x_probe_, K_);
+      c.dgamma_x.noalias() += c.dgamma_u * K_;
+    }
+  }
 }
 
 template <Scene S>

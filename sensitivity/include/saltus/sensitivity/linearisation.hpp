@@ -21,10 +21,21 @@
 // by an adaptive Dormand-Prince loop on fixed-size Eigen matrices (detail/ode.hpp). A and B come
 // from automatic differentiation of the flow (flow_jacobian, derivatives.hpp).
 //
-// Not thread-safe: one LinearisedSystem owns one derivative workspace.
+// Simultaneous events (a transition fired by several guards at once: a box landing flat) have a
+// conewise-linear, positively homogeneous gain (conewise_gain.hpp): predict() applies the piece
+// whose cone contains the propagated deviation (z-, v(t*)), so the prediction is positively
+// homogeneous in (z0, v), not linear; gains()[i] of such an event is NaN (use conewise_gain(i)),
+// and state_transition() across it throws SimultaneousActivation (there is no matrix). A piece
+// whose post-event outcome differs from the nominal one (an order that leaves a contact open, or
+// ends in another slip velocity) has no extended segment to continue on: predict() throws
+// SimultaneousActivation naming the order.
+//
+// Not thread-safe: one LinearisedSystem owns one derivative workspace, and builds the pieces of
+// conewise gains as predictions need them.
 #pragma once
 
 #include <saltus/hybrid/reference/reference_spreading.hpp>
+#include <saltus/sensitivity/conewise_gain.hpp>
 #include <saltus/sensitivity/detail/ode.hpp>
 #include <saltus/sensitivity/jump_gain.hpp>
 
@@ -40,6 +51,9 @@ struct LinearisationOptions {
   ExtensionOptions spreading;
   /// Tolerances of the variational integrations.
   detail::OdeTolerances variational;
+  /// The event physics that composes the micro-events of simultaneous events (conewise gains):
+  /// the reference's own simulation options.
+  SimulationOptions simulation;
 };
 
 template <Scene S>
@@ -79,16 +93,18 @@ class LinearisedSystem {
   /// Extends the segments of `traj` and computes the gains of all its events. `traj` and `scene`
   /// must outlive this object. @throws GrazingEvent, SimultaneousActivation (from the gains), InvalidArgument
   LinearisedSystem(S&&, const HybridTrajectory<S>&, LinearisationOptions = {}) = delete;  // keeps the scene: would dangle
-  LinearisedSystem(const S& scene, const HybridTrajectory<S>& traj, LinearisationOptions options = {})
-      : scene_(scene),
-        options_(options),
-        reference_(scene, traj, options.spreading),
-        gains_(jump_gains(scene, traj, options.gains)),
-        ws_(std::make_unique<DerivativeWorkspace<S>>()) {}
+  /// Simultaneous events get a conewise gain (header comment). @throws as JumpGainSolver and
+  /// ConewiseJumpGain's constructor.
+  LinearisedSystem(const S& scene, const HybridTrajectory<S>& traj, LinearisationOptions options = {});
 
   const S& scene() const { return scene_; }
   const Reference& reference() const { return reference_; }
+  /// The gain of every event; NaN for a simultaneous event (conewise(i)).
   const std::vector<JumpGain<S>>& gains() const { return gains_; }
+  /// Event i is fired by several guards at once: its gain is conewise_gain(i).
+  bool conewise(int i) const { return conewise_.at(i) != nullptr; }
+  /// The conewise gain of simultaneous event i. @throws InvalidArgument if event i is not one.
+  ConewiseJumpGain<S>& conewise_gain(int i) const;
   int segment_count() const { return reference_.segment_count(); }
 
   const Mode<nc>& mode(int i) const { return reference_.reference().segments.at(i).mode; }
@@ -136,6 +152,8 @@ class LinearisedSystem {
   LinearisationOptions options_;
   Reference reference_;
   std::vector<JumpGain<S>> gains_;
+  /// Per event: the conewise gain of a simultaneous event (pieces built on demand), else null.
+  std::vector<std::unique_ptr<ConewiseJumpGain<S>>> conewise_;
   std::unique_ptr<DerivativeWorkspace<S>> ws_;
   mutable FlowWorkspace<S> flow_;
   mutable State probe_;

@@ -1,10 +1,50 @@
 // Definitions of linearisation.hpp (see there for the math).
 #pragma once
 
+#include <saltus/sensitivity/conewise_gain.hxx>
 #include <saltus/sensitivity/detail/ode.hxx>
 #include <saltus/sensitivity/linearisation.hpp>
 
+#include <limits>
+
 namespace saltus {
+
+template <Scene S>
+LinearisedSystem<S>::LinearisedSystem(const S& scene, const HybridTrajectory<S>& traj, LinearisationOptions options)
+    : scene_(scene),
+      options_(options),
+      reference_(scene, traj, options.spreading),
+      ws_(std::make_unique<DerivativeWorkspace<S>>()) {
+  JumpGainSolver<S> solver(scene, options.gains);
+  const std::size_t n = traj.events.size();
+  gains_.resize(n);
+  conewise_.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const Event<S>& ev = traj.events[i];
+    if (!ev.transitions.empty() && ev.transitions.front().guards.size() > 1) {
+      try {  // coincident guards: an ordinary linear gain (jump_gain.hpp, "Coincident guards")
+        gains_[i] = solver.compute(ev, traj.input);
+        continue;
+      } catch (const SimultaneousActivation&) {
+      }
+      ConewiseGainOptions c;
+      c.gains = options.gains;
+      c.simulation = options.simulation;
+      conewise_[i] = std::make_unique<ConewiseJumpGain<S>>(scene, ev, traj.input, c);
+      gains_[i].G_z.setConstant(std::numeric_limits<double>::quiet_NaN());
+      gains_[i].G_v.setConstant(std::numeric_limits<double>::quiet_NaN());
+      continue;
+    }
+    gains_[i] = solver.compute(ev, traj.input);
+  }
+}
+
+template <Scene S>
+ConewiseJumpGain<S>& LinearisedSystem<S>::conewise_gain(int i) const {
+  SALTUS_REQUIRE(i >= 0 && i < static_cast<int>(conewise_.size()) && conewise_[i],
+                 "conewise_gain: event ", i, " is not a simultaneous event");
+  return *conewise_[i];
+}
 
 template <Scene S>
 auto LinearisedSystem<S>::begin_state(int i) const -> State {
@@ -67,6 +107,10 @@ auto LinearisedSystem<S>::state_transition(double t1, double t0) const -> Mat<nx
   Mat<nx, nx> Phi = Mat<nx, nx>::Identity();
   double t = t0;
   for (; i < last; ++i) {
+    if (conewise_[i])
+      throw SimultaneousActivation(detail::concat(
+          "state_transition: the event at t = ", t_end(i), " is simultaneous; its gain is conewise (positively "
+          "homogeneous, not linear), so the transition map has no matrix: use predict()"));
     Phi = (gains_[i].G_z * transition_matrix(i, t_end(i), t) * Phi).eval();
     t = t_end(i);
   }
@@ -89,8 +133,27 @@ auto LinearisedSystem<S>::predict(const State& z0, InputPerturbation v) const ->
     p.z_end_[i] = z;
     if (i + 1 < n) {
       const double te = t_end(i);
-      z = gains_[i].G_z * z;
-      if constexpr (nu > 0) z += gains_[i].G_v * (*p.v_)(te);
+      Input vi = Input::Zero();
+      if constexpr (nu > 0) vi = (*p.v_)(te);
+      if (conewise_[i]) {
+        const ConewisePiece<S>& piece = conewise_[i]->piece(z, vi);
+        if (!piece.nominal_outcome) {
+          std::string order;
+          for (const auto& group : piece.order)
+            for (const Guard& g : group)
+              order += detail::concat(order.empty() ? "" : ", ", to_string(g.kind), " of '", scene_.contact(g.contact).name, "'");
+          throw SimultaneousActivation(detail::concat(
+              "predict: at the simultaneous event at t = ", te, " the perturbation lies in the cone of the order [",
+              order, "], whose post-event state or mode differs from the nominal one (", piece.never_crossed.size(),
+              " guard(s) never crossed, post-state difference ", piece.post_state_difference,
+              "): there is no reference segment to continue on"));
+        }
+        z = (piece.G_z * z).eval();
+        if constexpr (nu > 0) z += piece.G_v * vi;
+      } else {
+        z = gains_[i].G_z * z;
+        if constexpr (nu > 0) z += gains_[i].G_v * vi;
+      }
     }
   }
   return p;

@@ -6,11 +6,14 @@
 // (x_k: extended segment k of reference spreading, integrated afresh to t at the simulation's
 // tolerances; z_k: LinearisedSystem's prediction on that segment) must shrink like eps^2: a
 // fitted log-log slope of 2 (>= 1.9 in the protocol) says the prediction is right to first order;
-// a slope of 1 says a first-order term is missing. Cost: |eps_values| x |sample_times|
+// a slope of 1 says a first-order term is missing. Through a simultaneous event the perturbed run
+// sees one jump per micro-event of the conewise piece its deviation falls in (conewise_gain.hpp):
+// those count as one reference event. Cost: |eps_values| x |sample_times|
 // simulations. Definitions in prediction_check.hxx (saltus/sensitivity/instantiate.hpp).
 #pragma once
 
 #include <saltus/hybrid/simulation/simulation_options.hpp>
+#include <saltus/sensitivity/conewise_gain.hpp>
 #include <saltus/sensitivity/linearisation.hpp>
 
 #include <functional>
@@ -39,5 +42,21 @@ RemainderFit prediction_remainder(const LinearisedSystem<S>& lin, const Simulati
                                   const Vec<2 * S::nq>& z0, const std::function<Vec<S::nu>(double)>& v,
                                   const std::vector<double>& sample_times,
                                   const std::vector<double>& eps_values = default_prediction_eps());
+
+/// r(eps) of the first-order prediction through the simultaneous event `event` of lin's reference
+/// in the cone of `piece` (one of lin.conewise_gain(event)'s pieces), relative to the piece's OWN
+/// post-event outcome, so also for a piece whose outcome is not the nominal one (conewise_gain.hpp):
+///     r(eps) = |x_eps(t) - x_p(t) - eps Phi_p(t, t*) G_z z-|_inf,
+/// z- = the prediction of z0 (v = 0) at the end of segment `event` (the events before it ordinary,
+/// or conewise with the nominal outcome), x_p the flow of piece.mode_after from (t*, piece.x_plus)
+/// (events off), Phi_p z+ its central difference along z+ (step 1e-6 / |z+|), x_eps the Simulator's
+/// run from x(t0) + eps z0 with `options`. `structure_matched` requires every run to see the events
+/// before, one event per micro-event of the piece, and none after it before t.
+/// @throws InvalidArgument (event not simultaneous, t not after it), SimultaneousActivation (an
+/// earlier simultaneous event's cone without the nominal outcome), what the Simulator throws.
+template <Scene S>
+RemainderFit piece_remainder(const LinearisedSystem<S>& lin, const SimulationOptions& options, int event,
+                             const Vec<2 * S::nq>& z0, const ConewisePiece<S>& piece, double t,
+                             const std::vector<double>& eps_values = default_prediction_eps());
 
 }  // namespace saltus

@@ -3,6 +3,7 @@
 // re-simulation.
 #pragma once
 
+#include <saltus/sensitivity/conewise_gain.hpp>
 #include <saltus/sensitivity/jump_gain.hpp>
 #include <saltus/sensitivity/linearisation.hpp>
 #include <saltus/sensitivity/numerical_jump_gain.hpp>

@@ -111,10 +111,20 @@ class ImpactSolver {
   /// Restitution coefficients of the last solve (impact_law.hpp: the energy-consistent common
   /// coefficient by default, 0 where made inelastic).
   const ImpactCoefficients<nc>& coefficients() const { return coefficients_; }
+  /// The last contact problem, at the solve's working velocity scale (v- scaled by a power of two
+  /// to unit scale when max|v-| is outside [2^-32, 2^32]; see impact.hxx).
   const Problem& problem() const { return problem_; }
 
  private:
-  const ImpactResult<S>& solve_evaluated(const VecT<double, nx>& x_minus, const std::array<bool, nc>& in_problem);
+  /// Solves at the (possibly scaled) state x_minus; x_reported is the caller's state, for messages.
+  void solve_evaluated(const VecT<double, nx>& x_minus, const std::array<bool, nc>& in_problem,
+                       const VecT<double, nx>& x_reported);
+
+  /// Copies x- into x_work_ with its velocity scaled by 2^-exponent to unit scale (impact.hxx:
+  /// positive homogeneity); returns the exponent, 0 when no scaling is needed.
+  int scale_velocity(const VecT<double, nx>& x_minus);
+  /// Scales the result of a solve at x_work_ back to the caller's velocity scale.
+  void unscale_result(int exponent, const VecT<double, nx>& x_minus);
 
   void fill_from_jump_map(const VecT<double, nx>& x_minus, const std::array<int, nc>& index);
 
@@ -140,6 +150,7 @@ class ImpactSolver {
   DelassusAssembly<S> assembly_;
   std::array<VecT<double, 2>, nc> no_slip_directions_{};  ///< unused: every contact is Stick
   VecT<double, nx> x_jump_;
+  VecT<double, nx> x_work_;  ///< x- with its velocity at unit scale (scale_velocity)
   ImpactCoefficients<nc> coefficients_{};
   MinNormSolver<DelassusAssembly<S>::max_rows> problem_delassus_;  ///< for the rank of the problem
   int problem_rank_ = 0;

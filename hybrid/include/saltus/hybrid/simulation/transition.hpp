@@ -62,10 +62,14 @@ class TransitionResolver {
 
   /// The event at time t from x- (the state just before) in mode_before, starting with the guards
   /// `fired` and following the chain at the same instant (file comment). sys is left in the mode
-  /// after the event. @throws NumericalFailure when the chain does not settle in max_chain
-  /// transitions; ContactProblemFailure from an impact or a mode selection.
+  /// after the event. `deferred`: guards that sit at zero at this instant but fire later in the
+  /// motion being composed (the conewise gains of a simultaneous event take the guards one at a
+  /// time, sensitivity/conewise_gain.hpp): the chain does not fire them, and a deferred
+  /// touchdown's contact, while open, takes no part in the impact problems of this event.
+  /// @throws NumericalFailure when the chain does not settle in max_chain transitions;
+  /// ContactProblemFailure from an impact or a mode selection.
   Event<S> resolve(ModeSystem<S>& sys, double t, const State& x_minus, const Mode<nc>& mode_before,
-                   std::vector<Guard> fired);
+                   std::vector<Guard> fired, const std::vector<Guard>& deferred = {});
 
   /// The guards of sys's mode due at (t, x): below -tolerance, or within it and decreasing (a
   /// touchdown: approaching faster than the velocity tolerance). Tolerances: the impact's gap
@@ -97,6 +101,8 @@ class TransitionResolver {
 
   const S& scene_;
   SimulationOptions options_;
+  /// Open contacts kept out of impact problems: deferred touchdowns of the resolve() under way.
+  std::array<bool, nc> deferred_contacts_{};
   std::unique_ptr<ImpactSolver<S>> impact_;  ///< large: on the heap
   ModeSelector<S> selector_;
   FlowWorkspace<S> flow_;

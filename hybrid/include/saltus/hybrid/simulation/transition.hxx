@@ -49,7 +49,19 @@ auto TransitionResolver<S>::start(ModeSystem<S>& sys, double t0, const State& x0
 
 template <Scene S>
 Event<S> TransitionResolver<S>::resolve(ModeSystem<S>& sys, double t, const State& x_minus, const Mode<nc>& mode_before,
-                                        std::vector<Guard> pending) {
+                                        std::vector<Guard> pending, const std::vector<Guard>& deferred) {
+  const auto is_deferred = [&](const Guard& g) {
+    return std::any_of(deferred.begin(), deferred.end(),
+                       [&](const Guard& d) { return d.contact == g.contact && d.kind == g.kind; });
+  };
+  deferred_contacts_ = {};
+  for (const Guard& g : deferred)
+    if (g.kind == GuardKind::Touchdown) deferred_contacts_[g.contact] = true;
+  // Cleared on every way out (the resolver is reused by the simulator).
+  struct ClearDeferred {
+    std::array<bool, nc>& flags;
+    ~ClearDeferred() { flags = {}; }
+  } clear_deferred{deferred_contacts_};
   Event<S> ev;
   ev.t = t;
   ev.x_minus = x_minus;
@@ -79,6 +91,7 @@ Event<S> TransitionResolver<S>::resolve(ModeSystem<S>& sys, double t, const Stat
       sys.set_mode(mode);
       pending = guards_due(sys, t, x);
       std::erase_if(pending, [&](const Guard& g) {
+        if (is_deferred(g)) return true;
         if (g.kind == GuardKind::Touchdown) return released[g.contact] && !(sys.guard_rate(t, x, g) < -v_tol);
         return settled_friction[g.contact] && (g.kind == GuardKind::Stop || g.kind == GuardKind::SlipOnset);
       });
@@ -201,7 +214,8 @@ void TransitionResolver<S>::apply_impact(ModeSystem<S>& sys, double t, State& x,
   Kinematics<S> kin;
   evaluate_kinematics(scene_, VecT<double, nq>(x.template head<nq>()), VecT<double, nq>(x.template tail<nq>()), kin);
   std::array<bool, nc> in_problem{}, inelastic{};
-  for (int i = 0; i < nc; ++i) in_problem[i] = mode[i].closed() || kin.contacts[i].gap <= options_.impact.gap_tolerance;
+  for (int i = 0; i < nc; ++i)
+    in_problem[i] = mode[i].closed() || (kin.contacts[i].gap <= options_.impact.gap_tolerance && !deferred_contacts_[i]);
   for (const Guard& g : guards) {
     in_problem[g.contact] = true;
     if (options_.rest_velocity > 0 && -kin.contacts[g.contact].zeta_n < options_.rest_velocity)

@@ -1,0 +1,241 @@
+// simultaneous_impact: conewise jump gains of simultaneous impacts (sensitivity/conewise_gain.hpp)
+// on the scene library's flat landings, per case:
+//   guards                 m, the guards that fire together at the nominal event
+//   pieces                 m!, the activation orders a perturbation could produce
+//   realisable_pieces      orders realised by an open cone of perturbations: the leaves of the
+//                          micro-event tree, all built (the others are reported by kind in
+//                          `unrealisable_orders`: sent_away, empty_cone, no_longer_a_guard)
+//   nominal_outcome_pieces realisable pieces that end in the nominal post-event state and mode (their
+//                          prediction continues on the reference; the others end elsewhere at
+//                          zeroth order: the impact map is discontinuous at the simultaneous event)
+//   min_slope              smallest fitted log-log slope of the first-order prediction's remainder
+//                          over eps = 1e-2..1e-6 with each sampled cone's own piece, against the
+//                          piece's own outcome at T = t* + 0.02 s (piece_remainder), fitted before the
+//                          integration floor (as in jump_gains: from the largest eps down while a
+//                          decade of eps shrinks the remainder more than 3x); `cones_sampled` cones
+//   wrong_piece_slope      largest slope (all five eps) when another piece is applied, the one with
+//                          the nearest outcome (about 1: a wrong first-order term; about 0: a wrong
+//                          outcome)
+//   max_face_discontinuity max |H_a(p) - H_b(p)| / |p| at points of shared cone faces between pieces
+//                          with the same outcome (ConewiseJumpGain::face_discontinuity, 200
+//                          directions; `faces` points checked, 0 when no two pieces share one)
+//   build_us_per_piece     wall time of build_all() over the realisable pieces, microseconds
+//   evaluate_us            wall time of one evaluate(z, v) once the pieces are built
+// Plain main; `--json` prints one JSON object, otherwise a table.
+#include "scenes/references.hpp"
+#include <saltus/sensitivity/prediction_check.hpp>
+
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <iomanip>
+#include <iostream>
+#include <map>
+#include <random>
+
+namespace {
+
+using namespace saltus;
+using Clock = std::chrono::steady_clock;
+
+struct Row {
+  std::string name;
+  int guards = 0, orders = 0, pieces = 0, realisable = 0, cones_sampled = 0, failed_runs = 0, faces = 0;
+  std::map<std::string, int> unrealisable;
+  std::vector<std::string> piece_lines;  ///< order: post-event mode, post-state difference
+  std::string nominal_mode;
+  double min_slope = NAN, wrong_slope = NAN, face = NAN, build_us = NAN, evaluate_us = NAN;
+};
+
+double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
+
+const char* reason_name(UnrealisableOrder::Reason r) {
+  switch (r) {
+    case UnrealisableOrder::Reason::SentAway: return "sent_away";
+    case UnrealisableOrder::Reason::NoLongerAGuard: return "no_longer_a_guard";
+    case UnrealisableOrder::Reason::EmptyCone: return "empty_cone";
+  }
+  return "?";
+}
+
+/// Slope of the remainder before the integration floor (see the file comment).
+double floor_aware_slope(const std::vector<double>& eps, const std::vector<double>& r) {
+  std::vector<double> e{eps.front()}, y{r.front()};
+  for (std::size_t k = 1; k < eps.size() && r[k] < r[k - 1] / 3.0; ++k) {
+    e.push_back(eps[k]);
+    y.push_back(r[k]);
+  }
+  return e.size() >= 2 ? fitted_log_slope(e, y) : NAN;
+}
+
+template <Scene S>
+Row measure(const std::string& name, const S& scene, const Vec<2 * S::nq>& x0, const InputLaw<S>& input,
+            double t_final, int samples) {
+  constexpr int nx = 2 * S::nq, nu = S::nu;
+  const SimulationOptions options = references::tight();
+  Simulator<S> sim(scene, options);
+  const auto traj = sim.run(x0, 0.0, t_final, input);
+  Row row;
+  row.name = name;
+  if (traj.events.empty() || traj.events[0].transitions.front().guards.size() < 2) {
+    std::cerr << name << ": the reference has no simultaneous first event\n";
+    return row;
+  }
+  const Event<S>& ev = traj.events[0];
+  row.guards = static_cast<int>(ev.transitions.front().guards.size());
+  row.nominal_mode = describe(scene, ev.mode_after);
+  row.orders = 1;
+  for (int k = 2; k <= row.guards; ++k) row.orders *= k;
+  ConewiseGainOptions copt;
+  copt.simulation = options;
+  {  // build time on a fresh gain
+    ConewiseJumpGain<S> fresh(scene, ev, traj.input, copt);
+    const auto start = Clock::now();
+    row.pieces = fresh.build_all();
+    row.build_us = 1e6 * seconds_since(start) / std::max(1, row.pieces);
+    for (const auto* p : fresh.pieces()) {
+      row.realisable += p->nominal_outcome;
+      std::string order;
+      for (const auto& group : p->order) {
+        order += order.empty() ? "" : " -> ";
+        for (std::size_t k = 0; k < group.size(); ++k) order += (k ? "+" : "") + scene.contact(group[k].contact).name;
+      }
+      row.piece_lines.push_back(order + ": " + describe(scene, p->mode_after) + ", post-state difference " +
+                                std::to_string(p->post_state_difference));
+    }
+    for (const auto& u : fresh.unrealisable_orders()) ++row.unrealisable[reason_name(u.reason)];
+    row.face = fresh.face_discontinuity(200, &row.faces);
+    std::mt19937 rng(3);
+    std::normal_distribution<double> normal;
+    Vec<nx> z;
+    Vec<nu> v;
+    long calls = 0;
+    const auto t0 = Clock::now();
+    double elapsed = 0;
+    do {
+      for (auto& c : z) c = normal(rng);
+      for (auto& c : v) c = normal(rng);
+      const Vec<nx> h = fresh.evaluate(z, v);
+      if (!h.allFinite()) std::abort();
+      ++calls;
+    } while ((elapsed = seconds_since(t0)) < 0.2);
+    row.evaluate_us = 1e6 * elapsed / static_cast<double>(calls);
+  }
+  LinearisationOptions lopt;
+  lopt.simulation = options;
+  LinearisedSystem<S> lin(scene, traj, lopt);
+  ConewiseJumpGain<S>& gain = lin.conewise_gain(0);
+  gain.build_all();
+  const double T = ev.t + 0.02;
+  std::mt19937 rng(5);
+  std::normal_distribution<double> normal;
+  std::map<const ConewisePiece<S>*, bool> sampled;
+  double min_slope = INFINITY, wrong_slope = -INFINITY;
+  const auto zero = [](double) { return Vec<nu>::Zero().eval(); };
+  for (int s = 0; s < samples && static_cast<int>(sampled.size()) < row.pieces; ++s) {
+    Vec<nx> z0;
+    for (auto& c : z0) c = normal(rng);
+    const Vec<nx> z_minus = lin.propagate(0, z0, zero, ev.t);
+    const ConewisePiece<S>& own = gain.piece(z_minus, Vec<nu>::Zero());
+    if (sampled.count(&own)) continue;
+    sampled[&own] = true;
+    // Another piece, with the same outcome if there is one (then only its first-order term is wrong).
+    const ConewisePiece<S>* other = nullptr;
+    for (const auto* q : gain.pieces())
+      if (q != &own && (!other || (q->x_plus - own.x_plus).norm() < (other->x_plus - own.x_plus).norm())) other = q;
+    try {
+      const RemainderFit right = piece_remainder(lin, options, 0, z0, own, T);
+      if (!right.structure_matched) {
+        ++row.failed_runs;
+        continue;
+      }
+      ++row.cones_sampled;
+      min_slope = std::min(min_slope, floor_aware_slope(right.eps, right.remainder));
+      if (other) {
+        const RemainderFit wrong = piece_remainder(lin, options, 0, z0, *other, T);
+        wrong_slope = std::max(wrong_slope, fitted_log_slope(wrong.eps, wrong.remainder));
+      }
+    } catch (const Error& err) {
+      std::cerr << name << ": perturbed run failed: " << err.what() << "\n";
+      ++row.failed_runs;
+    }
+  }
+  if (row.cones_sampled > 0) row.min_slope = min_slope;
+  if (std::isfinite(wrong_slope)) row.wrong_slope = wrong_slope;
+  return row;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const bool json = argc > 1 && std::strcmp(argv[1], "--json") == 0;
+  std::vector<Row> rows;
+  {
+    scenes::PlankBox plank_box;
+    auto input = open_loop<scenes::PlankBox>([&](double) { return plank_box.lowering_input(); });
+    for (const double vx : {0.0, 0.3}) {
+      Vec<8> x0 = plank_box.flat_state();
+      x0[4] = vx;
+      rows.push_back(measure(vx == 0 ? "plank_box flat landing, stick" : "plank_box flat landing, slip", plank_box, x0,
+                             InputLaw<scenes::PlankBox>(input), 0.3, 200));
+      std::cerr << "done: " << rows.back().name << "\n";
+    }
+  }
+  {
+    scenes::SpatialBox box;
+    for (const double vx : {0.0, 0.5}) {
+      Vec<12> x0 = Vec<12>::Zero();
+      x0[2] = 0.5 * box.parameters().size[2] + 0.02;
+      x0[6] = vx;
+      rows.push_back(measure(vx == 0 ? "spatial_box flat on four corners, stick" : "spatial_box flat on four corners, slip",
+                             box, x0, zero_input<scenes::SpatialBox>(), 0.1, 400));
+      std::cerr << "done: " << rows.back().name << "\n";
+    }
+  }
+  const auto number = [](double x) -> nlohmann::ordered_json {
+    if (std::isnan(x)) return nullptr;
+    return x;
+  };
+  if (json) {
+    nlohmann::ordered_json out = nlohmann::ordered_json::object();
+    for (const Row& r : rows) {
+      nlohmann::ordered_json unrealisable = nlohmann::ordered_json::object();
+      for (const auto& [k, n] : r.unrealisable) unrealisable[k] = n;
+      out[r.name] = {{"guards", r.guards},
+                     {"pieces", r.orders},
+                     {"realisable_pieces", r.pieces},
+                     {"nominal_outcome_pieces", r.realisable},
+                     {"unrealisable_orders", unrealisable},
+                     {"cones_sampled", r.cones_sampled},
+                     {"failed_runs", r.failed_runs},
+                     {"min_slope", number(r.min_slope)},
+                     {"wrong_piece_slope", number(r.wrong_slope)},
+                     {"max_face_discontinuity", number(r.face)},
+                     {"faces", r.faces},
+                     {"build_us_per_piece", number(r.build_us)},
+                     {"evaluate_us", number(r.evaluate_us)}};
+    }
+    std::cout << out.dump(2) << "\n";
+    return 0;
+  }
+  std::cout << std::left << std::setw(42) << "case" << std::right << std::setw(7) << "guards" << std::setw(7)
+            << "orders" << std::setw(11) << "realisable" << std::setw(9) << "nominal" << std::setw(7) << "cones"
+            << std::setw(10) << "min_slope" << std::setw(12) << "wrong_slope" << std::setw(12) << "face_jump"
+            << std::setw(14) << "build_us/pc" << std::setw(12) << "evaluate_us" << "\n";
+  for (const Row& r : rows) {
+    std::cout << std::left << std::setw(42) << r.name << std::right << std::setw(7) << r.guards << std::setw(7)
+              << r.orders << std::setw(11) << r.pieces << std::setw(9) << r.realisable << std::setw(7)
+              << r.cones_sampled << std::setw(10) << std::setprecision(3) << r.min_slope << std::setw(12)
+              << r.wrong_slope << std::setw(12) << std::setprecision(2) << r.face << std::setw(14)
+              << std::setprecision(4) << r.build_us << std::setw(12) << r.evaluate_us << "\n";
+    for (const auto& [k, n] : r.unrealisable) std::cout << "    unrealisable (" << k << "): " << n << "\n";
+    std::cout << "    nominal post-event mode: " << r.nominal_mode << "\n";
+    for (const auto& line : r.piece_lines) std::cout << "    piece " << line << "\n";
+    if (r.failed_runs) std::cout << "    failed perturbed runs: " << r.failed_runs << "\n";
+  }
+  return 0;
+}

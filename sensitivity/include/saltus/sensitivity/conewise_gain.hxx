@@ -1,0 +1,380 @@
+// Definitions of conewise_gain.hpp (see there for the derivation).
+#pragma once
+
+#include <saltus/hybrid/simulation/mode_system.hpp>
+#include <saltus/hybrid/simulation/transition.hpp>
+#include <saltus/sensitivity/conewise_gain.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <random>
+
+namespace saltus {
+
+template <Scene S>
+bool ConewisePiece<S>::contains(const Vec<nx>& z, const Vec<nu>& v, double tolerance) const {
+  if (cone_z.rows() == 0) return true;
+  double scale = z.norm();
+  if constexpr (nu > 0) scale = std::hypot(scale, v.norm());
+  Eigen::VectorXd c = cone_z * z;
+  if constexpr (nu > 0) c += cone_v * v;
+  return c.minCoeff() >= -tolerance * scale;
+}
+
+template <Scene S>
+struct ConewiseJumpGain<S>::Node {
+  State x = State::Zero();  ///< intermediate state at t*
+  Mode<nc> mode{};          ///< intermediate mode
+  Mat<nx, nx> Zz = Mat<nx, nx>::Identity();  ///< z_N = Zz z- + Zv v
+  Mat<nx, nu> Zv = Mat<nx, nu>::Zero();
+  std::vector<Guard> fired, never_crossed;
+  std::vector<std::vector<Guard>> order;  ///< the micro-events so far, each a group of guards
+  /// The crossing guards, grouped where they coincide (the same first-order shift: they fire
+  /// together in every nearby motion, "Coincident guards" in jump_gain.hpp).
+  std::vector<std::vector<Guard>> crossing;
+  /// Rows of the first-order crossing-time shifts of the groups: dt = dt_z z- + dt_v v.
+  Eigen::Matrix<double, Eigen::Dynamic, nx> dt_z;
+  Eigen::Matrix<double, Eigen::Dynamic, nu> dt_v;
+  /// The cone of the path to this node.
+  Eigen::Matrix<double, Eigen::Dynamic, nx> cone_z;
+  Eigen::Matrix<double, Eigen::Dynamic, nu> cone_v;
+  std::vector<Event<S>> steps;
+  double seconds = 0.0;
+  std::vector<std::unique_ptr<Node>> children;  ///< one per crossing group, built lazily
+  /// Per crossing group: its cone was found to have no interior (the order cannot happen).
+  std::vector<char> empty_cone;
+  std::unique_ptr<Piece> piece;                 ///< a leaf's piece
+};
+
+namespace detail {
+inline std::string describe_guard(const char* contact_name, const Guard& g) {
+  return concat(to_string(g.kind), " of '", contact_name, "'");
+}
+}  // namespace detail
+
+namespace detail {
+/// Distance from the origin to the convex hull of the rows of R: positive if and only if the cone
+/// {p : R p >= 0} has an interior point (Gordan's alternative: R p > 0 has no solution exactly when
+/// a convex combination of the rows vanishes). Exact for up to 20 rows, by the affinely
+/// independent subsets of rows (the nearest point lies in the relative interior of one of them,
+/// Caratheodory); +infinity (unchecked) beyond.
+inline double hull_distance_from_origin(const Eigen::MatrixXd& R) {
+  const int k = static_cast<int>(R.rows()), n = static_cast<int>(R.cols());
+  if (k == 0) return std::numeric_limits<double>::infinity();
+  if (k > 20) return std::numeric_limits<double>::infinity();
+  double best = std::numeric_limits<double>::infinity();
+  std::vector<int> idx;
+  for (unsigned mask = 1; mask < (1u << k); ++mask) {
+    idx.clear();
+    for (int i = 0; i < k; ++i)
+      if (mask & (1u << i)) idx.push_back(i);
+    const int s = static_cast<int>(idx.size());
+    if (s > n + 1) continue;
+    const Eigen::VectorXd p0 = R.row(idx[0]).transpose();
+    if (s == 1) {
+      best = std::min(best, p0.norm());
+      continue;
+    }
+    Eigen::MatrixXd D(n, s - 1);
+    for (int j = 1; j < s; ++j) D.col(j - 1) = R.row(idx[j]).transpose() - p0;
+    const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(D);
+    if (qr.rank() < s - 1) continue;  // affinely dependent: a smaller subset attains the same point
+    const Eigen::VectorXd mu = qr.solve(Eigen::VectorXd(-p0));
+    if (mu.minCoeff() < -1e-12 || mu.sum() > 1 + 1e-12) continue;  // the nearest point of the affine hull is outside
+    best = std::min(best, (p0 + D * mu).norm());
+  }
+  return best;
+}
+}  // namespace detail
+
+template <Scene S>
+std::string ConewiseJumpGain<S>::describe_order(const std::vector<Guard>& fired) const {
+  std::string s = "[";
+  for (std::size_t k = 0; k < fired.size(); ++k) {
+    if (k) s += ", ";
+    s += detail::describe_guard(scene_.contact(fired[k].contact).name.c_str(), fired[k]);
+  }
+  return s + "]";
+}
+
+template <Scene S>
+ConewiseJumpGain<S>::ConewiseJumpGain(const S& scene, const Event<S>& event, const InputLaw<S>& law,
+                                      ConewiseGainOptions options)
+    : scene_(scene), event_(event), law_(law), options_(options) {
+  SALTUS_REQUIRE(static_cast<bool>(law), "conewise gain: the input law is empty");
+  SALTUS_REQUIRE(!event.transitions.empty() && !event.transitions.front().guards.empty(),
+                 "conewise gain: the event at t = ", event.t, " has no guarded first transition (an initial impact "
+                 "has a fixed time and a linear gain: JumpGainSolver)");
+  SALTUS_REQUIRE(options.outcome_tolerance >= 0, "ConewiseGainOptions: outcome_tolerance must be >= 0");
+  guards_ = event.transitions.front().guards;
+  resolver_ = std::make_unique<TransitionResolver<S>>(scene, options.simulation);
+  gains_ = std::make_unique<JumpGainSolver<S>>(scene, options.gains);
+  root_ = std::make_unique<Node>();
+  root_->x = event.transitions.front().x_before;
+  root_->mode = event.transitions.front().mode_before;
+  const auto start = std::chrono::steady_clock::now();
+  classify(*root_);
+  // Every guard of the event crosses at x- (it fired): none may be dropped at the root.
+  if (!root_->never_crossed.empty()) {
+    const Guard& g = root_->never_crossed.front();
+    throw GrazingEvent(detail::concat("conewise gain: the ", detail::describe_guard(scene.contact(g.contact).name.c_str(), g),
+                                      " fired at t = ", event.t, " but does not cross there (rate >= 0 along the mode "
+                                      "before)"),
+                       event.t, g, unrealisable_.empty() ? 0.0 : unrealisable_.back().gamma_dot, 0.0);
+  }
+  root_->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+template <Scene S>
+ConewiseJumpGain<S>::~ConewiseJumpGain() = default;
+template <Scene S>
+ConewiseJumpGain<S>::ConewiseJumpGain(ConewiseJumpGain&&) noexcept = default;
+
+template <Scene S>
+void ConewiseJumpGain<S>::classify(Node& node) {
+  // Every guard of the event not fired yet is classified afresh at each node: one that the
+  // previous impulse sent away may be approached again after a later one.
+  const double t = event_.t;
+  const GuardList<nc> active = active_guards(scene_, node.mode);
+  std::vector<Eigen::Matrix<double, 1, nx>> rows_z;
+  std::vector<Eigen::Matrix<double, 1, nu>> rows_v;
+  node.never_crossed.clear();
+  for (const Guard& g : guards_) {
+    if (std::find(node.fired.begin(), node.fired.end(), g) != node.fired.end()) continue;
+    if (std::find(active.begin(), active.end(), g) == active.end()) {
+      // The contact's mode changed in a micro-event so that this guard no longer exists.
+      node.never_crossed.push_back(g);
+      unrealisable_.push_back({node.fired, {g}, UnrealisableOrder::Reason::NoLongerAGuard,
+                               std::numeric_limits<double>::quiet_NaN()});
+      continue;
+    }
+    const GuardCrossing<S>& c = gains_->crossing(law_, t, node.x, node.mode, g);
+    const double threshold = options_.gains.grazing_threshold * c.rate_scale;
+    if (!std::isfinite(c.gamma_dot) || std::abs(c.gamma_dot) <= threshold) {
+      throw GrazingEvent(
+          detail::concat("conewise gain: after the micro-events ", describe_order(node.fired), " of the event at t = ", t,
+                         ", the ", detail::describe_guard(scene_.contact(g.contact).name.c_str(), g),
+                         " is near-grazing: |gamma_dot| = ", std::abs(c.gamma_dot), " <= ",
+                         options_.gains.grazing_threshold, " * rate scale ", c.rate_scale,
+                         "; the order of its crossing is not differentiable there"),
+          t, g, c.gamma_dot, c.rate_scale);
+    }
+    if (c.gamma_dot > 0) {  // sent away: it cannot be the next micro-event
+      node.never_crossed.push_back(g);
+      unrealisable_.push_back({node.fired, {g}, UnrealisableOrder::Reason::SentAway, c.gamma_dot});
+      continue;
+    }
+    const Eigen::Matrix<double, 1, nx> rz = -(c.dgamma_x * node.Zz) / c.gamma_dot;
+    Eigen::Matrix<double, 1, nu> rv = Eigen::Matrix<double, 1, nu>::Zero();
+    if constexpr (nu > 0) rv = -(c.dgamma_x * node.Zv + c.dgamma_u) / c.gamma_dot;
+    bool grouped = false;
+    for (std::size_t k = 0; k < node.crossing.size() && !grouped; ++k) {
+      const double scale = std::max({std::hypot(rz.norm(), rv.norm()), std::hypot(rows_z[k].norm(), rows_v[k].norm()), 1e-300});
+      const double difference = std::hypot((rz - rows_z[k]).norm(), (rv - rows_v[k]).norm());
+      if (difference <= options_.gains.coincidence_tolerance * scale) {
+        node.crossing[k].push_back(g);
+        grouped = true;
+      }
+    }
+    if (grouped) continue;
+    node.crossing.push_back({g});
+    rows_z.push_back(rz);
+    rows_v.push_back(rv);
+  }
+  const int k = static_cast<int>(node.crossing.size());
+  node.dt_z.resize(k, nx);
+  node.dt_v.resize(k, nu);
+  for (int i = 0; i < k; ++i) {
+    node.dt_z.row(i) = rows_z[i];
+    node.dt_v.row(i) = rows_v[i];
+  }
+  node.children.resize(k);
+  node.empty_cone.assign(k, 0);
+}
+
+template <Scene S>
+auto ConewiseJumpGain<S>::child(Node& node, int k) -> Node* {
+  if (node.children[k]) return node.children[k].get();
+  if (node.empty_cone[k]) return nullptr;
+  const auto start = std::chrono::steady_clock::now();
+  const double t = event_.t;
+  const std::vector<Guard>& group = node.crossing[k];
+  // The cone: the path's rows and dt_i - dt_k >= 0 for every other crossing group i.
+  const int others = static_cast<int>(node.crossing.size()) - 1;
+  const int r0 = static_cast<int>(node.cone_z.rows());
+  Eigen::Matrix<double, Eigen::Dynamic, nx> cone_z(r0 + others, nx);
+  Eigen::Matrix<double, Eigen::Dynamic, nu> cone_v(r0 + others, nu);
+  cone_z.topRows(r0) = node.cone_z;
+  cone_v.topRows(r0) = node.cone_v;
+  for (int i = 0, r = r0; i <= others; ++i) {
+    if (i == k) continue;
+    cone_z.row(r) = node.dt_z.row(i) - node.dt_z.row(k);
+    cone_v.row(r) = node.dt_v.row(i) - node.dt_v.row(k);
+    ++r;
+  }
+  // A cone without interior holds no open set of perturbations: the order happens on a set of
+  // measure zero only (three corners of a flat face down force the fourth down with them, so
+  // the diagonal corner of the first one is never the second to land). Reported, not built.
+  if (cone_z.rows() > 0) {
+    Eigen::MatrixXd rows(cone_z.rows(), nx + nu);
+    rows.leftCols(nx) = cone_z;
+    if constexpr (nu > 0) rows.rightCols(nu) = cone_v;
+    for (int r = 0; r < rows.rows(); ++r) {
+      const double norm = rows.row(r).norm();
+      if (norm > 0) rows.row(r) /= norm;
+    }
+    if (detail::hull_distance_from_origin(rows) <= options_.empty_cone_tolerance) {
+      node.empty_cone[k] = 1;
+      unrealisable_.push_back({node.fired, group, UnrealisableOrder::Reason::EmptyCone, 0.0});
+      return nullptr;
+    }
+  }
+  auto c = std::make_unique<Node>();
+  c->fired = node.fired;
+  c->fired.insert(c->fired.end(), group.begin(), group.end());
+  c->order = node.order;
+  c->order.push_back(group);
+  c->cone_z = std::move(cone_z);
+  c->cone_v = std::move(cone_v);
+  // The guards still to come are held back, and so are those sent away: in the perturbed motion
+  // their contacts are at a positive gap of order eps when this micro-event happens.
+  std::vector<Guard> deferred = node.never_crossed;
+  for (int i = 0; i <= others; ++i)
+    if (i != k) deferred.insert(deferred.end(), node.crossing[i].begin(), node.crossing[i].end());
+  const std::string order = describe_order(c->fired);
+  ModeSystem<S> sys(scene_, law_);
+  sys.set_mode(node.mode);
+  Event<S> step;
+  try {
+    step = resolver_->resolve(sys, t, node.x, node.mode, group, deferred);
+  } catch (const ContactProblemFailure& e) {
+    throw ContactProblemFailure(detail::concat("conewise gain, micro-event order ", order, ": ", e.what()));
+  } catch (const NumericalFailure& e) {
+    throw NumericalFailure(detail::concat("conewise gain, micro-event order ", order, ": ", e.what()));
+  }
+  try {
+    // Composed from node's maps: the step's dt and its coincident guards in terms of (z-, v).
+    const JumpGain<S>& sg = gains_->compute(step, law_, node.Zz, node.Zv);
+    c->Zz = sg.G_z;
+    c->Zv = sg.G_v;
+  } catch (const GrazingEvent& e) {
+    throw GrazingEvent(detail::concat("conewise gain, micro-event order ", order, ": ", e.what()), e.t(), e.guard(),
+                       e.gamma_dot(), e.rate_scale());
+  } catch (const SimultaneousActivation& e) {
+    throw SimultaneousActivation(detail::concat("conewise gain, micro-event order ", order, ": ", e.what()));
+  }
+  c->x = step.x_plus;
+  c->mode = step.mode_after;
+  c->steps = node.steps;
+  c->steps.push_back(std::move(step));
+  classify(*c);
+  c->seconds = node.seconds + std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  if (c->crossing.empty()) {  // a leaf: the piece
+    auto p = std::make_unique<Piece>();
+    p->order = c->order;
+    p->never_crossed = c->never_crossed;
+    p->G_z = c->Zz;
+    p->G_v = c->Zv;
+    p->cone_z = c->cone_z;
+    p->cone_v = c->cone_v;
+    p->x_plus = c->x;
+    p->mode_after = c->mode;
+    p->post_state_difference = (c->x - event_.x_plus).cwiseAbs().maxCoeff();
+    p->nominal_outcome = c->mode == event_.mode_after &&
+                         p->post_state_difference <=
+                             options_.outcome_tolerance * std::max(1.0, event_.x_plus.cwiseAbs().maxCoeff());
+    p->steps = c->steps;
+    p->build_seconds = c->seconds;
+    pieces_.push_back(p.get());
+    c->piece = std::move(p);
+  }
+  node.children[k] = std::move(c);
+  return node.children[k].get();
+}
+
+template <Scene S>
+auto ConewiseJumpGain<S>::piece(const State& z_minus, const Input& v) -> const Piece& {
+  SALTUS_REQUIRE(z_minus.allFinite() && v.allFinite(), "conewise gain: the deviation (z-, v) is not finite");
+  Node* node = root_.get();
+  std::vector<int> candidates;
+  while (!node->crossing.empty()) {
+    Eigen::VectorXd dt = node->dt_z * z_minus;
+    if constexpr (nu > 0) dt += node->dt_v * v;
+    // The earliest crossing; ties (a face) to the first listed. A cone without interior can be
+    // the argmin only on its (measure-zero) set: the next earliest is taken then.
+    candidates.resize(dt.size());
+    for (int i = 0; i < dt.size(); ++i) candidates[i] = i;
+    std::stable_sort(candidates.begin(), candidates.end(), [&](int a, int b) { return dt[a] < dt[b]; });
+    Node* next = nullptr;
+    for (const int i : candidates)
+      if ((next = child(*node, i)) != nullptr) break;
+    SALTUS_INVARIANT(next != nullptr, "the cones of a node's children cover every direction");
+    node = next;
+  }
+  SALTUS_INVARIANT(node->piece != nullptr, "a node without crossing guards is a leaf with a piece");
+  return *node->piece;
+}
+
+template <Scene S>
+auto ConewiseJumpGain<S>::evaluate(const State& z_minus, const Input& v) -> State {
+  const Piece& p = piece(z_minus, v);
+  State z = p.G_z * z_minus;
+  if constexpr (nu > 0) z += p.G_v * v;
+  return z;
+}
+
+template <Scene S>
+int ConewiseJumpGain<S>::build_all() {
+  std::vector<Node*> stack{root_.get()};
+  while (!stack.empty()) {
+    Node* node = stack.back();
+    stack.pop_back();
+    for (int k = 0; k < static_cast<int>(node->crossing.size()); ++k)
+      if (Node* c = child(*node, k)) stack.push_back(c);
+  }
+  return static_cast<int>(pieces_.size());
+}
+
+template <Scene S>
+double ConewiseJumpGain<S>::face_discontinuity(int samples, int* faces, unsigned seed) {
+  SALTUS_REQUIRE(samples > 0, "face_discontinuity: samples must be > 0");
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> normal;
+  constexpr int n = nx + nu;
+  double worst = 0.0;
+  int checked = 0;
+  for (int s = 0; s < samples; ++s) {
+    Eigen::Matrix<double, n, 1> p;
+    for (int k = 0; k < n; ++k) p[k] = normal(rng);
+    p.normalize();
+    const Piece& a = piece(p.template head<nx>(), p.template tail<nu>());
+    for (int r = 0; r < a.cone_z.rows(); ++r) {
+      Eigen::Matrix<double, n, 1> row;
+      row.template head<nx>() = a.cone_z.row(r).transpose();
+      if constexpr (nu > 0) row.template tail<nu>() = a.cone_v.row(r).transpose();
+      const double rn = row.norm();
+      if (!(rn > 0)) continue;
+      // The point of the face's hyperplane nearest to p, kept if it lies on the cone's boundary.
+      Eigen::Matrix<double, n, 1> f = p - (row.dot(p) / (rn * rn)) * row;
+      const double fn = f.norm();
+      if (!(fn > 1e-6) || !a.contains(f.template head<nx>(), f.template tail<nu>(), 1e-12)) continue;
+      const Eigen::Matrix<double, n, 1> out = f - 1e-7 * fn / rn * row;
+      const Piece& b = piece(out.template head<nx>(), out.template tail<nu>());
+      if (&b == &a || b.nominal_outcome != a.nominal_outcome) continue;
+      if (!a.nominal_outcome && (a.x_plus - b.x_plus).cwiseAbs().maxCoeff() > 0) continue;
+      State ha = a.G_z * f.template head<nx>(), hb = b.G_z * f.template head<nx>();
+      if constexpr (nu > 0) {
+        ha += a.G_v * f.template tail<nu>();
+        hb += b.G_v * f.template tail<nu>();
+      }
+      worst = std::max(worst, (ha - hb).norm() / fn);
+      ++checked;
+    }
+  }
+  if (faces) *faces = checked;
+  return worst;
+}
+
+}  // namespace saltus
