@@ -7,14 +7,16 @@
 //   slope              fitted log-log slope of the first-order prediction's remainder
 //                      |x_eps - x_k - eps z_k| over eps = 1e-2..1e-6, for a perturbed state at the
 //                      start, sampled in the segment after the event (2 means exact first order),
-//                      fitted on the points before the integration floor: from the largest eps
-//                      down, while each decade of eps shrinks the remainder by more than 3x
-//                      (slope > 0.48; the floor is a plateau, a wrong first order still has slope 1);
-//   slope_points       how many of the 5 eps values that fit used (5: the whole range)
+//                      fitted on the points at least 30x above the smallest remainder (the
+//                      integration floor: remainder_slope.hpp); "exact" when every remainder is
+//                      at round-off (the motion is linear in the perturbation)
+//   slope_points       how many of the 5 eps values that fit used
+//   remainders         r(eps) for eps = 1e-2, ..., 1e-6 (JSON only)
 //   gain_us            wall time of one analytic gain (JumpGainSolver::compute), microseconds
 //   numerical_twin_us  wall time of one numerical twin (numerical_jump_gain), microseconds
 // Both times are measured in the same run, so their ratio is the meaningful figure.
 // Plain main; `--json` prints one JSON object, otherwise a table.
+#include "remainder_slope.hpp"
 #include "scenes/references.hpp"
 #include <saltus/sensitivity/prediction_check.hpp>
 
@@ -40,6 +42,7 @@ struct Row {
   std::string scene, kind;
   double fd_rel_error = 0, dt_rel_error = 0, slope = 0, gain_us = 0, twin_us = 0;
   int slope_points = 0;
+  bool exact = false;
   std::vector<double> remainders;  ///< r(eps) for eps = 1e-2..1e-6
 };
 
@@ -93,14 +96,11 @@ void measure(const references::Reference<S>& ref, const Vec<2 * S::nq>& z0, std:
     const double t_sample = traj.events[e].t + 0.5 * (t_next - traj.events[e].t);
     const auto fit = prediction_remainder(lin, ref.options, z0, [](double) { return Vec<S::nu>::Zero().eval(); },
                                                {t_sample});
-    std::vector<double> e_above{fit.eps.front()}, r_above{fit.remainder.front()};
-    for (std::size_t k = 1; k < fit.eps.size() && fit.remainder[k] < fit.remainder[k - 1] / 3.0; ++k) {
-      e_above.push_back(fit.eps[k]);
-      r_above.push_back(fit.remainder[k]);
-    }
+    const bench::RemainderSlope slope = bench::slope_above_floor(fit.eps, fit.remainder);
     row.remainders = fit.remainder;
-    row.slope_points = static_cast<int>(e_above.size());
-    row.slope = fit.structure_matched && e_above.size() >= 2 ? fitted_log_slope(e_above, r_above) : std::nan("");
+    row.slope_points = slope.points;
+    row.exact = slope.exact;
+    row.slope = fit.structure_matched ? slope.slope : std::nan("");
     rows.push_back(row);
   }
 }
@@ -139,7 +139,7 @@ int main(int argc, char** argv) {
       const std::string kind = r.kind + (k > 1 ? " #" + std::to_string(k) : "");
       out[r.scene][kind] = {{"fd_rel_error", number(r.fd_rel_error)},
                             {"dt_rel_error", number(r.dt_rel_error)},
-                            {"slope", number(r.slope)},
+                            {"slope", r.exact ? nlohmann::ordered_json("exact") : number(r.slope)},
                             {"slope_points", r.slope_points},
                             {"remainders", [&] {
                                nlohmann::ordered_json a = nlohmann::ordered_json::array();
@@ -155,7 +155,9 @@ int main(int argc, char** argv) {
        << std::setw(14) << "dt_rel_error" << std::setw(8) << "slope" << std::setw(8) << "points" << std::setw(12) << "gain_us" << "numerical_twin_us\n";
     for (const Row& r : rows)
       os << std::left << std::setw(32) << r.scene << std::setw(36) << r.kind << std::setw(14) << r.fd_rel_error
-         << std::setw(14) << r.dt_rel_error << std::setw(8) << std::setprecision(3) << r.slope << std::setw(8) << r.slope_points << std::setw(12) << r.gain_us
+         << std::setw(14) << r.dt_rel_error << std::setw(8) << std::setprecision(3)
+         << (r.exact ? std::string("exact") : [&] { std::ostringstream o; o << std::setprecision(3) << r.slope; return o.str(); }())
+         << std::setw(8) << r.slope_points << std::setw(12) << r.gain_us
          << r.twin_us << std::setprecision(4) << "\n";
   }
   std::cout << os.str();

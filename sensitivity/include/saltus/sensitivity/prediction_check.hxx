@@ -108,8 +108,15 @@ RemainderFit piece_remainder(const LinearisedSystem<S>& lin, const SimulationOpt
   for (const double eps : eps_values) {
     const auto run = sim.run(Vec<nx>(lin.begin_state(0) + eps * z0), traj.segments.front().mode, traj.t_begin(), t,
                              traj.input);
-    fit.structure_matched = fit.structure_matched && run.events.size() == expected_events &&
-                            run.segments.back().mode == piece.mode_after;
+    // The same contact modes (open / stick / slip, and the sign of a planar slip); a spatial
+    // slip's stored direction is the sliding direction at the slip's start, which moves with eps.
+    bool same_modes = true;
+    for (int i = 0; i < S::nc; ++i) {
+      const ContactState &a = run.segments.back().mode[i], &b = piece.mode_after[i];
+      same_modes = same_modes && a.mode == b.mode &&
+                   (a.mode != ContactMode::Slip || scene.contact(i).tangents() != 1 || a.slip_direction == b.slip_direction);
+    }
+    fit.structure_matched = fit.structure_matched && run.events.size() == expected_events && same_modes;
     fit.eps.push_back(eps);
     fit.remainder.push_back(std::max((run.final_state() - x_piece - eps * z_t).cwiseAbs().maxCoeff(), 1e-300));
   }
