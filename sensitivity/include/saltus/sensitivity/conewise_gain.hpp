@@ -1,6 +1,12 @@
 // Conewise-linear, positively homogeneous jump gains of simultaneous events (thesis C.40-C.63
 // and appendix D; Rijnen, Chen, van de Wouw, Saccon, Nijmeijer 2018).
 //
+// Shapes and units: z- (nx = 2 nq) is the state deviation (q, q') from the extended ante-event
+// reference at the nominal event time t*, v (nu) the input deviation at t*, z+ (nx) the deviation
+// from the post-event reference at t* (the nominal one, or the piece's own outcome, below); all in
+// the scene's units (SI in the library's scenes). The map is H(z-, v) = G_z z- + G_v v on the cone
+// of the piece that contains (z-, v).
+//
 // An event fired by m guards at once (a box landing flat: both corners' touchdowns) is split by a
 // perturbation into m micro-events in an order that depends on the perturbation. To first order
 // the map from the ante-event deviation (z-, v) to the post-event deviation z+ is then linear on
@@ -62,6 +68,11 @@
 //    exceptions, with the order added to the message);
 //  - continuity across shared faces is measured, not assumed: face_discontinuity().
 //
+// Not followed yet: a guard that fires a second time within the macro-event (a corner released by
+// a later impulse that lands again at once). The spatial box on four corners does this (its first
+// four touchdowns leave it on one corner, and the perturbed motion lands again within
+// milliseconds): its pieces describe the first firing of each guard only.
+//
 // Cost: up to m! leaves. The tree is built lazily: evaluate() builds only the nodes on the path
 // of its (z-, v) and keeps them (memoised); build_all() builds every leaf. A node costs one
 // resolved transition (impact problem, mode selection), one single-guard gain and one guard
@@ -89,7 +100,8 @@ struct ConewiseGainOptions {
   /// A piece's post-event state is the nominal one when max |x_plus - x+| <= this * max(1, |x+|).
   double outcome_tolerance = 1e-9;
   /// A cone whose normalised rows have a convex combination shorter than this has no interior
-  /// (its order is unrealisable, UnrealisableOrder::Reason::EmptyCone).
+  /// (its order is unrealisable, UnrealisableOrder::Reason::EmptyCone). Checked exactly for cones
+  /// of up to 20 rows (every path of up to 6 guards); deeper cones are not checked and built.
   double empty_cone_tolerance = 1e-9;
 };
 
@@ -117,9 +129,9 @@ struct ConewisePiece {
   double post_state_difference = 0.0;  ///< max |x_plus - nominal x+|
   /// The micro-events of this order as the event physics resolved them (each with its chain).
   std::vector<Event<S>> steps;
-  double build_seconds = 0.0;  ///< CPU-independent wall time spent on the nodes of this piece's path
+  double build_seconds = 0.0;  ///< wall time (steady clock) spent on the nodes of this piece's path, root included
 
-  /// True if (z, v) lies in the cone, up to tolerance * |(z, v)|.
+  /// True if (z, v) lies in the cone: every row, normalised, gives >= -tolerance * |(z, v)|.
   bool contains(const Vec<nx>& z, const Vec<nu>& v, double tolerance = 0.0) const;
 };
 
@@ -147,9 +159,12 @@ class ConewiseJumpGain {
   using Piece = ConewisePiece<S>;
 
   /// The event's first transition must be fired by guards (one or more); its x- and mode before
-  /// are the nominal ones; `law` is the input law of the reference. The scene and the law must
-  /// outlive this object. @throws InvalidArgument (an event without guards, an empty law),
-  /// GrazingEvent (a guard of the event that does not cross transversally at x-).
+  /// are the nominal ones; `law` is the input law of the reference (copied: the scene, and what
+  /// the law captures, must outlive this object). options.simulation must be the reference's own
+  /// simulation options: other impact or selection options can resolve the micro-events
+  /// differently. @throws InvalidArgument (an event without guards, an empty law, a guard of the
+  /// event that its mode does not have), GrazingEvent (a guard of the event that does not cross
+  /// transversally at x-, or whose rate is positive there).
   ConewiseJumpGain(const S& scene, const Event<S>& event, const InputLaw<S>& law, ConewiseGainOptions options = {});
   ConewiseJumpGain(S&&, const Event<S>&, const InputLaw<S>&, ConewiseGainOptions = {}) = delete;  // would dangle
   ~ConewiseJumpGain();
@@ -162,9 +177,13 @@ class ConewiseJumpGain {
 
   /// The piece whose cone contains (z-, v), built on first use. Ties (a face) go to the guard
   /// listed first in guards(): the map is continuous there when face_discontinuity() is small.
-  /// @throws GrazingEvent (an intermediate crossing that is not transversal), the event
-  /// physics' exceptions (ContactProblemFailure, NumericalFailure), SimultaneousActivation (a
-  /// micro-event's chain fired by several guards at once), each naming the order so far.
+  /// A cone found empty (interior below empty_cone_tolerance) is never returned: on its
+  /// measure-zero set the next earliest micro-event's piece is, whose cone then contains (z, v)
+  /// up to that tolerance. @throws InvalidArgument (non-finite z or v), GrazingEvent (an
+  /// intermediate crossing that is not transversal), the event physics' exceptions
+  /// (ContactProblemFailure, NumericalFailure, NonSpdMassMatrix), SimultaneousActivation (a
+  /// micro-event's chain fired by several non-coincident guards at once), each naming the order
+  /// so far; InternalError if every cone of a node were empty (cannot happen: they cover space).
   const Piece& piece(const State& z_minus, const Input& v);
   /// z+ = G_z z- + G_v v of piece(z-, v).
   State evaluate(const State& z_minus, const Input& v);
@@ -178,12 +197,12 @@ class ConewiseJumpGain {
   const std::vector<UnrealisableOrder>& unrealisable_orders() const { return unrealisable_; }
 
   /// Continuity across shared cone faces, measured: `samples` random directions (z-, v) (unit
-  /// Euclidean norm, seeded) are projected onto each face of their piece's cone; where the
-  /// projection lies on the cone's boundary, the neighbouring piece across that face is found by
-  /// a step of 1e-7 outward and both pieces are applied at the face point. Returns
+  /// Euclidean norm in the scene's units, seeded) are projected onto each face of their piece's
+  /// cone; where the projection p lies on the cone's boundary, the neighbouring piece across that
+  /// face is found by a step of 1e-7 |p| outward and both pieces are applied at p. Returns
   /// max |H_a(p) - H_b(p)| / |p| over the pairs of pieces with the same post-event outcome, and
-  /// the number of faces checked in `faces` (0: no face found; the map is then linear). Builds
-  /// the pieces it meets.
+  /// the number of face points compared in `faces` (0: none compared: a single piece, pieces
+  /// with different outcomes, or faces the samples missed). Builds the pieces it meets.
   double face_discontinuity(int samples, int* faces = nullptr, unsigned seed = 20261130);
 
  private:

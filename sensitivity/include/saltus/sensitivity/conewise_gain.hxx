@@ -18,9 +18,15 @@ bool ConewisePiece<S>::contains(const Vec<nx>& z, const Vec<nu>& v, double toler
   if (cone_z.rows() == 0) return true;
   double scale = z.norm();
   if constexpr (nu > 0) scale = std::hypot(scale, v.norm());
-  Eigen::VectorXd c = cone_z * z;
-  if constexpr (nu > 0) c += cone_v * v;
-  return c.minCoeff() >= -tolerance * scale;
+  for (int r = 0; r < cone_z.rows(); ++r) {
+    double value = cone_z.row(r).dot(z), norm = cone_z.row(r).norm();
+    if constexpr (nu > 0) {
+      value += cone_v.row(r).dot(v);
+      norm = std::hypot(norm, cone_v.row(r).norm());
+    }
+    if (norm > 0 && value < -tolerance * scale * norm) return false;
+  }
+  return true;
 }
 
 template <Scene S>
@@ -117,12 +123,14 @@ ConewiseJumpGain<S>::ConewiseJumpGain(const S& scene, const Event<S>& event, con
   const auto start = std::chrono::steady_clock::now();
   classify(*root_);
   // Every guard of the event crosses at x- (it fired): none may be dropped at the root.
-  if (!root_->never_crossed.empty()) {
-    const Guard& g = root_->never_crossed.front();
-    throw GrazingEvent(detail::concat("conewise gain: the ", detail::describe_guard(scene.contact(g.contact).name.c_str(), g),
-                                      " fired at t = ", event.t, " but does not cross there (rate >= 0 along the mode "
-                                      "before)"),
-                       event.t, g, unrealisable_.empty() ? 0.0 : unrealisable_.back().gamma_dot, 0.0);
+  for (const UnrealisableOrder& u : unrealisable_) {
+    const Guard& g = u.next.front();
+    const std::string name = detail::describe_guard(scene.contact(g.contact).name.c_str(), g);
+    SALTUS_REQUIRE(u.reason != UnrealisableOrder::Reason::NoLongerAGuard, "conewise gain: the ", name,
+                   " fired at t = ", event.t, " is not a guard of the mode before the event");
+    throw GrazingEvent(detail::concat("conewise gain: the ", name, " fired at t = ", event.t,
+                                      " but does not cross there (rate ", u.gamma_dot, " >= 0 along the mode before)"),
+                       event.t, g, u.gamma_dot, 0.0);
   }
   root_->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
@@ -282,9 +290,17 @@ auto ConewiseJumpGain<S>::child(Node& node, int k) -> Node* {
     p->x_plus = c->x;
     p->mode_after = c->mode;
     p->post_state_difference = (c->x - event_.x_plus).cwiseAbs().maxCoeff();
-    p->nominal_outcome = c->mode == event_.mode_after &&
-                         p->post_state_difference <=
-                             options_.outcome_tolerance * std::max(1.0, event_.x_plus.cwiseAbs().maxCoeff());
+    // The same contact modes (a spatial slip's stored direction compared to the outcome
+    // tolerance: it is the sliding direction at the slip's start, computed from round-off-level
+    // different states) and the same post-event state.
+    const double tolerance = options_.outcome_tolerance * std::max(1.0, event_.x_plus.cwiseAbs().maxCoeff());
+    bool same_modes = true;
+    for (int i = 0; i < nc; ++i) {
+      const ContactState &a = c->mode[i], &b = event_.mode_after[i];
+      same_modes = same_modes && a.mode == b.mode &&
+                   (a.mode != ContactMode::Slip || (a.slip_direction - b.slip_direction).norm() <= 1e-9);
+    }
+    p->nominal_outcome = same_modes && p->post_state_difference <= tolerance;
     p->steps = c->steps;
     p->build_seconds = c->seconds;
     pieces_.push_back(p.get());

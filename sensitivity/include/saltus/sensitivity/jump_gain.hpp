@@ -203,16 +203,18 @@ class JumpGainSolver {
   /// The gain of `event` under the input law that drove the trajectory.
   /// @throws GrazingEvent, SimultaneousActivation, InvalidArgument (an event without transitions)
   const JumpGain<S>& compute(const Event<S>& event, const InputLaw<S>& law);
-  /// The same for a deviation that reaches the event as z = incoming_z z0 + incoming_v v (nx x n0
-  /// maps of an outer deviation z0, e.g. the micro-events before it in a conewise gain): G_z and
-  /// dt_dz come out composed, in terms of z0 (G_z = gain incoming_z, G_v = gain incoming_v + G_v),
-  /// and coincident guards are judged on the deviations the maps can reach.
+  /// The same for a deviation that reaches the event as z = incoming_z z0 + incoming_v v (nx x nx
+  /// and nx x nu maps of an outer deviation z0, e.g. the micro-events before it in a conewise
+  /// gain): everything comes out composed, in terms of (z0, v): with G^e the event's own gain,
+  /// G_z = G_z^e incoming_z, G_v = G_z^e incoming_v + G_v^e, and dt_dz, dt_dv likewise; coincident
+  /// guards are judged on the deviations the maps can reach.
   const JumpGain<S>& compute(const Event<S>& event, const InputLaw<S>& law, const Mat<nx, nx>& incoming_z,
                              const Mat<nx, nu>& incoming_v);
 
   /// The first-order crossing of `guard` at (t, x) in `mode` under `law` (the same quantities
   /// compute() uses for a guarded transition; the guard must be one of the mode's). No check of
-  /// transversality: the caller compares |gamma_dot| with grazing_threshold * rate_scale.
+  /// transversality: the caller compares |gamma_dot| with grazing_threshold * rate_scale. The
+  /// reference is to the solver's own buffer: the next crossing() or compute() overwrites it.
   const GuardCrossing<S>& crossing(const InputLaw<S>& law, double t, const State& x, const Mode<nc>& mode,
                                    const Guard& guard);
 

@@ -131,7 +131,13 @@ bool JumpGainSolver<S>::coincident_guards(const InputLaw<S>& law, double t, cons
   for (std::size_t i = 0; i < tr.guards.size(); ++i) {
     evaluate_crossing(law, t, tr.x_before, tr.mode_before, tr.guards[i], f_before_);
     const GuardCrossing<S>& c = crossing_;
-    if (!(std::abs(c.gamma_dot) > options_.grazing_threshold * c.rate_scale)) return false;
+    if (!(std::abs(c.gamma_dot) > options_.grazing_threshold * c.rate_scale))
+      throw GrazingEvent(detail::concat("jump gain: near-grazing ", to_string(tr.guards[i].kind), " of contact '",
+                                        scene_.contact(tr.guards[i].contact).name, "' at t = ", t, " (one of ",
+                                        tr.guards.size(), " guards firing together): |gamma_dot| = ",
+                                        std::abs(c.gamma_dot), " <= ", options_.grazing_threshold, " * rate scale ",
+                                        c.rate_scale),
+                         t, tr.guards[i], c.gamma_dot, c.rate_scale);
     Row row;
     row.template head<nx>() = -(c.dgamma_x * Zz_) / c.gamma_dot;
     if constexpr (nu > 0) row.template tail<nu>() = -(c.dgamma_x * Zv_ + c.dgamma_u) / c.gamma_dot;

@@ -93,17 +93,21 @@ class LinearisedSystem {
   /// Extends the segments of `traj` and computes the gains of all its events. `traj` and `scene`
   /// must outlive this object. @throws GrazingEvent, SimultaneousActivation (from the gains), InvalidArgument
   LinearisedSystem(S&&, const HybridTrajectory<S>&, LinearisationOptions = {}) = delete;  // keeps the scene: would dangle
-  /// Simultaneous events get a conewise gain (header comment). @throws as JumpGainSolver and
-  /// ConewiseJumpGain's constructor.
+  /// Simultaneous events get a conewise gain (header comment); options.simulation must be the
+  /// reference's simulation options for those. @throws GrazingEvent, InvalidArgument (from the
+  /// gains and ConewiseJumpGain's constructor), SimultaneousActivation (a later transition of an
+  /// event fired by several non-coincident guards).
   LinearisedSystem(const S& scene, const HybridTrajectory<S>& traj, LinearisationOptions options = {});
 
   const S& scene() const { return scene_; }
   const Reference& reference() const { return reference_; }
-  /// The gain of every event; NaN for a simultaneous event (conewise(i)).
+  /// The gain of every event; for a simultaneous event (conewise(i)) G_z and G_v are NaN (the
+  /// other fields are left at their defaults): use conewise_gain(i).
   const std::vector<JumpGain<S>>& gains() const { return gains_; }
   /// Event i is fired by several guards at once: its gain is conewise_gain(i).
   bool conewise(int i) const { return conewise_.at(i) != nullptr; }
-  /// The conewise gain of simultaneous event i. @throws InvalidArgument if event i is not one.
+  /// The conewise gain of simultaneous event i (mutable: it builds pieces on demand). @throws
+  /// InvalidArgument if event i is not one.
   ConewiseJumpGain<S>& conewise_gain(int i) const;
   int segment_count() const { return reference_.segment_count(); }
 

@@ -51,8 +51,11 @@ RemainderFit prediction_remainder(const LinearisedSystem<S>& lin, const Simulati
 /// or conewise with the nominal outcome), x_p the flow of piece.mode_after from (t*, piece.x_plus)
 /// (events off), Phi_p z+ its central difference along z+ (step 1e-6 / |z+|), x_eps the Simulator's
 /// run from x(t0) + eps z0 with `options`. `structure_matched` requires every run to see the events
-/// before, one event per micro-event of the piece, none after it before t, and to end in the
-/// piece's contact modes (a spatial slip's direction may differ by O(eps)).
+/// before (one per ordinary event, one per micro-event at an earlier simultaneous one), one event
+/// per micro-event of the piece, none after it before t, and to end in the piece's contact modes
+/// (a spatial slip's direction may differ by O(eps)). Whether `piece` belongs to that event and
+/// whether z- lies in its cone is not checked: applying another cone's piece is how a test shows
+/// that it fails.
 /// @throws InvalidArgument (event not simultaneous, t not after it), SimultaneousActivation (an
 /// earlier simultaneous event's cone without the nominal outcome), what the Simulator throws.
 template <Scene S>

@@ -78,10 +78,13 @@ RemainderFit piece_remainder(const LinearisedSystem<S>& lin, const SimulationOpt
   const auto zero = [](double) { return Vec<nu>::Zero().eval(); };
   // z- at the event: propagated through the events before it (v = 0).
   Vec<nx> z = z0;
+  std::size_t expected_events = piece.order.size();
   for (int k = 0; k < event; ++k) {
     z = lin.propagate(k, z, zero, lin.t_end(k));
+    ++expected_events;
     if (lin.conewise(k)) {
       const ConewisePiece<S>& before = lin.conewise_gain(k).piece(z, Vec<nu>::Zero());
+      expected_events += before.order.size() - 1;
       if (!before.nominal_outcome)
         throw SimultaneousActivation(detail::concat("piece_remainder: at the earlier simultaneous event ", k,
                                                     " the perturbation's cone does not end in the nominal outcome"));
@@ -99,11 +102,13 @@ RemainderFit piece_remainder(const LinearisedSystem<S>& lin, const SimulationOpt
     integrator.integrate(sys, t_event, x, t, 0.0, nullptr, false);
     return x;
   };
-  const double h = 1e-6 / std::max(z_plus.norm(), 1e-300);
   const Vec<nx> x_piece = flow(piece.x_plus);
-  const Vec<nx> z_t = (flow(Vec<nx>(piece.x_plus + h * z_plus)) - flow(Vec<nx>(piece.x_plus - h * z_plus))) / (2 * h);
+  Vec<nx> z_t = Vec<nx>::Zero();
+  if (z_plus.norm() > 0) {
+    const double h = 1e-6 / z_plus.norm();
+    z_t = (flow(Vec<nx>(piece.x_plus + h * z_plus)) - flow(Vec<nx>(piece.x_plus - h * z_plus))) / (2 * h);
+  }
   Simulator<S> sim(scene, options);
-  const std::size_t expected_events = static_cast<std::size_t>(event) + piece.order.size();
   RemainderFit fit;
   for (const double eps : eps_values) {
     const auto run = sim.run(Vec<nx>(lin.begin_state(0) + eps * z0), traj.segments.front().mode, traj.t_begin(), t,

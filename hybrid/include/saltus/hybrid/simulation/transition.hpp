@@ -62,10 +62,10 @@ class TransitionResolver {
 
   /// The event at time t from x- (the state just before) in mode_before, starting with the guards
   /// `fired` and following the chain at the same instant (file comment). sys is left in the mode
-  /// after the event. `deferred`: guards that sit at zero at this instant but fire later in the
-  /// motion being composed (the conewise gains of a simultaneous event take the guards one at a
-  /// time, sensitivity/conewise_gain.hpp): the chain does not fire them, and a deferred
-  /// touchdown's contact, while open, takes no part in the impact problems of this event.
+  /// after the event. `deferred`: guards this chain must not fire, typically guards at zero at
+  /// this instant that fire later, or never, in the motion being composed (the conewise gains of
+  /// a simultaneous event take the guards one at a time, sensitivity/conewise_gain.hpp); a
+  /// deferred touchdown's contact, while open, takes no part in the impact problems of this event.
   /// @throws NumericalFailure when the chain does not settle in max_chain transitions;
   /// ContactProblemFailure from an impact or a mode selection.
   Event<S> resolve(ModeSystem<S>& sys, double t, const State& x_minus, const Mode<nc>& mode_before,
