@@ -321,8 +321,9 @@ TEST(Impact, ImpactScalesWithThePreImpactVelocity) {
       EXPECT_EQ(r.x_plus.head<3>(), x.head<3>());
       // Kinetic energies scale with scale^2: at 2^-520 that is below the normal range (subnormal,
       // digits lost), so they are compared where scale^2 is a normal number.
-      if (std::isnormal(scale * scale) && std::isnormal(unit.kinetic_energy_plus * scale * scale))
+      if (std::isnormal(scale * scale) && std::isnormal(unit.kinetic_energy_plus * scale * scale)) {
         EXPECT_NEAR(r.kinetic_energy_plus / (scale * scale), unit.kinetic_energy_plus, 1e-12);
+      }
       ++compared;
     }
   }
