@@ -1,0 +1,369 @@
+// The time-freezing system and its FESD discretisation (timefreezing/): Radau IIA tableaus, the
+// regions' fields of a two-contact scene, exact derivatives of the FESD MPCC (finite differences
+// and Ipopt's own second-order derivative checker), and simulations against closed forms: the
+// guiding example (time-freezing paper, Example 3) and the frictional landing of a point mass.
+#include "scenes/plank_box.hpp"
+#include "scenes/point_mass.hpp"
+
+#include <saltus/timefreezing/fesd.hpp>
+#include <saltus/timefreezing/mpcc_solver.hpp>
+#include <saltus/timefreezing/simulation.hpp>
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <iostream>
+
+namespace saltus::timefreezing {
+namespace {
+
+using scenes::PlankBox;
+using scenes::PointMass;
+
+TEST(Radau, TableausSatisfyTheSimplifyingConditions) {
+  for (int ns = 1; ns <= 3; ++ns) {
+    const RadauIIA t = radau_iia(ns);
+    // B(2 ns - 1): the quadrature is exact for polynomials of degree 2 ns - 2.
+    for (int k = 1; k <= 2 * ns - 1; ++k) {
+      double s = 0.0;
+      for (int i = 0; i < ns; ++i) s += t.b[i] * std::pow(t.c[i], k - 1);
+      EXPECT_NEAR(s, 1.0 / k, 1e-14) << "n_s " << ns << " k " << k;
+    }
+    // C(ns): each stage integrates polynomials of degree ns - 1 exactly.
+    for (int i = 0; i < ns; ++i)
+      for (int k = 1; k <= ns; ++k) {
+        double s = 0.0;
+        for (int j = 0; j < ns; ++j) s += t.a(i, j) * std::pow(t.c[j], k - 1);
+        EXPECT_NEAR(s, std::pow(t.c[i], k) / k, 1e-14) << "n_s " << ns << " stage " << i << " k " << k;
+      }
+    EXPECT_DOUBLE_EQ(t.c[ns - 1], 1.0);
+  }
+  EXPECT_THROW(radau_iia(4), InvalidArgument);
+}
+
+// Regions of the plank-box (two planar-friction contacts): the ODE field only when both contacts
+// are free, each contact's auxiliary field alone, and their sum when both are in their auxiliary
+// regions (time_freezing_system.hpp, "several contacts").
+TEST(TimeFreezingSystem, PlankBoxRegionsGiveTheDocumentedFields) {
+  const PlankBox scene;
+  const double a_n = 50.0;
+  const TimeFreezingSystem<PlankBox> system(scene, a_n);
+  const Vec<4> q(0.5, 0.05 + 0.011, 0.02, 0.01), v(0.3, -1.0, 0.5, 0.2);
+  const Vec<3> u(1.0, 2.0, 0.1);
+  using Alpha = Vec<6>;
+  // Contact Jacobians by central differences of the scene's gap and tangent position.
+  auto gradient = [&](auto f) {
+    Vec<4> g;
+    for (int k = 0; k < 4; ++k) {
+      Vec<4> qp = q, qm = q;
+      qp[k] += 1e-6;
+      qm[k] -= 1e-6;
+      g[k] = (f(qp) - f(qm)) / 2e-6;
+    }
+    return g;
+  };
+  const double mu = scene.parameters().mu;
+  Vec<4> jn[2], jt[2];
+  for (int i = 0; i < 2; ++i) {
+    jn[i] = gradient([&](const Vec<4>& x) { return scene.gap<double>(i, x); });
+    jt[i] = gradient([&](const Vec<4>& x) { return scene.tangent_position<double>(i, x)[0]; });
+  }
+  const Vec<4> ode = scene.input_matrix<double>(q) * u - scene.bias<double>(q, v);
+  // alpha per contact: (gap > 0, normal velocity > 0, tangential velocity > 0)
+  const Alpha both_free = (Alpha() << 1, 0, 1, 1, 1, 0).finished();
+  const Alpha left_closing_slip_plus = (Alpha() << 0, 0, 1, 1, 0, 0).finished();
+  const Alpha right_closing_slip_minus = (Alpha() << 0, 1, 1, 0, 0, 0).finished();
+  const Alpha both_closing = (Alpha() << 0, 0, 1, 0, 0, 0).finished();
+  EXPECT_LT((system.generalised_force<double>(q, v, u, both_free) - ode).norm(), 1e-12);
+  EXPECT_DOUBLE_EQ(system.ode_weight<double>(both_free), 1.0);
+  // Left closing, v_t > 0: a_n (J_n - mu J_t), clock frozen.
+  EXPECT_LT((system.generalised_force<double>(q, v, u, left_closing_slip_plus) - a_n * (jn[0] - mu * jt[0])).norm(), 1e-7);
+  EXPECT_DOUBLE_EQ(system.ode_weight<double>(left_closing_slip_plus), 0.0);
+  // Right closing, v_t < 0 (left leaving: alpha_2 = 1 is free for it): a_n (J_n + mu J_t).
+  EXPECT_LT((system.generalised_force<double>(q, v, u, right_closing_slip_minus) - a_n * (jn[1] + mu * jt[1])).norm(), 1e-7);
+  // Both closing: the sum of both auxiliary fields.
+  EXPECT_LT((system.generalised_force<double>(q, v, u, both_closing) -
+             a_n * (jn[0] - mu * jt[0] + jn[1] + mu * jt[1])).norm(), 1e-7);
+  // Fractional alphas: Theta is the product of the contacts' theta^free.
+  const Alpha mixed = (Alpha() << 0.3, 0.4, 0.5, 0.8, 0.1, 0.2).finished();
+  EXPECT_NEAR(system.ode_weight<double>(mixed), (0.3 + 0.7 * 0.4) * (0.8 + 0.2 * 0.1), 1e-15);
+  // Switching functions: gap, J_n v, J_t v.
+  const Vec<6> c = system.switching_functions<double>(q, v);
+  for (int i = 0; i < 2; ++i) {
+    EXPECT_NEAR(c[3 * i], scene.gap<double>(i, q), 1e-15);
+    EXPECT_NEAR(c[3 * i + 1], jn[i].dot(v), 1e-8);
+    EXPECT_NEAR(c[3 * i + 2], jt[i].dot(v), 1e-8);
+  }
+}
+
+TEST(TimeFreezingSystem, RefusesWhatItDoesNotModel) {
+  scenes::PointMassParameters p;
+  p.restitution = 0.5;
+  EXPECT_THROW(TimeFreezingSystem<PointMass>(PointMass(p), 10.0), InvalidArgument);
+  EXPECT_THROW(TimeFreezingSystem<PointMass>(PointMass(), 0.0), InvalidArgument);
+  EXPECT_THROW(TimeFreezingSystem<PointMass>(PointMass(), std::nan("")), InvalidArgument);
+  p.restitution = 0.0;
+  p.friction = Friction::Spatial;
+  p.mu = 0.3;
+  EXPECT_THROW(TimeFreezingSystem<PointMass>(PointMass(p), 10.0), InvalidArgument);
+}
+
+// A small OCP touching every derivative path: running cost, terminal cost, path constraints,
+// terminal constraints, an input law depending on the clock.
+struct EveryTermOcp {
+  static constexpr int path_constraint_count = 2;
+  static constexpr int terminal_constraint_count = 2;
+  template <class T>
+  T running_cost(const VecT<T, 4>& x, const VecT<T, 2>& u) const {
+    return T(u.squaredNorm() + T(0.1 * T(x[0] * x[3])));
+  }
+  template <class T>
+  T terminal_cost(const VecT<T, 4>& x, const T& t) const {
+    return T(T(x[0] * x[0]) + T(sin(x[1]) * t));
+  }
+  template <class T>
+  VecT<T, 2> input(const T& t, const VecT<T, 2>& decision) const {
+    return VecT<T, 2>(T(decision[0] * T(1.0 + T(t * t))), decision[1]);
+  }
+  template <class T>
+  VecT<T, 2> path_constraints(const VecT<T, 4>& x, const VecT<T, 2>& u) const {
+    return VecT<T, 2>(T(x[1] * x[1] + u[0]), T(cos(x[0]) * x[2]));
+  }
+  Vec<2> path_lower() const { return Vec<2>(-1.0, -2.0); }
+  Vec<2> path_upper() const { return Vec<2>(1.0, 2.0); }
+  template <class T>
+  VecT<T, 2> terminal_constraints(const VecT<T, 4>& x, const T& t) const {
+    return VecT<T, 2>(T(x[0] * x[1]), T(t * x[3]));
+  }
+  Vec<2> terminal_lower() const { return Vec<2>(0.0, 1.0); }
+  Vec<2> terminal_upper() const { return Vec<2>(0.0, 1.0); }
+};
+
+FesdOptions small_grid(bool switch_detection) {
+  FesdOptions o;
+  o.control_intervals = 2;
+  o.finite_elements = 2;
+  o.stages = 2;
+  o.horizon = 1.0;
+  o.speed_of_time_max = 3.0;
+  o.speed_of_time_weight = 0.5;
+  o.clock = ClockConstraint::Stagewise;
+  o.physical_horizon = 0.8;
+  o.switch_detection = switch_detection;
+  return o;
+}
+
+/// A point of the FESD MPCC inside its bounds, away from the initial guess.
+Eigen::VectorXd interior_point(const Mpcc& problem, unsigned seed) {
+  const int n = problem.variable_count(), m = problem.constraint_count();
+  Eigen::VectorXd x(n), xl(n), xu(n), gl(m), gu(m);
+  problem.initial_point(x);
+  problem.bounds(xl, xu, gl, gu);
+  std::srand(seed);
+  const Eigen::VectorXd r = Eigen::VectorXd::Random(n);
+  for (int i = 0; i < n; ++i) {
+    x[i] += 0.2 * r[i];
+    if (std::isfinite(xl[i]) && std::isfinite(xu[i])) x[i] = xl[i] + 0.5 * (1.0 + r[i]) * (xu[i] - xl[i]);
+    else if (std::isfinite(xl[i])) x[i] = std::max(x[i], xl[i] + 0.05);
+  }
+  return x;
+}
+
+TEST(Fesd, DerivativesMatchFiniteDifferences) {
+  scenes::PointMassParameters p;
+  p.friction = Friction::Planar;
+  p.mu = 0.3;
+  const TimeFreezingSystem<PointMass> system(PointMass(p), 10.0);
+  for (bool fesd : {true, false}) {
+    const FesdMpcc<PointMass, EveryTermOcp> problem(system, EveryTermOcp{}, Vec<2>(0.1, 0.5), Vec<2>(1.0, -0.5),
+                                                    small_grid(fesd));
+    const int n = problem.variable_count(), m = problem.constraint_count();
+    const Eigen::VectorXd x = interior_point(problem, 3);
+    // Dense Jacobian against central differences of the constraints.
+    Eigen::VectorXd jv(problem.jacobian_structure().size());
+    problem.jacobian_values(x, jv);
+    Eigen::MatrixXd J = Eigen::MatrixXd::Zero(m, n);
+    for (std::size_t e = 0; e < problem.jacobian_structure().size(); ++e)
+      J(problem.jacobian_structure()[e].row, problem.jacobian_structure()[e].col) += jv[static_cast<Eigen::Index>(e)];
+    Eigen::MatrixXd Jfd(m, n);
+    const double d = 1e-6;
+    for (int i = 0; i < n; ++i) {
+      Eigen::VectorXd xp = x, xm = x, gp(m), gm(m);
+      xp[i] += d;
+      xm[i] -= d;
+      problem.constraints(xp, gp);
+      problem.constraints(xm, gm);
+      Jfd.col(i) = (gp - gm) / (2 * d);
+    }
+    EXPECT_LT((J - Jfd).cwiseAbs().maxCoeff(), 1e-6 * (1.0 + J.cwiseAbs().maxCoeff())) << "fesd " << fesd;
+    // Lagrangian Hessian against central differences of the Lagrangian gradient.
+    const Eigen::VectorXd mu = Eigen::VectorXd::Random(m);
+    const double sigma = 0.7;
+    auto lagrangian_gradient = [&](const Eigen::VectorXd& xx) {
+      Eigen::VectorXd jj(problem.jacobian_structure().size()), gr(n);
+      problem.jacobian_values(xx, jj);
+      problem.objective_gradient(xx, gr);
+      gr *= sigma;
+      for (std::size_t e = 0; e < problem.jacobian_structure().size(); ++e)
+        gr[problem.jacobian_structure()[e].col] += mu[problem.jacobian_structure()[e].row] * jj[static_cast<Eigen::Index>(e)];
+      return gr;
+    };
+    Eigen::VectorXd hv(problem.hessian_structure().size());
+    problem.hessian_values(x, sigma, mu, hv);
+    Eigen::MatrixXd H = Eigen::MatrixXd::Zero(n, n);
+    for (std::size_t e = 0; e < problem.hessian_structure().size(); ++e) {
+      const SparseEntry s = problem.hessian_structure()[e];
+      ASSERT_GE(s.row, s.col);
+      H(s.row, s.col) += hv[static_cast<Eigen::Index>(e)];
+      if (s.row != s.col) H(s.col, s.row) += hv[static_cast<Eigen::Index>(e)];
+    }
+    Eigen::MatrixXd Hfd(n, n);
+    for (int i = 0; i < n; ++i) {
+      Eigen::VectorXd xp = x, xm = x;
+      xp[i] += d;
+      xm[i] -= d;
+      Hfd.col(i) = (lagrangian_gradient(xp) - lagrangian_gradient(xm)) / (2 * d);
+    }
+    EXPECT_LT((H - Hfd).cwiseAbs().maxCoeff(), 1e-6 * (1.0 + H.cwiseAbs().maxCoeff())) << "fesd " << fesd;
+    // Objective gradient.
+    Eigen::VectorXd gr(n);
+    problem.objective_gradient(x, gr);
+    for (int i = 0; i < n; ++i) {
+      Eigen::VectorXd xp = x, xm = x;
+      xp[i] += d;
+      xm[i] -= d;
+      EXPECT_NEAR(gr[i], (problem.objective(xp) - problem.objective(xm)) / (2 * d), 1e-6) << problem.variable_name(i);
+    }
+  }
+}
+
+TEST(Fesd, IpoptDerivativeCheckerFindsNoError) {
+  scenes::PointMassParameters p;
+  p.friction = Friction::Planar;
+  p.mu = 0.3;
+  const TimeFreezingSystem<PointMass> system(PointMass(p), 10.0);
+  // Ipopt's second-order check costs about one Hessian evaluation per constraint and variable: the
+  // finite-difference test above covers the larger grid, this one a single control interval.
+  FesdOptions one = small_grid(true);
+  one.control_intervals = 1;
+  const FesdMpcc<PointMass, EveryTermOcp> problem(system, EveryTermOcp{}, Vec<2>(0.1, 0.5), Vec<2>(1.0, -0.5), one);
+  const DerivativeCheckReport report = check_derivatives(problem, interior_point(problem, 5));
+  EXPECT_EQ(report.errors, 0) << report.output;
+  // Two contacts with friction (the plank-box), no OCP terms.
+  const TimeFreezingSystem<PlankBox> plank(PlankBox(), 50.0);
+  FesdOptions o = small_grid(true);
+  o.control_intervals = 1;
+  o.finite_elements = 1;
+  o.clock = ClockConstraint::Terminal;
+  const FesdMpcc<PlankBox> two(plank, NoObjective{}, Vec<4>(0.5, 0.08, 0.01, 0.0), Vec<4>(0.2, -1.0, 0.3, 0.0), o);
+  const DerivativeCheckReport report2 = check_derivatives(two, interior_point(two, 7));
+  EXPECT_EQ(report2.errors, 0) << report2.output;
+}
+
+TEST(Fesd, RefusesBadOptionsAndStates) {
+  const TimeFreezingSystem<PointMass> system(PointMass(), 10.0);
+  FesdOptions o;
+  o.finite_elements = 0;
+  EXPECT_THROW(FesdMpcc<PointMass>(system, {}, Vec<2>(0, 1), Vec<2>(0, 0), o), InvalidArgument);
+  o = FesdOptions{};
+  o.horizon = -1.0;
+  EXPECT_THROW(FesdMpcc<PointMass>(system, {}, Vec<2>(0, 1), Vec<2>(0, 0), o), InvalidArgument);
+  o = FesdOptions{};
+  o.clock = ClockConstraint::Terminal;  // without a physical horizon
+  EXPECT_THROW(FesdMpcc<PointMass>(system, {}, Vec<2>(0, 1), Vec<2>(0, 0), o), InvalidArgument);
+  o = FesdOptions{};
+  o.stages = 4;
+  EXPECT_THROW(FesdMpcc<PointMass>(system, {}, Vec<2>(0, 1), Vec<2>(0, 0), o), InvalidArgument);
+  o = FesdOptions{};
+  o.control_lower = Eigen::VectorXd::Zero(3);
+  EXPECT_THROW(FesdMpcc<PointMass>(system, {}, Vec<2>(0, 1), Vec<2>(0, 0), o), InvalidArgument);
+  EXPECT_THROW(FesdMpcc<PointMass>(system, {}, Vec<2>(0, std::nan("")), Vec<2>(0, 0), FesdOptions{}), InvalidArgument);
+}
+
+// Example 3 of the time-freezing paper: u = (7, 0) for t < 1, (7, 2 g (t - 1)) after; a_n = g.
+constexpr double g_ex3 = 9.81;
+struct Example3Input {
+  template <class T>
+  VecT<T, 2> input(const T& t, const VecT<T, 2>&) const {
+    if (t < 1.0) return VecT<T, 2>(T(7.0), T(0.0));
+    return VecT<T, 2>(T(7.0), T(2.0 * g_ex3 * T(t - 1.0)));
+  }
+};
+
+/// Closed form of Example 3 at numerical time 3.5 (derivation in bench/fesd_accuracy.cpp):
+/// physical time 2.25, q1 = 3.5 t^2, v1 = 7 t; after lift-off at t = 1.5 the vertical
+/// acceleration is g (2 t - 3), so v2 = g (t - 1.5)^2 and q2 = g (t - 1.5)^3 / 3.
+Vec<5> example3_final_state() {
+  const double t = 2.25;
+  return (Vec<5>() << 3.5 * t * t, g_ex3 * std::pow(t - 1.5, 3) / 3.0, 7.0 * t, g_ex3 * (t - 1.5) * (t - 1.5), t).finished();
+}
+
+TEST(TimeFreezingSimulation, GuidingExampleMatchesItsClosedForms) {
+  const TimeFreezingSystem<PointMass> system(PointMass(), g_ex3);
+  FesdOptions o;
+  o.stages = 2;
+  o.control_intervals = 14;  // tau = 2 (t = 1, the kink of u) is a control node
+  o.finite_elements = 4;
+  o.horizon = 3.5;
+  const auto sim = simulate_time_freezing(system, Vec<2>(0, 1), Vec<2>(0, 0), o, Example3Input{});
+  ASSERT_TRUE(sim.converged()) << sim.solution.message;
+  const double error = (sim.final_state().head<5>() - example3_final_state()).cwiseAbs().maxCoeff();
+  std::cout << "Example 3 (n_s = 2, 56 elements): final-state error " << error << ", " << sim.solution.ipopt_iterations
+            << " Ipopt iterations, " << sim.solution.seconds << " s\n";
+  // Measured 1.4e-4 (bench/README.md, "FESD accuracy"): not the Radau order. The relaxed homotopy
+  // lets the gap drift to about -1e-5 during the frozen phase with a multiplier of the same size,
+  // so the branch the final polish must pick is ambiguous there and the clock creeps by 5e-6; the
+  // bound below guards that level, not the target of 1e-8 (timefreezing issue, open).
+  EXPECT_LT(error, 5e-4);
+  // The touchdown is a switch of the gap at t = sqrt(2/g); the frozen phase ends at
+  // tau = 2 sqrt(2/g) (the normal velocity switches to 0); lift-off at tau = 2.75 (t = 1.5).
+  const double t_impact = std::sqrt(2.0 / g_ex3);
+  const SwitchPoint* touchdown = nullptr;
+  const SwitchPoint* frozen_end = nullptr;
+  const SwitchPoint* lift_off = nullptr;
+  for (const SwitchPoint& s : sim.switch_points) {
+    if (!touchdown && s.switching_function == 0) touchdown = &s;
+    if (touchdown && !frozen_end && s.switching_function == 1 && s.alpha_after > 0.1) frozen_end = &s;
+    if (s.switching_function == 1 && s.alpha_after > 1.0 - 1e-6 && s.alpha_before < 1.0 - 1e-6) lift_off = &s;
+  }
+  ASSERT_TRUE(touchdown && frozen_end && lift_off);
+  EXPECT_NEAR(touchdown->time, t_impact, 1e-9);
+  EXPECT_NEAR(frozen_end->tau, 2.0 * t_impact, 1e-4);
+  EXPECT_NEAR(lift_off->tau, 2.75, 1e-4);
+  EXPECT_NEAR(lift_off->time, 1.5, 1e-4);
+  ASSERT_FALSE(sim.frozen_phases.empty());
+  EXPECT_NEAR(sim.frozen_phases.front().time, t_impact, 1e-9);
+}
+
+// NOSNOC's smallest time-freezing example: the mass lands at t = sqrt(2/g) with v = (3, -sqrt(2 g)),
+// the impact removes mu sqrt(2 g) of the tangential velocity (the auxiliary phase lasts
+// sqrt(2 g)/a_n with v_t' = -mu a_n), then it slides with deceleration mu g and stops at
+// x = 3 sqrt(2/g) + (3 - mu sqrt(2 g))^2 / (2 mu g) = 2.45 exactly for g = 10, mu = 0.2
+// (the square roots cancel: 3/sqrt(5) - 0.3 sqrt(20) = 0).
+TEST(TimeFreezingSimulation, FrictionalLandingStopsAtTheClosedForm) {
+  scenes::PointMassParameters p;
+  p.gravity = 10.0;
+  p.friction = Friction::Planar;
+  p.mu = 0.2;
+  const TimeFreezingSystem<PointMass> system(PointMass(p), 20.0);
+  FesdOptions o;
+  o.stages = 2;
+  o.control_intervals = 20;
+  o.finite_elements = 5;
+  o.horizon = 2.5;
+  const auto sim = simulate_time_freezing(system, Vec<2>(0, 1), Vec<2>(3, 0), o);
+  ASSERT_TRUE(sim.converged()) << sim.solution.message;
+  const double error = std::abs(sim.final_state()[0] - 2.45);
+  std::cout << "frictional landing: stop error " << error << ", " << sim.solution.ipopt_iterations << " Ipopt iterations, "
+            << sim.solution.seconds << " s\n";
+  EXPECT_LT(error, 1e-5);  // measured 3.2e-6 (NOSNOC: 2e-5); same limit as in Example 3
+  EXPECT_NEAR(sim.final_state()[2], 0.0, 1e-8);  // at rest
+  // The slide ends at t = sqrt(2/g) + (3 - mu sqrt(2 g)) / (mu g) = 1.5.
+  bool stop = false;
+  for (const SwitchPoint& s : sim.switch_points)
+    if (s.switching_function == 2 && std::abs(s.time - 1.5) < 1e-6) stop = true;
+  EXPECT_TRUE(stop);
+}
+
+}  // namespace
+}  // namespace saltus::timefreezing

@@ -1,0 +1,289 @@
+// The solver of the MPCCs of mpcc.hpp: a homotopy of relaxed (or penalised) NLPs, each solved by
+// Ipopt (3.11, MUMPS), as NOSNOC does (/work/shared/research/nosnoc_facts.md section 3 and
+// mpcc_robustness.md; S. Scholtes, "Convergence properties of a regularization scheme for
+// mathematical programs with complementarity constraints", SIAM J. Optim. 11(4):918-936, 2001):
+//
+//   Scholtes (inequality form; NOSNOC's SCHOLTES_INEQ): step k solves
+//       min f(x)   s.t.  g_lower <= g(x) <= g_upper,  x_lower <= x <= x_upper,
+//                        G_j(x) >= 0,  H_j(x) >= 0,  G_j(x) H_j(x) <= sigma_k       (all pairs j)
+//   Penalty (elastic): step k solves
+//       min f(x) + rho_k sum_j G_j(x) H_j(x)   s.t. the same, without the rows G_j H_j <= sigma_k,
+//   with sigma_{k+1} = kappa sigma_k, sigma_0 given, rho_k = 1 / sigma_k.
+//
+// A side that is a single variable with a lower bound >= 0 needs no row for its sign (the bound
+// already says it); every other side gets the linear row side(x) >= 0 (identical sides share one
+// row: cross-complementarity sums repeat, and duplicate rows would make the constraint Jacobian
+// rank deficient for no reason). The relaxation rows and the penalty have exact derivatives from
+// the affine sides: d(G H)/dx = G a_H + H a_G, d2(G H)/dx2 = a_G a_H' + a_H a_G'.
+//
+// Row pruning: more generally, a side that the variable bounds alone keep >= 0 gets no row: its
+// least value over the bounds by interval arithmetic, b + sum_i a_i (a_i > 0 ? x_lower_i :
+// x_upper_i) (finite bounds where needed), is >= 0 (up to 8 eps of rounding). The single
+// variable with lower bound >= 0 is the simplest case; FESD's sums of step functions alpha in
+// [0, 1], n_s - sum alpha and 1 - alpha are others. With bound_relax_factor = 0 Ipopt keeps the
+// bounds, hence these sides, exactly. MpccSolution::sign_rows and relaxed_rows count the rows.
+//
+// Each step starts from the last successful step's primal-dual solution (warm start, below). The
+// homotopy stops with converged == true at the first SUCCESSFUL step whose complementarity
+// residual, the largest product of a pair max_j |G_j(x) H_j(x)|, is <= complementarity_tolerance;
+// otherwise (steps exhausted, the first step failing, or a step failing after its retries) with
+// converged == false and the last successful iterate (NOSNOC: return the last successful iterate,
+// mpcc_robustness.md R2), or the last iterate when no step succeeded.
+//
+// Polishing (options.polish; mpcc_robustness.md R5, the "cheap version without an LPEC" of
+// NOSBENCH 5.5 and MPECopt's branch NLP): a relaxed solution with residual 1e-9 can still be
+// inaccurate (G = 1e-5 against H = 1e-4 meets the tolerance). After a successful step whose
+// residual is <= polish_below, and after the last successful step of the homotopy in any case,
+// the solver guesses the active set and solves the branch NLP (BNLP) from the step's primal-dual
+// solution: every pair j gets ONE side set to zero and the other kept >= 0, no products:
+//   Branch rule: the side Z with the smaller |Z(x)| / ||a_Z||_2, the Euclidean distance from the
+//   step's x to the hyperplane Z = 0 (invariant to scaling a side; ties: the left side G). A pair
+//   with both distances below sqrt(complementarity_tolerance) is counted as biactive, and gets
+//   the same rule: its smaller side is zeroed and the other kept >= 0, the larger of the two
+//   branch NLPs (the tightened NLP, both zero, removes freedom the solution may need; a wrong
+//   guess costs one failed polish, after which the homotopy goes on and the next step guesses
+//   again from a better resolved iterate).
+//   A zero side becomes BOUNDS where it can: a side whose least value over the variable bounds is
+//   0 (interval arithmetic, as above: a single variable with lower bound 0, 1 - alpha, sums of
+//   alpha or of 1 - alpha over alpha in [0, 1]) is zero exactly when each of its variables sits at
+//   the bound attaining that least value: those variables are fixed there (x_l = x_u; Ipopt's
+//   default fixed_variable_treatment = make_parameter removes them), and a side with one
+//   variable, a x_i + b, fixes x_i = -b / a. Any other zero side gets the equality row Z(x) = 0.
+//   The other side keeps a >= 0 row unless the branch's bounds keep it >= 0 (row pruning). Fixings
+//   that contradict each other or the bounds fail the polish without an Ipopt solve.
+// The polish succeeds when Ipopt's result is accepted as a step's would be (accept_acceptable,
+// within polish_max_iter iterations), its violation of the original constraints is <=
+// polish_feasibility_tolerance, the ORIGINAL pairs' residual is <= complementarity_tolerance
+// (zero sides held by fixed variables are exactly 0), and its objective exceeds the step's by
+// no more than the relaxation explains (polish_objective_increase). Then the homotopy stops there, converged, with the polished point: its x, the
+// multipliers of the original rows (the branch rows' multipliers are dropped) and the bound
+// multipliers as Ipopt reports them, except for fixed variables, for which Ipopt 3.11 reports
+// zeros: there z_L - z_U is the gradient of the branch NLP's Lagrangian, grad f + J' lambda with
+// the branch rows included, split into its positive and negative parts (so a variable the branch
+// fixed carries its pair's multiplier in z_L or z_U). A failed polish is recorded and the homotopy goes on from the step's
+// own solution, which remains the result if no later polish succeeds.
+#pragma once
+
+#include <saltus/timefreezing/mpcc.hpp>
+
+#include <Eigen/Core>
+
+#include <iosfwd>
+#include <string>
+#include <variant>
+#include <vector>
+
+namespace saltus::timefreezing {
+
+/// One Ipopt option set by name, passed as is (after the solver's own settings, so it overrides
+/// them): e.g. {"linear_solver", "mumps"}, {"acceptable_iter", 3}, {"mumps_pivtol", 1e-4}.
+/// Ipopt's option types are strict: an integer option needs an int, a number option a double.
+struct IpoptOption {
+  std::string name;
+  std::variant<std::string, int, double> value;
+};
+
+/// Settings of solve_mpcc. Defaults follow NOSNOC's current defaults (nosnoc_facts.md section 3)
+/// where the brief and the evidence agree; deviations are explained per field.
+struct MpccSolverOptions {
+  enum class Relaxation {
+    Scholtes,  ///< G_j H_j <= sigma_k as constraint rows (the most robust in NOSBENCH-S)
+    Penalty    ///< rho_k sum_j G_j H_j in the objective, rho_k = 1 / sigma_k
+  };
+  Relaxation relaxation = Relaxation::Scholtes;
+  /// First relaxation parameter (Penalty: rho_0 = 1 / sigma_0). NOSBENCH 5.4: sigma_0 in [0.1, 10];
+  /// a too small sigma_0 loses problems to bad local minima.
+  double sigma_0 = 1.0;
+  /// sigma_{k+1} = kappa sigma_k, kappa in (0, 1).
+  double kappa = 0.1;
+  /// Converged when a successful step has max_j |G_j H_j| <= this.
+  double complementarity_tolerance = 1e-9;
+  /// Number of homotopy steps (sigma values), retries of a step not counted; >= 1.
+  int max_homotopy_steps = 30;
+  /// A step whose Ipopt solve fails is restarted from the last successful iterate with a slower
+  /// decrease, kappa <- sqrt(kappa) (kept for the rest of the homotopy: the failure says the path
+  /// needs smaller steps; NOSBENCH 5.4 and FESD-J: larger kappa solves more of the hard problems),
+  /// at most this many times per step; >= 0. The first step has no iterate to restart from: its
+  /// failure ends the homotopy.
+  int max_step_retries = 3;
+
+  // ---- Ipopt, per step
+  double tol = 1e-10;       ///< Ipopt `tol` (> 0)
+  int max_iter = 3000;      ///< Ipopt `max_iter` per step (>= 0)
+  int print_level = 0;      ///< Ipopt `print_level` (0..12); 0: no Ipopt output at all
+  std::string mu_strategy = "adaptive";  ///< Ipopt `mu_strategy`
+  /// Ipopt `mu_oracle`; "quality-function" is what NOSNOC, MPECopt and the NOSBENCH runs use
+  /// (mpcc_robustness.md 3.1). With warm-started duals the adaptive oracle starts from the small
+  /// complementarity of the previous solution instead of a large barrier parameter.
+  std::string mu_oracle = "quality-function";
+  /// A step also counts as successful when Ipopt stops at Solved_To_Acceptable_Level (NOSBENCH
+  /// scores these as solved, mpcc_robustness.md R2), or at Search_Direction_Becomes_Too_Small
+  /// with the original constraint violation <= small_step_feasibility_tolerance (ditto).
+  bool accept_acceptable = true;
+  double small_step_feasibility_tolerance = 1e-8;
+  /// Ipopt `bound_relax_factor`. 0: bounds (among them the sign bounds G, H >= 0 of single-variable
+  /// sides) hold exactly, so products measure complementarity; Ipopt's 1e-8 would let both sides
+  /// of a pair go slightly negative (NOSNOC, MPECopt and NOSBENCH all use 0).
+  double bound_relax_factor = 0.0;
+
+  /// Warm start every step but the first from the previous successful step's primal AND dual
+  /// solution (x, constraint multipliers including the relaxation rows, z_L, z_U), with Ipopt's
+  /// warm_start_init_point = yes. false: each step starts from the previous x only, with Ipopt's
+  /// own initialisation of the multipliers and its default push away from the bounds (NOSNOC's
+  /// default, warm_start_duals = false).
+  bool warm_start = true;
+  /// Ipopt's warm_start_bound_push, warm_start_bound_frac, warm_start_slack_bound_push and
+  /// warm_start_slack_bound_frac (> 0, frac capped at 0.5). Small: the previous solution sits on
+  /// its active bounds and Ipopt's default (1e-3) would push it away from them, undoing most of
+  /// the warm start (mpcc_robustness.md 3.1 suggests 1e-6..1e-9). Measured on the 10-step
+  /// Scholtes homotopy of tests/test_mpcc_solver.cpp (SmallMpcc), total Ipopt iterations with
+  /// mult push 1e-6: bound push 1e-3 -> 36, 1e-6 -> 26, 1e-9 -> 24; primal-only starts: 72.
+  double warm_start_bound_push = 1e-9;
+  /// Ipopt's warm_start_mult_bound_push (> 0): the least value a warm-started bound multiplier is
+  /// raised to. Small for the same reason: the inactive bounds' multipliers are ~0 at a solution
+  /// (same measurement, bound push 1e-9: mult push 1e-3 -> 44 iterations, 1e-6 and 1e-9 -> 24;
+  /// 1e-6 keeps a margin from zero for the multipliers Ipopt divides by).
+  double warm_start_mult_bound_push = 1e-6;
+
+  // ---- Polishing by a branch NLP (top of this file)
+  /// Try the branch NLP after the successful steps with residual <= polish_below and after the
+  /// last successful step; stop at the first polish that succeeds.
+  bool polish = true;
+  /// >= 0. Default 0: polish only after the homotopy's last successful step. Early polishing
+  /// (1e-6) saves steps on small problems (tests: SmallMpcc 22 instead of 24 iterations) but on
+  /// the chained FESD simulation of time-freezing Example 3 (4 elements, 2 Radau stages) a
+  /// polish at sigma = 1e-6 guesses branches the homotopy has not resolved yet; the exact but
+  /// different interval end states then led a later interval to a worse local solution and an
+  /// infeasible one after it (not converged, 55000 Ipopt iterations against 4255).
+  double polish_below = 0.0;
+  /// The polished point's largest violation of the original constraints (bounds, g, the sides'
+  /// signs) for the polish to count (>= 0).
+  double polish_feasibility_tolerance = 1e-8;
+  /// Ipopt `max_iter` of a polish (>= 0). From the warm start, a right guess converges in a few
+  /// iterations; a wrong one can wander for thousands (FESD time-freezing, Example 3: 3000).
+  int polish_max_iter = 100;
+  /// The polish is rejected when its objective exceeds the step's by more than
+  /// 2 sum_j w_j |G_j H_j| + polish_objective_increase * max(1, |f_step|) (>= 0), w_j the pair's
+  /// weight in the step's Lagrangian (Scholtes: the relaxation row's multiplier; Penalty: rho):
+  /// the relaxed optimum lies about sum_j w_j |G_j H_j| below the MPCC's, more means the branch
+  /// NLP found another, worse local solution (a wrong or premature guess of the branch).
+  double polish_objective_increase = 1e-4;
+
+  /// Extra Ipopt options, applied last. An option Ipopt rejects throws InvalidArgument.
+  std::vector<IpoptOption> ipopt_options;
+
+  /// One line per Ipopt solve (homotopy step or retry) when not null: step, sigma (or rho),
+  /// complementarity residual, objective, constraint violation, Ipopt iterations and status,
+  /// seconds. Not owned; must outlive the call.
+  std::ostream* progress = nullptr;
+
+  /// Throws InvalidArgument naming the first field out of its domain.
+  void validate() const;
+};
+
+/// A starting point other than problem.initial_point(): x (size n), and optionally the
+/// multipliers of a previous solution of the same problem (sizes m, n, n; all three or none).
+/// With multipliers (and options.warm_start) the first step is warm-started too; the first
+/// step's relaxation rows start with zero multipliers.
+struct MpccStart {
+  Eigen::VectorXd x;
+  Eigen::VectorXd constraint_multipliers;   ///< empty or size m
+  Eigen::VectorXd bound_multipliers_lower;  ///< empty or size n (>= 0)
+  Eigen::VectorXd bound_multipliers_upper;  ///< empty or size n (>= 0)
+};
+
+/// One Ipopt solve of the homotopy (a step, or a retry of one), or a polish (branch NLP).
+struct MpccHomotopyStep {
+  int index = 0;    ///< homotopy step k (0-based); retries of a step share its index; a polish
+                    ///< has the index of the step it started from
+  int retry = 0;    ///< 0 for the first attempt of the step, 1.. for its retries; 0 for a polish
+  double sigma = 0.0;  ///< relaxation parameter of the step (Penalty: rho = 1 / sigma); a
+                       ///< polish: that of the step it started from
+  bool polish = false;  ///< a polish (branch NLP), not a relaxed step
+  int left_zero = 0;    ///< polish: pairs whose branch sets the left side G_j = 0
+  int right_zero = 0;   ///< polish: pairs whose branch sets the right side H_j = 0
+  int biactive = 0;     ///< polish: pairs with both sides within sqrt(complementarity_tolerance)
+  int by_trend = 0;     ///< polish: pairs whose branch the trend decided against the distances
+  std::string note;     ///< polish: why it failed ("" when it succeeded)
+  double complementarity = 0.0;       ///< max_j |G_j(x) H_j(x)| at the step's final iterate
+  double objective = 0.0;             ///< original f at the step's final iterate (no penalty)
+  double constraint_violation = 0.0;  ///< of the original MPCC (MpccSolution::constraint_violation)
+  int ipopt_iterations = 0;
+  std::string ipopt_status;  ///< Ipopt's ApplicationReturnStatus by name, e.g. "Solve_Succeeded"
+  /// The step counts as successful (accept_acceptable); a polish: it was accepted (Ipopt, the
+  /// violation and the residual, top of this file).
+  bool ipopt_succeeded = false;
+  double seconds = 0.0;          ///< wall time of the step
+};
+
+/// Result of solve_mpcc. x and the multipliers are those of the successful polish, or else of the
+/// last successful step (or of the last step when none succeeded; or the starting point with zero
+/// multipliers when Ipopt returned no iterate at all). Multipliers use Ipopt's sign convention, at a solution of the
+/// last relaxed problem: grad f + J_g' lambda + (J of the sign and relaxation rows)' mu - z_L + z_U
+/// = 0 with z_L, z_U >= 0; only lambda (the original rows) is returned.
+struct MpccSolution {
+  bool converged = false;  ///< a successful step had complementarity <= complementarity_tolerance
+  std::string message;     ///< why the homotopy stopped
+  Eigen::VectorXd x;                        ///< size n
+  Eigen::VectorXd constraint_multipliers;   ///< size m: the ORIGINAL constraints only
+  Eigen::VectorXd bound_multipliers_lower;  ///< size n
+  Eigen::VectorXd bound_multipliers_upper;  ///< size n
+  double objective = 0.0;                   ///< original f(x), without the penalty
+  double complementarity = 0.0;             ///< max_j |G_j(x) H_j(x)|, 0 without pairs
+  /// Largest violation of the original MPCC's constraints at x: of x_lower <= x <= x_upper,
+  /// g_lower <= g(x) <= g_upper and of the sides' signs G_j, H_j >= 0 (the relaxation
+  /// G_j H_j <= sigma is not part of it; the products are in `complementarity`).
+  double constraint_violation = 0.0;
+  int ipopt_iterations = 0;  ///< total over all steps and retries
+  double seconds = 0.0;      ///< wall time of the whole solve
+  std::vector<MpccHomotopyStep> steps;  ///< every Ipopt solve, in order
+  std::string worst_pair;  ///< name of the pair with the largest |G_j H_j| at x ("" without pairs)
+  bool polished = false;   ///< x is a polish's (branch NLP) solution
+  /// Size of the relaxed NLP: rows m + sign_rows (+ one relaxation row per pair, Scholtes).
+  int relaxed_rows = 0;
+  int sign_rows = 0;  ///< rows side(x) >= 0 (after pruning and merging identical sides)
+};
+
+/// Solves the MPCC by the homotopy described at the top of this file, from
+/// problem.initial_point().
+/// @throws InvalidArgument when the problem statement is inconsistent (sizes, bounds with
+///   lower > upper or NaN, a non-finite initial point, a structure index out of range, a Hessian
+///   entry above the diagonal, a pair side with a variable out of range, repeated or without
+///   terms, a non-finite coefficient), the options are invalid, or Ipopt rejects an option or
+///   the problem (Invalid_Option, Not_Enough_Degrees_Of_Freedom, Invalid_Problem_Definition).
+/// @throws NumericalFailure on Ipopt's internal errors (Unrecoverable_Exception, Internal_Error,
+///   Insufficient_Memory, NonIpopt_Exception_Thrown), naming the status and Ipopt's message.
+/// Failures of a step (infeasibility, iteration limit, restoration failure, NaN from the
+/// problem's functions, which Ipopt handles by cutting the step) are reported, not thrown.
+/// Exceptions thrown by the problem's own functions propagate.
+MpccSolution solve_mpcc(const Mpcc& problem, const MpccSolverOptions& options = {});
+
+/// The same from a given starting point (and optionally multipliers); throws InvalidArgument
+/// also when the start's sizes do not match or it is not finite.
+MpccSolution solve_mpcc(const Mpcc& problem, const MpccStart& start, const MpccSolverOptions& options = {});
+
+/// Output of Ipopt's derivative checker (check_derivatives).
+struct DerivativeCheckReport {
+  int errors = 0;            ///< entries Ipopt flagged ("Derivative checker detected N error(s).")
+  std::string output;        ///< Ipopt's checker output: the flagged entries and the verdict
+  std::string ipopt_status;  ///< status of the zero-iteration Ipopt run that hosted the check
+};
+
+/// Runs Ipopt's own derivative checker (derivative_test = second-order, forward differences) on
+/// the Scholtes-relaxed NLP at exactly x (point_perturbation_radius = 0: Ipopt would otherwise
+/// check at a random point within 10 of x): gradient of f, Jacobian of g and of the sign and
+/// relaxation rows, Hessians of f, of every g_j and of every relaxation row. An entry is flagged
+/// when |approx - exact| / max(|approx|, 1) >= tolerance; `perturbation` is relative,
+/// perturbation * max(1, |x_i|). Nothing is printed.
+/// @pre x has size n, is finite and within the bounds; perturbation > 0; tolerance > 0.
+/// @throws InvalidArgument as solve_mpcc for the problem statement, and for x or the numbers.
+/// @throws NumericalFailure when Ipopt's output holds no verdict (the check could not run, e.g.
+///   a function could not be evaluated at x), with Ipopt's status and output.
+DerivativeCheckReport check_derivatives(const Mpcc& problem, const Eigen::VectorXd& x, double perturbation = 1e-7,
+                                        double tolerance = 1e-4);
+
+/// Throws InvalidArgument naming the first inconsistency of the problem statement (see
+/// solve_mpcc). Evaluates the bounds, the initial point and the structures, no function.
+void validate_problem(const Mpcc& problem);
+
+}  // namespace saltus::timefreezing

@@ -1,0 +1,263 @@
+// Simulation of the time-freezing system with FESD under a given input law: the FESD MPCC with
+// its decisions fixed (no controls, no clock constraint, s = 1), solved by the MPCC homotopy, and
+// the reading of its result: the frozen phases (impacts: the clock stands still while the
+// auxiliary dynamics act, time-freezing Theorem 5) and the element boundaries where a switching
+// function changes its active set (touchdowns into sliding, lift-offs, slip-stick).
+#pragma once
+
+#include <saltus/timefreezing/fesd.hpp>
+#include <saltus/hybrid/vocabulary/trajectory.hpp>
+#include <saltus/timefreezing/mpcc_solver.hpp>
+
+#include <algorithm>
+#include <string>
+#include <vector>
+
+namespace saltus::timefreezing {
+
+/// A frozen phase of the discrete solution: the clock stands still from tau_begin to tau_end,
+/// the physical time is `time`, the state jumps from x_minus to x_plus (an impact).
+template <int nx>
+struct FrozenPhase {
+  double tau_begin = 0.0, tau_end = 0.0;
+  double time = 0.0;                       ///< physical time of the jump [s]
+  Eigen::Matrix<double, nx, 1> x_minus, x_plus;
+};
+
+/// An element boundary where switching function m changes its active set (alpha rounded to
+/// {0, 1/2, 1} differs between the elements on both sides).
+struct SwitchPoint {
+  double tau = 0.0;   ///< numerical time of the boundary
+  double time = 0.0;  ///< physical time there
+  int switching_function = 0;  ///< m = 3 i + (0: gap, 1: normal velocity, 2: tangential velocity)
+  double alpha_before = 0.0, alpha_after = 0.0;  ///< mean alpha_m over the elements on both sides
+};
+
+template <Scene S>
+struct TimeFreezingSimulation {
+  static constexpr int nx = 2 * S::nq;
+  using Point = typename FesdMpcc<S>::Point;
+  std::vector<Point> points;  ///< the initial point and every stage point, in numerical time
+  std::vector<double> element_lengths;        ///< h of every element, in order
+  std::vector<FrozenPhase<nx>> frozen_phases;
+  std::vector<SwitchPoint> switch_points;
+  MpccSolution solution;  ///< the homotopy's result: converged, complementarity, steps, times
+  bool converged() const { return solution.converged; }
+  /// The state (q, v, t, L) at the end of the horizon.
+  const auto& final_state() const { return points.back().y; }
+};
+
+namespace detail {
+/// Reads frozen phases and switch points off a FESD solution (see TimeFreezingSimulation).
+/// An element is frozen when its clock advance is below frozen_tolerance * h.
+template <int ny, int nsw, int nu, int nx>
+void read_events(const std::vector<FesdPoint<ny, nsw, nu>>& pts, int stages, std::vector<double>& lengths,
+                 std::vector<FrozenPhase<nx>>& frozen, std::vector<SwitchPoint>& switches, double frozen_tolerance = 1e-7) {
+  const int clock = nx;
+  const int elements = static_cast<int>((pts.size() - 1) / stages);
+  auto start_of = [&](int e) -> const FesdPoint<ny, nsw, nu>& { return e == 0 ? pts[0] : pts[e * stages]; };
+  auto end_of = [&](int e) -> const FesdPoint<ny, nsw, nu>& { return pts[(e + 1) * stages]; };
+  std::vector<bool> is_frozen(elements);
+  for (int e = 0; e < elements; ++e) {
+    const double h = end_of(e).tau - start_of(e).tau;
+    lengths.push_back(h);
+    is_frozen[e] = h > 0.0 && end_of(e).y[clock] - start_of(e).y[clock] <= frozen_tolerance * h;
+  }
+  for (int e = 0; e < elements;) {
+    if (!is_frozen[e]) {
+      ++e;
+      continue;
+    }
+    int f = e;
+    while (f + 1 < elements && is_frozen[f + 1]) ++f;
+    FrozenPhase<nx> p;
+    p.tau_begin = start_of(e).tau;
+    p.tau_end = end_of(f).tau;
+    p.time = start_of(e).y[clock];
+    p.x_minus = start_of(e).y.template head<nx>();
+    p.x_plus = end_of(f).y.template head<nx>();
+    frozen.push_back(p);
+    e = f + 1;
+  }
+  auto mean_alpha = [&](int e, int m) {
+    double s = 0.0;
+    for (int r = 0; r < stages; ++r) s += pts[1 + e * stages + r].alpha[m];
+    return s / stages;
+  };
+  auto rounded = [](double a) { return a > 1.0 - 1e-6 ? 2 : (a < 1e-6 ? 0 : 1); };
+  for (int e = 0; e + 1 < elements; ++e)
+    for (int m = 0; m < nsw; ++m) {
+      const double a = mean_alpha(e, m), b = mean_alpha(e + 1, m);
+      if (rounded(a) != rounded(b)) switches.push_back({end_of(e).tau, end_of(e).y[clock], m, a, b});
+    }
+}
+}  // namespace detail
+
+/// Recovers the physical-time reference from a discrete time-freezing solution (time-freezing
+/// Theorem 5): the samples are the element boundaries at their physical times t (the clock
+/// state; interior Radau stages are left out: with a_12 < 0 their clocks need not increase); a
+/// run of frozen elements (clock advance below frozen_tolerance * h) is removed and becomes an
+/// event: the sample at its start (x-) and at its end (x+) share the event's time, x- first, and
+/// the time is listed in event_times. Inputs are the applied inputs at the samples; at every
+/// control-interval boundary the sample is repeated with the next interval's input, so the
+/// right-continuous interpolation of ImportedReference::input reproduces the piecewise-constant
+/// control exactly. Polish the result (hybrid/reference/resimulation.hpp: polish) to re-simulate
+/// it with the event-driven simulator and to obtain the HybridTrajectory that the sensitivity
+/// analysis takes. Throws InvalidArgument if points has no stage point or stages < 1.
+template <Scene S, int ny, int nsw, int nu>
+ImportedReference<S> recover_reference(const std::vector<FesdPoint<ny, nsw, nu>>& points, int stages,
+                                       double frozen_tolerance = 1e-7) {
+  constexpr int nx = 2 * S::nq;
+  SALTUS_REQUIRE(stages >= 1 && points.size() >= 1 + static_cast<std::size_t>(stages) &&
+                     (points.size() - 1) % static_cast<std::size_t>(stages) == 0,
+                 "recover_reference: expected the initial point and n_s points per element, got ", points.size(),
+                 " points for n_s = ", stages);
+  ImportedReference<S> ref;
+  auto add = [&](const FesdPoint<ny, nsw, nu>& p) {
+    ref.t.push_back(p.y[nx]);
+    ref.x.push_back(p.y.template head<nx>());
+    ref.u.push_back(p.u);
+  };
+  const int elements = static_cast<int>((points.size() - 1) / stages);
+  auto start_of = [&](int e) -> const FesdPoint<ny, nsw, nu>& { return e == 0 ? points[0] : points[static_cast<std::size_t>(e * stages)]; };
+  auto end_of = [&](int e) -> const FesdPoint<ny, nsw, nu>& { return points[static_cast<std::size_t>((e + 1) * stages)]; };
+  auto frozen = [&](int e) {
+    const double h = end_of(e).tau - start_of(e).tau;
+    return h > 0.0 && end_of(e).y[nx] - start_of(e).y[nx] <= frozen_tolerance * h;
+  };
+  add(points[0]);
+  for (int e = 0; e < elements;) {
+    if (frozen(e)) {
+      int f = e;
+      while (f + 1 < elements && frozen(f + 1)) ++f;
+      // x- is the last sample (the start of the run); x+ at the same time.
+      ref.event_times.push_back(ref.t.back());
+      FesdPoint<ny, nsw, nu> plus = end_of(f);
+      plus.y[nx] = ref.t.back();
+      add(plus);
+      e = f + 1;
+    } else {
+      add(end_of(e));
+      ++e;
+    }
+    // A control-interval boundary: repeat the sample with the next interval's input.
+    if (e < elements && points[static_cast<std::size_t>(1 + e * stages)].interval != end_of(e - 1).interval) {
+      FesdPoint<ny, nsw, nu> next = end_of(e - 1);
+      next.u = points[static_cast<std::size_t>(1 + e * stages)].u;
+      add(next);
+    }
+  }
+  return ref;
+}
+
+/// How simulate_time_freezing splits the horizon into MPCCs.
+enum class SimulationSplit {
+  PerControlInterval,  ///< one MPCC per control interval, each from the previous one's end (NOSNOC's integrator)
+  WholeHorizon,        ///< one MPCC over all control intervals
+};
+
+/// Simulates the time-freezing system of `system` from (q0, v0) at physical time
+/// fesd.initial_time over the numerical horizon fesd.horizon under the input law of `law` (an
+/// object with `template <class T> VecT<T, nu> input(const T& t, const VecT<T, nu>& decision) const`,
+/// t the physical time; NoObjective applies u = 0).
+/// fesd.clock, speed_of_time_max and the control bounds are overridden (no clock constraint,
+/// s = 1, decisions fixed at 0). The input law must be smooth inside each control interval (a kink
+/// in time belongs on a control-interval boundary, where the grid is fixed).
+/// PerControlInterval (the default) solves N small MPCCs in sequence; the cross-complementarity
+/// across their boundaries is then not imposed (the first element of each interval has no
+/// previous end point), as in NOSNOC's integrator.
+/// Returns the result whether or not every homotopy converged: converged() is true only when all
+/// did; solution holds the totals (iterations, seconds; complementarity the largest; steps all).
+/// Throws InvalidArgument for bad options or initial states, as FesdMpcc and solve_mpcc do.
+template <Scene S, class InputLaw = NoObjective>
+TimeFreezingSimulation<S> simulate_time_freezing(const TimeFreezingSystem<S>& system, const Vec<S::nq>& q0,
+                                                 const Vec<S::nq>& v0, FesdOptions fesd, const InputLaw& law = {},
+                                                 const MpccSolverOptions& solver = {},
+                                                 SimulationSplit split = SimulationSplit::PerControlInterval) {
+  constexpr int nq = S::nq;
+  fesd.clock = ClockConstraint::None;
+  fesd.speed_of_time_max = 1.0;
+  fesd.speed_of_time_weight = 0.0;
+  fesd.control_lower = Eigen::VectorXd::Zero(S::nu);
+  fesd.control_upper = Eigen::VectorXd::Zero(S::nu);
+  TimeFreezingSimulation<S> out;
+  const int pieces = split == SimulationSplit::WholeHorizon ? 1 : fesd.control_intervals;
+  FesdOptions piece = fesd;
+  if (pieces > 1) {
+    piece.control_intervals = 1;
+    piece.horizon = fesd.horizon / fesd.control_intervals;
+  }
+  Vec<nq> q = q0, v = v0;
+  double tau0 = 0.0, cost0 = 0.0;
+  out.solution.converged = true;
+  for (int k = 0; k < pieces; ++k) {
+    const FesdMpcc<S, InputLaw> problem(system, law, q, v, piece);
+    MpccSolution sol = solve_mpcc(problem, solver);
+    auto pts = problem.points(sol.x);
+    for (auto& p : pts) {
+      p.tau += tau0;
+      p.interval += k;
+      p.y[TimeFreezingSystem<S>::cost_index] += cost0;
+    }
+    out.points.insert(out.points.end(), pts.begin() + (k == 0 ? 0 : 1), pts.end());
+    const auto& end = out.points.back().y;
+    q = end.template head<nq>();
+    v = end.template segment<nq>(nq);
+    piece.initial_time = end[TimeFreezingSystem<S>::clock_index];
+    cost0 = end[TimeFreezingSystem<S>::cost_index];
+    tau0 += piece.horizon;
+    // Totals.
+    MpccSolution& t = out.solution;
+    t.converged = t.converged && sol.converged;
+    if (!sol.converged && t.message.empty()) t.message = "control interval " + std::to_string(k) + ": " + sol.message;
+    if (sol.complementarity >= t.complementarity) {
+      t.complementarity = sol.complementarity;
+      t.worst_pair = "interval " + std::to_string(k) + ": " + sol.worst_pair;
+    }
+    t.constraint_violation = std::max(t.constraint_violation, sol.constraint_violation);
+    t.ipopt_iterations += sol.ipopt_iterations;
+    t.seconds += sol.seconds;
+    t.objective += sol.objective;
+    t.steps.insert(t.steps.end(), sol.steps.begin(), sol.steps.end());
+    if (pieces == 1) t.x = sol.x;
+  }
+  if (out.solution.converged) out.solution.message = "every homotopy converged";
+  detail::read_events<FesdMpcc<S>::ny, FesdMpcc<S>::nsw, S::nu, 2 * S::nq>(out.points, fesd.stages, out.element_lengths,
+                                                                          out.frozen_phases, out.switch_points);
+  return out;
+}
+
+/// The result of solve_time_freezing_ocp.
+template <Scene S>
+struct TimeFreezingOcpResult {
+  static constexpr int nx = 2 * S::nq;
+  using Point = typename FesdMpcc<S>::Point;
+  MpccSolution solution;       ///< converged, complementarity, objective, steps, iterations, seconds
+  std::vector<Point> points;   ///< the discrete solution in numerical time
+  std::vector<double> element_lengths;
+  std::vector<FrozenPhase<nx>> frozen_phases;  ///< the impacts
+  std::vector<SwitchPoint> switch_points;      ///< touchdowns, lift-offs, slip-stick
+  ImportedReference<S> reference;              ///< recovered in physical time (recover_reference)
+  bool converged() const { return solution.converged; }
+};
+
+/// Solves the time-freezing OCP described by `ocp` (FesdMpcc's docstring lists what it may
+/// provide) from (q0, v0) with FESD, by the MPCC homotopy, and recovers its reference in physical
+/// time. Returns the result whether or not the homotopy converged (converged() says; the message
+/// says why not). Throws InvalidArgument for bad options or states.
+template <Scene S, class Ocp>
+TimeFreezingOcpResult<S> solve_time_freezing_ocp(const TimeFreezingSystem<S>& system, const Ocp& ocp, const Vec<S::nq>& q0,
+                                                 const Vec<S::nq>& v0, const FesdOptions& fesd,
+                                                 const MpccSolverOptions& solver = {}) {
+  const FesdMpcc<S, Ocp> problem(system, ocp, q0, v0, fesd);
+  TimeFreezingOcpResult<S> out;
+  out.solution = solve_mpcc(problem, solver);
+  const auto pts = problem.points(out.solution.x);
+  out.points.assign(pts.begin(), pts.end());
+  detail::read_events<FesdMpcc<S>::ny, FesdMpcc<S>::nsw, S::nu, 2 * S::nq>(out.points, fesd.stages, out.element_lengths,
+                                                                          out.frozen_phases, out.switch_points);
+  out.reference = recover_reference<S>(out.points, fesd.stages);
+  return out;
+}
+
+}  // namespace saltus::timefreezing

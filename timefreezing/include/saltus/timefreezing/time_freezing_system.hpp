@@ -1,0 +1,163 @@
+// The time-freezing system of a planar Scene (time-freezing paper, Sections 3-4: regions eq. 14
+// and 25, auxiliary dynamics eq. 16 and eq. 24 with a_t = mu a_n, the step-function DCS eqs.
+// 31-32), written for any number of contacts.
+//
+// State y = (q, v, t, L) in R^{2 nq + 2}: configuration, velocity, the clock t (physical time) and
+// the cost quadrature L (the running cost integrated over physical time only, eq. 29: it runs
+// with the clock). Inputs u in R^nu.
+//
+// ONE CONTACT i (eq. 25). Switching functions c_i = (g_i(q), J_n,i(q) v, J_t,i(q) v): gap, normal
+// and tangential velocity (J = the gradients of the scene's gap and tangent position). With the
+// step functions alpha_i,k in [0, 1] of c_i,k (alpha = 1 where c > 0, eq. 31):
+//     theta_i^free  = alpha_i1 + (1 - alpha_i1) alpha_i2        (R1: open, or closed and leaving)
+//     theta_i^+     = (1 - alpha_i1)(1 - alpha_i2) alpha_i3      (R2: closing, sliding with v_t > 0)
+//     theta_i^-     = (1 - alpha_i1)(1 - alpha_i2)(1 - alpha_i3) (R3: closing, v_t < 0)
+// (theta_i^free + theta_i^+ + theta_i^- = 1; eq. 32). The auxiliary dynamics of contact i act on
+// the velocity only, with the clock frozen (eq. 16, 24, a_t = mu a_n):
+//     M(q) v' = a_n (J_n,i - mu_i J_t,i)  in R2,   a_n (J_n,i + mu_i J_t,i)  in R3,   q' = 0, t' = 0.
+// A frictionless contact has no tangential switching function: its c_i3 is the constant 1 (so
+// alpha_i3 = 1 and theta_i^- = 0 at every solution) and mu_i = 0; this keeps the compile-time
+// layout of 3 switching functions per contact without adding switches at v_t = 0.
+//
+// SEVERAL CONTACTS (the construction of this library; the paper treats one contact). The product
+// space of the contacts' regions has 3^nc regions; in the region where the set A of contacts is
+// in an auxiliary region the field is the SUM of their auxiliary fields (each contact pushes its
+// own normal velocity up at rate a_n, through the coupling of M^-1), and the ODE field with the
+// clock running only where A is empty. Weighting each region by the product of the contacts'
+// thetas (the multi-affine Heaviside DCS) and summing, the products collapse because
+// theta_i^free + theta_i^+ + theta_i^- = 1:
+//     M(q) v' = Theta (S u - h) + a_n sum_i [ theta_i^+ (J_n,i - mu_i J_t,i) + theta_i^- (J_n,i + mu_i J_t,i) ],
+//     q' = Theta v,   t' = Theta,   L' = Theta l(x, u),        Theta = prod_i theta_i^free.
+// So physical time runs only when no contact is in an auxiliary region. When two contacts are in
+// their auxiliary regions at once both push together with the clock frozen: a frozen-time
+// resolution of a simultaneous impact. A contact whose normal velocity reaches 0 first leaves its
+// auxiliary region; if the other contact's push, through J_n,i' M^-1 J_n,j, drives it negative
+// again it re-enters: the Filippov solution slides on J_n,i v = 0, i.e. that contact is held at
+// zero normal velocity while the other one finishes. For a symmetric flat landing (the plank-box)
+// both normal velocities reach zero together. The frozen phase ends when every contact has
+// J_n v >= 0, and its outcome satisfies Signorini's conditions at the velocity level; in general
+// it need not equal the impact law of the event-driven simulator (dynamics/impact_law.hpp: a
+// single LCP), so the two are compared on scenes, not assumed equal.
+//
+// With the speed of time s >= 1 (eq. 33) every field is multiplied by s.
+#pragma once
+
+#include <saltus/ad/autodiff.hpp>
+#include <saltus/hybrid/vocabulary/errors.hpp>
+#include <saltus/hybrid/vocabulary/scene.hpp>
+
+#include <Eigen/Core>
+
+#include <cmath>
+
+namespace saltus::timefreezing {
+
+/// The time-freezing reformulation of a planar scene (see the file comment).
+/// Preconditions (checked, InvalidArgument): every contact frictionless or planar (spatial
+/// friction needs eq. 26's regularised field, not built), restitution e_n = 0 (elastic
+/// time-freezing is not built), a_n > 0 and finite.
+template <Scene S>
+class TimeFreezingSystem {
+ public:
+  static constexpr int nq = S::nq;
+  static constexpr int nu = S::nu;
+  static constexpr int nc = S::nc;
+  static constexpr int nx = 2 * nq;
+  /// y = (q, v, t, L).
+  static constexpr int ny = 2 * nq + 2;
+  static constexpr int clock_index = 2 * nq;
+  static constexpr int cost_index = 2 * nq + 1;
+  /// Three switching functions per contact: gap, normal velocity, tangential velocity.
+  static constexpr int n_switch = 3 * nc;
+
+  /// a_n: the auxiliary normal acceleration (paper's a_n; units of J_n' M^-1 J_n a_n are
+  /// m/s^2 of the contact's normal velocity per unit numerical time when J_n is a unit normal).
+  TimeFreezingSystem(const S& scene, double auxiliary_acceleration) : scene_(scene), a_n_(auxiliary_acceleration) {
+    validate_scene(scene);
+    SALTUS_REQUIRE(std::isfinite(a_n_) && a_n_ > 0.0,
+                   "time-freezing: the auxiliary acceleration a_n must be finite and > 0, got ", a_n_);
+    for (int i = 0; i < nc; ++i) {
+      const ContactSpec& c = scene.contact(i);
+      SALTUS_REQUIRE(c.friction != Friction::Spatial, "time-freezing: contact '", c.name,
+                     "' has spatial friction; the time-freezing system supports frictionless and planar contacts");
+      SALTUS_REQUIRE(c.restitution == 0.0, "time-freezing: contact '", c.name, "' has restitution e_n = ",
+                     c.restitution, "; the inelastic time-freezing system needs e_n = 0");
+      mu_[i] = c.friction == Friction::Planar ? c.mu : 0.0;
+      planar_[i] = c.friction == Friction::Planar;
+    }
+  }
+
+  const S& scene() const { return scene_; }
+  double auxiliary_acceleration() const { return a_n_; }
+  bool has_friction(int i) const { return planar_[i]; }
+
+  /// c(q, v) (size 3 nc): per contact (gap, J_n v, J_t v); the third is 1 for a frictionless one.
+  template <class T>
+  VecT<T, n_switch> switching_functions(const VecT<T, nq>& q, const VecT<T, nq>& v) const {
+    // Directional derivatives along v: one more AD level with one direction.
+    using D = ad::Dual<T, 1>;
+    VecT<D, nq> qd;
+    for (int k = 0; k < nq; ++k) qd[k] = D(q[k], Eigen::Matrix<T, 1, 1>(v[k]));
+    VecT<T, n_switch> c;
+    for (int i = 0; i < nc; ++i) {
+      const D g = scene_.template gap<D>(i, qd);
+      c[3 * i] = g.value();
+      c[3 * i + 1] = g.derivatives()[0];
+      if (planar_[i]) {
+        const VecT<D, 2> tp = scene_.template tangent_position<D>(i, qd);
+        c[3 * i + 2] = tp[0].derivatives()[0];
+      } else {
+        c[3 * i + 2] = T(1.0);
+      }
+    }
+    return c;
+  }
+
+  /// Theta_i^free of each contact and Theta = prod_i theta_i^free (file comment).
+  template <class T>
+  static T ode_weight(const VecT<T, n_switch>& alpha) {
+    T theta(1.0);
+    for (int i = 0; i < nc; ++i) {
+      const T& a1 = alpha[3 * i];
+      const T& a2 = alpha[3 * i + 1];
+      theta = T(theta * T(a1 + T(T(1.0 - a1) * a2)));
+    }
+    return theta;
+  }
+
+  /// The right-hand side of M(q) v' in the time-freezing DCS at step values alpha (size nq):
+  /// Theta (S u - h) + a_n sum_i [theta_i^+ (J_n - mu J_t) + theta_i^- (J_n + mu J_t)].
+  template <class T>
+  VecT<T, nq> generalised_force(const VecT<T, nq>& q, const VecT<T, nq>& v, const VecT<T, nu>& u,
+                                const VecT<T, n_switch>& alpha) const {
+    const T theta = ode_weight<T>(alpha);
+    VecT<T, nq> f = -scene_.template bias<T>(q, v);
+    if constexpr (nu > 0) f += scene_input_matrix<S, T>(scene_, q) * u;
+    f *= theta;
+    if constexpr (nc > 0) {
+      using D = ad::Dual<T, nq>;
+      VecT<D, nq> qd;
+      for (int k = 0; k < nq; ++k) qd[k] = ad::seed<nq>(q[k], k);
+      for (int i = 0; i < nc; ++i) {
+        const T closing = T(T(1.0 - alpha[3 * i]) * T(1.0 - alpha[3 * i + 1]));
+        const T plus = T(closing * alpha[3 * i + 2]);
+        const T minus = T(closing * T(1.0 - alpha[3 * i + 2]));
+        const VecT<T, nq> jn = scene_.template gap<D>(i, qd).derivatives();
+        f += T(a_n_ * T(plus + minus)) * jn;
+        if (planar_[i]) {
+          const VecT<T, nq> jt = scene_.template tangent_position<D>(i, qd)[0].derivatives();
+          f += T(a_n_ * mu_[i] * T(minus - plus)) * jt;
+        }
+      }
+    }
+    return f;
+  }
+
+ private:
+  S scene_;
+  double a_n_;
+  std::array<double, (nc > 0 ? nc : 1)> mu_{};
+  std::array<bool, (nc > 0 ? nc : 1)> planar_{};
+};
+
+}  // namespace saltus::timefreezing
