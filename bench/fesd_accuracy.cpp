@@ -74,6 +74,7 @@
 // it, a table. One progress line per configuration goes to stderr either way. Exit status 0
 // unless a simulation threw.
 #include "scenes/point_mass.hpp"
+#include "scenes/time_freezing_examples.hpp"
 
 #include <saltus/timefreezing/fesd.hpp>
 #include <saltus/timefreezing/mpcc_solver.hpp>
@@ -102,20 +103,10 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr int control_intervals = 14;
 constexpr double horizon = 3.5;
 
-/// Example 3's input law (the kink at t = 1 is at the control node tau = 2).
-struct Example3Input {
-  template <class T>
-  VecT<T, 2> input(const T& t, const VecT<T, 2>&) const {
-    if (t < 1.0) return VecT<T, 2>(T(7.0), T(0.0));
-    return VecT<T, 2>(T(7.0), T(2.0 * g * T(t - 1.0)));
-  }
-};
+using Example3Input = scenes::Example3;
 
 /// y(3.5) = (q1, q2, v1, v2, t) of Example 3 (file comment).
-Vec<5> exact_final_state() {
-  const double t = 2.25;
-  return (Vec<5>() << 3.5 * t * t, g * std::pow(t - 1.5, 3) / 3.0, 7.0 * t, g * (t - 1.5) * (t - 1.5), t).finished();
-}
+Vec<5> exact_final_state() { return scenes::Example3::final_state(); }
 
 struct Row {
   std::string scheme;

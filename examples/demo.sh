@@ -24,3 +24,11 @@ for bench in contact_properties simulation_accuracy jump_gains simultaneous_impa
     echo "wrote $SALTUS_REPORT_DIR/$bench.json"
   fi
 done
+# Time-freezing + FESD against closed forms (about 5 minutes): run once; its progress lines (one per
+# configuration, on stderr) are the printed results, the table is in the JSON.
+if [ -x "$build/bench/fesd_accuracy" ]; then
+  echo
+  echo "== fesd_accuracy =="
+  OPENBLAS_NUM_THREADS=1 "$build/bench/fesd_accuracy" --json > "$SALTUS_REPORT_DIR/fesd_accuracy.json"
+  echo "wrote $SALTUS_REPORT_DIR/fesd_accuracy.json"
+fi

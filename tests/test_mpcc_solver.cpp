@@ -564,6 +564,12 @@ TEST(MpccSolver, BadOptionsAreRefusedByName) {
   o = {};
   o.ipopt_options.push_back({"mu_strategy", std::string("sideways")});
   refused(o, "mu_strategy");
+  o = {};
+  o.polish_single_flips = -1;
+  refused(o, "polish_single_flips");
+  o = {};
+  o.polish_single_flip_max_biactive = -1;
+  refused(o, "polish_single_flip_max_biactive");
   // A valid extra option is accepted.
   o = {};
   o.ipopt_options.push_back({"acceptable_iter", 10});
@@ -959,6 +965,161 @@ TEST(MpccSolver, SidesKeptNonnegativeByTheBoundsGetNoRow) {
   const MpccSolution p = solve_mpcc(problem, penalty);
   EXPECT_EQ(p.sign_rows, 2);
   EXPECT_EQ(p.relaxed_rows, 1 + 2);
+}
+
+// The polish's fallback (top of mpcc_solver.hpp), on the mechanism of an impact's frozen phase in
+// FESD time-freezing. Variables y (the gap), ln, lp >= 0 (its multipliers), a in [0, 1] (the step
+// function); y = lp - ln, y = -2e-5 (a gap that drifted negative), pairs ln _|_ a and
+// lp _|_ 1 - a; min (a - 0.5)^2 + ln^2 + lp^2. Feasible only with ln >= 2e-5 > 0, so a = 0, lp =
+// 0: the unique solution, f = 0.25 + 4e-10. The Scholtes solution at sigma has ln = 2e-5 and
+// a = sigma / 2e-5 (the objective pulls a up): at sigma = 5e-10 (sigma_0, one homotopy step, so
+// no trend from a previous step) a = 2.5e-5, both sides below sqrt(1e-9) = 3.2e-5: biactive,
+// and the rule zeroes the smaller, ln: the branch y = lp >= 0, infeasible. The flipped branch
+// a = 0 is the solution.
+// With `decoy`, a second biactive pair m _|_ b, b >= 2.4e-5 by its bound, min (m - 0.5)^2 + b^2:
+// relaxed m = sigma / 2.4e-5 = 2.08e-5 < b, the rule zeroes m, right (the solution has m = 0,
+// b = 2.4e-5); flipping it contradicts the bound.
+// Then the flip of both pairs fails too, and the single flips, largest first (ln _|_ a: 2.5e-5
+// against 2.4e-5), flip ln _|_ a alone first: the third attempt succeeds.
+class BiactiveWrongGuess : public Mpcc {
+ public:
+  static constexpr double gap = -2e-5;
+  explicit BiactiveWrongGuess(bool decoy) : decoy_(decoy) {
+    if (decoy_) pairs_.push_back({variable(4), variable(5), "m _|_ b"});
+  }
+  int variable_count() const override { return decoy_ ? 6 : 4; }  // y, ln, lp, a [, m, b]
+  int constraint_count() const override { return 2; }
+  void bounds(Eigen::Ref<Eigen::VectorXd> xl, Eigen::Ref<Eigen::VectorXd> xu, Eigen::Ref<Eigen::VectorXd> gl,
+              Eigen::Ref<Eigen::VectorXd> gu) const override {
+    xl.head(4) << -inf, 0.0, 0.0, 0.0;
+    xu.head(4) << inf, inf, inf, 1.0;
+    if (decoy_) {
+      xl.tail(2) << 0.0, 2.4e-5;
+      xu.tail(2) << inf, inf;
+    }
+    gl << 0.0, gap;
+    gu << 0.0, gap;
+  }
+  void initial_point(Eigen::Ref<Eigen::VectorXd> x) const override {
+    x.setConstant(0.5);
+    x[0] = 0.0;
+  }
+  double objective(const Eigen::Ref<const Eigen::VectorXd>& x) const override {
+    double f = (x[3] - 0.5) * (x[3] - 0.5) + x[1] * x[1] + x[2] * x[2];
+    if (decoy_) f += (x[4] - 0.5) * (x[4] - 0.5) + x[5] * x[5];
+    return f;
+  }
+  void objective_gradient(const Eigen::Ref<const Eigen::VectorXd>& x, Eigen::Ref<Eigen::VectorXd> d) const override {
+    d.head(4) << 0.0, 2 * x[1], 2 * x[2], 2 * (x[3] - 0.5);
+    if (decoy_) d.tail(2) << 2 * (x[4] - 0.5), 2 * x[5];
+  }
+  void constraints(const Eigen::Ref<const Eigen::VectorXd>& x, Eigen::Ref<Eigen::VectorXd> g) const override {
+    g << x[0] - x[2] + x[1], x[0];
+  }
+  const std::vector<SparseEntry>& jacobian_structure() const override { return jac_; }
+  void jacobian_values(const Eigen::Ref<const Eigen::VectorXd>&, Eigen::Ref<Eigen::VectorXd> v) const override {
+    v << 1.0, -1.0, 1.0, 1.0;
+  }
+  const std::vector<SparseEntry>& hessian_structure() const override { return decoy_ ? hess_decoy_ : hess_; }
+  void hessian_values(const Eigen::Ref<const Eigen::VectorXd>&, double s, const Eigen::Ref<const Eigen::VectorXd>&,
+                      Eigen::Ref<Eigen::VectorXd> v) const override {
+    v.setConstant(2.0 * s);
+  }
+  const std::vector<ComplementarityPair>& complementarity_pairs() const override { return pairs_; }
+  std::string variable_name(int i) const override {
+    static const char* names[] = {"y", "ln", "lp", "a", "m", "b"};
+    return names[i];
+  }
+
+ private:
+  bool decoy_;
+  std::vector<SparseEntry> jac_{{0, 0}, {0, 2}, {0, 1}, {1, 0}};
+  std::vector<SparseEntry> hess_{{1, 1}, {2, 2}, {3, 3}};
+  std::vector<SparseEntry> hess_decoy_{{1, 1}, {2, 2}, {3, 3}, {4, 4}, {5, 5}};
+  std::vector<ComplementarityPair> pairs_{{variable(1), variable(3), "ln _|_ a"},
+                                          {variable(2), AffineExpression{{{3, -1.0}}, 1.0}, "lp _|_ 1 - a"}};
+};
+
+TEST(MpccSolver, PolishFallbackFlipsAWronglyGuessedBiactivePair) {
+  for (const bool decoy : {false, true}) {
+    BiactiveWrongGuess problem(decoy);
+    const std::string title = decoy ? "BiactiveWrongGuess (with decoy)" : "BiactiveWrongGuess";
+    std::ostringstream progress;
+    MpccSolverOptions options;
+    options.sigma_0 = 5e-10;  // one step, <= complementarity_tolerance: no trend
+    options.polish_fallback = true;
+    options.progress = &progress;
+    const MpccSolution s = solve_mpcc(problem, options);
+    print_steps(title, s);
+    std::cout << progress.str() << "  x = " << s.x.transpose() << "\n";
+    ASSERT_TRUE(s.converged) << s.message;
+    ASSERT_TRUE(s.polished) << s.message;
+    // The relaxed step: both sides of ln _|_ a ~ 2e-5, the product sigma.
+    ASSERT_GE(s.steps.size(), 3u);
+    EXPECT_FALSE(s.steps[0].polish);
+    EXPECT_NEAR(s.steps[0].complementarity, 5e-10, 1e-12);
+    // The first attempt guessed ln = 0 (and lp = 0) and failed.
+    const MpccHomotopyStep& first = s.steps[1];
+    EXPECT_TRUE(first.polish);
+    EXPECT_EQ(first.polish_attempt, 0);
+    EXPECT_FALSE(first.ipopt_succeeded);
+    EXPECT_FALSE(first.note.empty());
+    EXPECT_EQ(first.biactive, decoy ? 2 : 1);
+    EXPECT_EQ(first.by_trend, 0);
+    EXPECT_EQ(first.left_zero, decoy ? 3 : 2);
+    EXPECT_EQ(first.flipped, 0);
+    const MpccHomotopyStep& last = s.steps.back();
+    EXPECT_TRUE(last.polish);
+    EXPECT_TRUE(last.ipopt_succeeded);
+    EXPECT_TRUE(last.note.empty()) << last.note;
+    if (!decoy) {
+      // Attempt 1, the biactive pair flipped: a = 0.
+      ASSERT_EQ(s.steps.size(), 3u);
+      EXPECT_EQ(last.polish_attempt, 1);
+      EXPECT_EQ(last.flipped, 1);
+      EXPECT_EQ(last.left_zero, 1);
+      EXPECT_EQ(last.right_zero, 1);
+      EXPECT_NE(progress.str().find("attempt 1 [biactive flipped (1)]"), std::string::npos) << progress.str();
+    } else {
+      // Attempt 1 flips both (m _|_ b: b = 0 contradicts b >= 2.4e-5, no solve), attempt 2
+      // flips ln _|_ a alone.
+      ASSERT_EQ(s.steps.size(), 4u);
+      EXPECT_EQ(s.steps[2].polish_attempt, 1);
+      EXPECT_EQ(s.steps[2].flipped, 2);
+      EXPECT_FALSE(s.steps[2].ipopt_succeeded);
+      EXPECT_EQ(s.steps[2].ipopt_status, "Not_Solved");
+      EXPECT_EQ(last.polish_attempt, 2);
+      EXPECT_EQ(last.flipped, 1);
+      EXPECT_EQ(last.flipped_pair, 0);
+      EXPECT_NE(progress.str().find("attempt 2 [flipped ln _|_ a]"), std::string::npos) << progress.str();
+      EXPECT_EQ(s.x[4], 0.0);                 // m: its branch, fixed
+      EXPECT_NEAR(s.x[5], 2.4e-5, 1e-6);      // b at its bound (Ipopt's tolerance: b^2 is flat)
+    }
+    EXPECT_EQ(count_lines(progress.str()), static_cast<int>(s.steps.size()));
+    EXPECT_NE(s.message.find("polished"), std::string::npos) << s.message;
+    EXPECT_EQ(s.complementarity, 0.0);
+    EXPECT_LE(s.constraint_violation, 1e-12);
+    EXPECT_EQ(s.x[3], 0.0);  // a
+    EXPECT_EQ(s.x[2], 0.0);  // lp
+    EXPECT_NEAR(s.x[1], 2e-5, 1e-12);
+    EXPECT_NEAR(s.x[0], BiactiveWrongGuess::gap, 1e-15);
+    int total = 0;
+    for (const MpccHomotopyStep& st : s.steps) total += st.ipopt_iterations;
+    EXPECT_EQ(total, s.ipopt_iterations);
+
+    // Without the fallback: one attempt, failed; the relaxed step's point remains (converged by
+    // its residual 5e-10 <= 1e-9, but not exactly complementary).
+    MpccSolverOptions single = options;
+    single.progress = nullptr;
+    single.polish_fallback = false;
+    const MpccSolution u = solve_mpcc(problem, single);
+    print_steps(title + ", no fallback", u);
+    EXPECT_FALSE(u.polished);
+    ASSERT_EQ(u.steps.size(), 2u);
+    EXPECT_FALSE(u.steps[1].ipopt_succeeded);
+    EXPECT_GT(u.complementarity, 1e-10);
+    EXPECT_GT(u.x[3], 1e-5);
+  }
 }
 
 // A branch whose zero side needs an equality row (two variables, no bound makes it zero):

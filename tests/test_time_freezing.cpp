@@ -1,10 +1,13 @@
 // The time-freezing system and its FESD discretisation (timefreezing/): Radau IIA tableaus, the
 // regions' fields of a two-contact scene, exact derivatives of the FESD MPCC (finite differences
 // and Ipopt's own second-order derivative checker), and simulations against closed forms: the
-// guiding example (time-freezing paper, Example 3) and the frictional landing of a point mass.
+// guiding example (time-freezing paper, Example 3) and the frictional landing of a point mass;
+// a small OCP that lands the point mass and slides it to a target.
 #include "scenes/plank_box.hpp"
 #include "scenes/point_mass.hpp"
+#include "scenes/time_freezing_examples.hpp"
 
+#include <saltus/hybrid/simulation/simulator.hpp>
 #include <saltus/timefreezing/fesd.hpp>
 #include <saltus/timefreezing/mpcc_solver.hpp>
 #include <saltus/timefreezing/simulation.hpp>
@@ -13,6 +16,7 @@
 
 #include <cmath>
 #include <iostream>
+#include <vector>
 
 namespace saltus::timefreezing {
 namespace {
@@ -280,23 +284,7 @@ TEST(Fesd, RefusesBadOptionsAndStates) {
   EXPECT_THROW(FesdMpcc<PointMass>(system, {}, Vec<2>(0, std::nan("")), Vec<2>(0, 0), FesdOptions{}), InvalidArgument);
 }
 
-// Example 3 of the time-freezing paper: u = (7, 0) for t < 1, (7, 2 g (t - 1)) after; a_n = g.
-constexpr double g_ex3 = 9.81;
-struct Example3Input {
-  template <class T>
-  VecT<T, 2> input(const T& t, const VecT<T, 2>&) const {
-    if (t < 1.0) return VecT<T, 2>(T(7.0), T(0.0));
-    return VecT<T, 2>(T(7.0), T(2.0 * g_ex3 * T(t - 1.0)));
-  }
-};
-
-/// Closed form of Example 3 at numerical time 3.5 (derivation in bench/fesd_accuracy.cpp):
-/// physical time 2.25, q1 = 3.5 t^2, v1 = 7 t; after lift-off at t = 1.5 the vertical
-/// acceleration is g (2 t - 3), so v2 = g (t - 1.5)^2 and q2 = g (t - 1.5)^3 / 3.
-Vec<5> example3_final_state() {
-  const double t = 2.25;
-  return (Vec<5>() << 3.5 * t * t, g_ex3 * std::pow(t - 1.5, 3) / 3.0, 7.0 * t, g_ex3 * (t - 1.5) * (t - 1.5), t).finished();
-}
+constexpr double g_ex3 = scenes::Example3::gravity;
 
 TEST(TimeFreezingSimulation, GuidingExampleMatchesItsClosedForms) {
   const TimeFreezingSystem<PointMass> system(PointMass(), g_ex3);
@@ -305,9 +293,9 @@ TEST(TimeFreezingSimulation, GuidingExampleMatchesItsClosedForms) {
   o.control_intervals = 14;  // tau = 2 (t = 1, the kink of u) is a control node
   o.finite_elements = 4;
   o.horizon = 3.5;
-  const auto sim = simulate_time_freezing(system, Vec<2>(0, 1), Vec<2>(0, 0), o, Example3Input{});
+  const auto sim = simulate_time_freezing(system, Vec<2>(0, 1), Vec<2>(0, 0), o, scenes::Example3{});
   ASSERT_TRUE(sim.converged()) << sim.solution.message;
-  const double error = (sim.final_state().head<5>() - example3_final_state()).cwiseAbs().maxCoeff();
+  const double error = (sim.final_state().head<5>() - scenes::Example3::final_state()).cwiseAbs().maxCoeff();
   std::cout << "Example 3 (n_s = 2, 56 elements): final-state error " << error << ", " << sim.solution.ipopt_iterations
             << " Ipopt iterations, " << sim.solution.seconds << " s\n";
   // Measured 1.4e-4 (bench/README.md, "FESD accuracy"): not the Radau order. The relaxed homotopy
@@ -363,6 +351,128 @@ TEST(TimeFreezingSimulation, FrictionalLandingStopsAtTheClosedForm) {
   for (const SwitchPoint& s : sim.switch_points)
     if (s.switching_function == 2 && std::abs(s.time - 1.5) < 1e-6) stop = true;
   EXPECT_TRUE(stop);
+}
+
+// Two contacts: the plank-box's box lowered flat onto the plank under a constant input (both
+// corners land at once at t = sqrt(2 c m / push), then the box sticks and the plank rocks),
+// time-freezing + FESD against the event-driven simulator. sigma_0 = 1e-3: with the default 1 the
+// first relaxed NLP is the whole convexified inclusion (a simulation has no objective to select
+// inside it) and the interior point returns fractional step functions in free flight, a phantom
+// push that interval 1 cannot undo (measured: not converged, complementarity 1.2e-2, 18,310
+// Ipopt iterations); 1e-2 and 1e-4 fail in other intervals, so this is a narrow window, not a fix
+// (timefreezing issue, open).
+/// A constant input law.
+struct ConstantInput3 {
+  Vec<3> u;
+  template <class T>
+  VecT<T, 3> input(const T&, const VecT<T, 3>&) const {
+    return VecT<T, 3>(T(u[0]), T(u[1]), T(u[2]));
+  }
+};
+
+TEST(TimeFreezingSimulation, PlankBoxFlatLandingAgreesWithTheEventDrivenSimulator) {
+#if defined(__SANITIZE_ADDRESS__)
+  GTEST_SKIP() << "30 s in Release, several minutes under AddressSanitizer: run in the release stage only";
+#endif
+  const PlankBox scene;
+  const Vec<8> x0 = scene.flat_state(0.6, 0.05);
+  const TimeFreezingSystem<PlankBox> system(scene, 50.0);
+  FesdOptions o;
+  o.stages = 2;
+  o.control_intervals = 10;
+  o.finite_elements = 4;
+  o.horizon = 0.5;
+  MpccSolverOptions solver;
+  solver.sigma_0 = 1e-3;
+  const auto sim = simulate_time_freezing(system, Vec<4>(x0.head<4>()), Vec<4>(x0.tail<4>()), o,
+                                          ConstantInput3{scene.lowering_input(2.0)}, solver);
+  ASSERT_TRUE(sim.converged()) << sim.solution.message;
+  // Both gaps close at the same element boundary, at the event-driven landing time.
+  const double t_landing = std::sqrt(2.0 * 0.05 * scene.parameters().box_mass / 2.0);
+  std::vector<const SwitchPoint*> closing;
+  for (const SwitchPoint& s : sim.switch_points)
+    if ((s.switching_function == 0 || s.switching_function == 3) && s.alpha_before > 0.5 && s.alpha_after < 0.5)
+      closing.push_back(&s);
+  ASSERT_GE(closing.size(), 2u);
+  EXPECT_NEAR(closing[0]->time, t_landing, 1e-6);
+  EXPECT_NEAR(closing[1]->time, t_landing, 1e-6);
+  EXPECT_EQ(closing[0]->tau, closing[1]->tau);
+  // The event-driven simulation to the same physical time.
+  SimulationOptions options;
+  options.integrator.relative_tolerance = 1e-12;
+  options.integrator.absolute_tolerance = 1e-13;
+  Simulator<PlankBox> simulator(scene, options);
+  const double t_final = sim.final_state()[8];
+  const auto trajectory =
+      simulator.run(x0, 0.0, t_final, open_loop<PlankBox>([&](double) { return scene.lowering_input(2.0); }));
+  ASSERT_GE(trajectory.events.size(), 1u);
+  EXPECT_EQ(trajectory.events[0].guards().size(), 2u);
+  const double distance = (trajectory.final_state() - sim.final_state().head<8>()).cwiseAbs().maxCoeff();
+  std::cout << "plank-box flat landing: time-freezing against event-driven, final distance " << distance << " at t = "
+            << t_final << ", " << sim.solution.ipopt_iterations << " Ipopt iterations, " << sim.solution.seconds << " s\n";
+  EXPECT_LT(distance, 1e-3);  // measured 6e-5: the clock advances a little in the impact element
+}
+
+// A small OCP: the point mass with friction from rest at (0, 1) to rest on the table at x = 3 at
+// T = 2 s, minimising the integral of u'u over physical time, |u_i| <= 20. Penalty homotopy with
+// Ipopt tol 1e-8 (solve_time_freezing_ocp's docstring: the Scholtes defaults take 15x more
+// iterations here).
+struct PointMassToTheTarget {
+  static constexpr int terminal_constraint_count = 4;
+  template <class T>
+  T running_cost(const VecT<T, 4>&, const VecT<T, 2>& u) const {
+    return u.squaredNorm();
+  }
+  template <class T>
+  VecT<T, 4> terminal_constraints(const VecT<T, 4>& x, const T&) const {
+    return x;
+  }
+  Vec<4> terminal_lower() const { return Vec<4>(3, 0, 0, 0); }
+  Vec<4> terminal_upper() const { return Vec<4>(3, 0, 0, 0); }
+};
+
+TEST(TimeFreezingOcp, PointMassReachesTheTargetOnTheTable) {
+  scenes::PointMassParameters p;
+  p.friction = Friction::Planar;
+  p.mu = 0.2;
+  const TimeFreezingSystem<PointMass> system(PointMass(p), 3.0 * p.gravity);
+  FesdOptions o;
+  o.stages = 2;
+  o.control_intervals = 10;
+  o.finite_elements = 3;
+  o.horizon = 2.0;
+  o.clock = ClockConstraint::Terminal;
+  o.physical_horizon = 2.0;
+  o.speed_of_time_max = 5.0;
+  o.control_lower = Eigen::VectorXd::Constant(2, -20.0);
+  o.control_upper = Eigen::VectorXd::Constant(2, 20.0);
+  MpccSolverOptions solver;
+  solver.relaxation = MpccSolverOptions::Relaxation::Penalty;
+  solver.tol = 1e-8;
+  const auto r = solve_time_freezing_ocp(system, PointMassToTheTarget{}, Vec<2>(0, 1), Vec<2>(0, 0), o, solver);
+  std::cout << "point-mass OCP: objective " << r.solution.objective << ", " << r.solution.steps.size() << " steps, "
+            << r.solution.ipopt_iterations << " Ipopt iterations, " << r.solution.seconds << " s\n";
+  ASSERT_TRUE(r.converged()) << r.solution.message;
+  EXPECT_LE(r.solution.complementarity, 1e-9);
+  EXPECT_LE(r.solution.constraint_violation, 1e-6);
+  const auto& y = r.points.back().y;
+  EXPECT_NEAR(y[0], 3.0, 1e-6);
+  EXPECT_NEAR(y[1], 0.0, 1e-6);
+  EXPECT_NEAR(y[2], 0.0, 1e-6);
+  EXPECT_NEAR(y[3], 0.0, 1e-6);
+  EXPECT_NEAR(y[4], 2.0, 1e-6);  // the clock reaches T
+  // The objective: the running cost over physical time only (the cost state L) plus the heuristic
+  // step equilibration rho_h sum (h - h0)^2 (rho_h = 1, fesd.hpp).
+  double equilibration = 0.0;
+  for (double h : r.element_lengths) equilibration += (h - 2.0 / 30.0) * (h - 2.0 / 30.0);
+  EXPECT_NEAR(r.solution.objective, y[5] + equilibration, 1e-8 * (1.0 + y[5]));
+  EXPECT_GT(y[5], 1.0);  // it had to push: 3 m of slide or flight in 2 s
+  // The mass lands: the gap's switching function switches to closed at least once.
+  bool touchdown = false;
+  for (const SwitchPoint& s : r.switch_points)
+    if (s.switching_function == 0 && s.alpha_before > 0.5 && s.alpha_after < 0.5) touchdown = true;
+  EXPECT_TRUE(touchdown);
+  for (const MpccHomotopyStep& s : r.solution.steps) EXPECT_GT(s.seconds, 0.0);
 }
 
 }  // namespace

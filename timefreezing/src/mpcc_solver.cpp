@@ -182,15 +182,17 @@ std::string format_step(const MpccHomotopyStep& s, bool penalty) {
   return line;
 }
 
-std::string format_polish(const MpccHomotopyStep& s, int fixed, int eq_rows, int ineq_rows) {
+std::string format_polish(const MpccHomotopyStep& s, const std::string& label, int fixed, int eq_rows,
+                          int ineq_rows) {
   char line[400];
   std::snprintf(line, sizeof line,
-                "mpcc polish %3d  G=0 %d H=0 %d biactive %d trend %d (fixed %d, rows %d =, %d >=)  compl %9.3e  f % .10e  "
-                "viol %9.3e  iter %5d  %-34s %8.3f s%s%s\n",
-                s.index, s.left_zero, s.right_zero, s.biactive, s.by_trend, fixed, eq_rows, ineq_rows, s.complementarity,
-                s.objective, s.constraint_violation, s.ipopt_iterations, s.ipopt_status.c_str(), s.seconds,
-                s.note.empty() ? "" : "  failed: ", s.note.c_str());
-  return line;
+                "mpcc polish %3d  attempt %d [%s]  G=0 %d H=0 %d biactive %d trend %d (fixed %d, rows %d =, %d >=)  "
+                "compl %9.3e  f % .10e  viol %9.3e  iter %5d  %-34s %8.3f s",
+                s.index, s.polish_attempt, label.c_str(), s.left_zero, s.right_zero, s.biactive, s.by_trend, fixed,
+                eq_rows, ineq_rows, s.complementarity, s.objective, s.constraint_violation, s.ipopt_iterations,
+                s.ipopt_status.c_str(), s.seconds);
+  // The note can be long (a branch's reason to be infeasible names variables): appended as is.
+  return std::string(line) + (s.note.empty() ? "" : "  failed: " + s.note) + "\n";
 }
 
 void require_finite(const Eigen::VectorXd& v, const char* what, const Mpcc& problem, bool is_x) {
@@ -260,16 +262,12 @@ MpccSolution solve_from(const Mpcc& problem, const MpccStart& start, bool with_m
   // The successful step before `success` (x and sigma), for the trend of choose_branches.
   Eigen::VectorXd previous_x;
   double previous_sigma = 0.0;
-  auto try_polish = [&](const Iterate& from, int k, double step_sigma) {
+  // One attempt of a polish: the branch NLP with the branches zero_side from the step's
+  // solution `from`; `step` comes with index, sigma, the counts of choose_branches and the
+  // attempt's identity, and is completed and recorded here. True when the attempt is accepted.
+  auto run_branch = [&](const Iterate& from, double step_sigma, const std::vector<int>& zero_side,
+                            MpccHomotopyStep step, const std::string& label) {
     const Clock::time_point polish_start = Clock::now();
-    MpccHomotopyStep step;
-    step.index = k;
-    step.sigma = step_sigma;
-    step.polish = true;
-    const bool trend = previous_x.size() > 0 && previous_sigma > step_sigma;
-    const std::vector<int> zero_side =
-        nlp->choose_branches(from.x, std::sqrt(options.complementarity_tolerance), &step.biactive,
-                             trend ? &previous_x : nullptr, trend ? step_sigma / previous_sigma : 0.1, &step.by_trend);
     for (int z : zero_side) ++(z != 0 ? step.right_zero : step.left_zero);
     Ipopt::SmartPtr<detail::BranchNlp> branch = new detail::BranchNlp(*nlp, zero_side);
     std::ostringstream note;
@@ -327,18 +325,58 @@ MpccSolution solve_from(const Mpcc& problem, const MpccStart& start, bool with_m
     solution.ipopt_iterations += step.ipopt_iterations;
     solution.steps.push_back(step);
     if (options.progress)
-      *options.progress << format_polish(step, branch->fixed_variable_count(), branch->equality_row_count(),
+      *options.progress << format_polish(step, label, branch->fixed_variable_count(), branch->equality_row_count(),
                                          branch->inequality_row_count())
                         << std::flush;
     if (!step.ipopt_succeeded) return false;
     polished = Iterate{branch->result_x(), branch->result_lambda(), branch->result_z_lower(),
                        branch->result_z_upper()};
     std::ostringstream summary;
-    summary << "; polished from homotopy step " << k << " (sigma = " << step_sigma << ") by a branch NLP with "
-            << step.left_zero << " pairs G = 0, " << step.right_zero << " pairs H = 0 (" << step.biactive
-            << " biactive)";
+    summary << "; polished from homotopy step " << step.index << " (sigma = " << step_sigma
+            << ") by a branch NLP with " << step.left_zero << " pairs G = 0, " << step.right_zero << " pairs H = 0 ("
+            << step.biactive << " biactive), " << label;
     polish_summary = summary.str();
     return true;
+  };
+  // The polish of a successful step: the first guess of choose_branches, then the fallback
+  // (top of mpcc_solver.hpp): the biactive pairs flipped together, then one at a time.
+  auto try_polish = [&](const Iterate& from, int k, double step_sigma) {
+    MpccHomotopyStep base;
+    base.index = k;
+    base.sigma = step_sigma;
+    base.polish = true;
+    const bool trend = previous_x.size() > 0 && previous_sigma > step_sigma;
+    std::vector<int> biactive_pairs;
+    const std::vector<int> guess =
+        nlp->choose_branches(from.x, std::sqrt(options.complementarity_tolerance), &base.biactive,
+                             trend ? &previous_x : nullptr, trend ? step_sigma / previous_sigma : 0.1, &base.by_trend,
+                             &biactive_pairs);
+    if (run_branch(from, step_sigma, guess, base, "first guess")) return true;
+    const int n_biactive = static_cast<int>(biactive_pairs.size());
+    if (!options.polish_fallback || n_biactive == 0) return false;
+    std::vector<int> zero_side = guess;
+    for (int j : biactive_pairs) zero_side[static_cast<std::size_t>(j)] ^= 1;
+    MpccHomotopyStep step = base;
+    step.polish_attempt = 1;
+    step.flipped = n_biactive;
+    if (run_branch(from, step_sigma, zero_side, step, "biactive flipped (" + std::to_string(n_biactive) + ")"))
+      return true;
+    // One biactive pair alone: with a single one, that was the attempt above.
+    if (n_biactive < 2 || n_biactive > options.polish_single_flip_max_biactive) return false;
+    const int flips = std::min(n_biactive, options.polish_single_flips);
+    for (int f = 0; f < flips; ++f) {
+      const int j = biactive_pairs[static_cast<std::size_t>(f)];
+      zero_side = guess;
+      zero_side[static_cast<std::size_t>(j)] ^= 1;
+      step = base;
+      step.polish_attempt = 2 + f;
+      step.flipped = 1;
+      step.flipped_pair = j;
+      if (run_branch(from, step_sigma, zero_side, step,
+                         "flipped " + problem.complementarity_pairs()[static_cast<std::size_t>(j)].name))
+        return true;
+    }
+    return false;
   };
   bool success_polished = false;  // the polish of the current `success` has been tried
 
@@ -482,6 +520,11 @@ void MpccSolverOptions::validate() const {
   SALTUS_REQUIRE(warm_start_mult_bound_push > 0.0 && std::isfinite(warm_start_mult_bound_push),
                  "MpccSolverOptions::warm_start_mult_bound_push must be > 0 and finite, got ",
                  warm_start_mult_bound_push);
+  SALTUS_REQUIRE(polish_single_flips >= 0, "MpccSolverOptions::polish_single_flips must be >= 0, got ",
+                 polish_single_flips);
+  SALTUS_REQUIRE(polish_single_flip_max_biactive >= 0,
+                 "MpccSolverOptions::polish_single_flip_max_biactive must be >= 0, got ",
+                 polish_single_flip_max_biactive);
   SALTUS_REQUIRE(polish_max_iter >= 0, "MpccSolverOptions::polish_max_iter must be >= 0, got ", polish_max_iter);
   SALTUS_REQUIRE(polish_objective_increase >= 0.0 && std::isfinite(polish_objective_increase),
                  "MpccSolverOptions::polish_objective_increase must be >= 0 and finite, got ",

@@ -45,6 +45,27 @@ double interval_lower(const int* var, const double* coef, int count, double cons
 
 double interval_slack(double magnitude) { return 8.0 * std::numeric_limits<double>::epsilon() * magnitude; }
 
+void NlpResult::resize(int n, int m) {
+  x = Eigen::VectorXd::Zero(n);
+  lambda = Eigen::VectorXd::Zero(m);
+  z_lower = Eigen::VectorXd::Zero(n);
+  z_upper = Eigen::VectorXd::Zero(n);
+  present = false;
+}
+
+bool NlpResult::store(const double* x_in, const double* z_L, const double* z_U, const double* lambda_in) {
+  if (x_in == nullptr) return false;
+  std::copy_n(x_in, x.size(), x.data());
+  if (z_L) std::copy_n(z_L, z_lower.size(), z_lower.data());
+  else z_lower.setZero();
+  if (z_U) std::copy_n(z_U, z_upper.size(), z_upper.data());
+  else z_upper.setZero();
+  if (lambda_in) std::copy_n(lambda_in, lambda.size(), lambda.data());
+  else lambda.setZero();
+  present = true;
+  return true;
+}
+
 RelaxedNlp::RelaxedNlp(const Mpcc& problem, RelaxationKind kind) : problem_(problem), kind_(kind) {
   n_ = problem.variable_count();
   m_ = problem.constraint_count();
@@ -187,10 +208,7 @@ RelaxedNlp::RelaxedNlp(const Mpcc& problem, RelaxationKind kind) : problem_(prob
   start_lambda_ = Eigen::VectorXd::Zero(m_total_);
   start_z_lower_ = Eigen::VectorXd::Zero(n_);
   start_z_upper_ = Eigen::VectorXd::Zero(n_);
-  result_x_ = Eigen::VectorXd::Zero(n_);
-  result_lambda_ = Eigen::VectorXd::Zero(m_total_);
-  result_z_lower_ = Eigen::VectorXd::Zero(n_);
-  result_z_upper_ = Eigen::VectorXd::Zero(n_);
+  result_.resize(n_, m_total_);
 }
 
 void RelaxedNlp::set_start(const Eigen::VectorXd& x) {
@@ -225,9 +243,10 @@ double RelaxedNlp::complementarity(const Eigen::Ref<const Eigen::VectorXd>& x, i
 
 std::vector<int> RelaxedNlp::choose_branches(const Eigen::Ref<const Eigen::VectorXd>& x, double biactive_threshold,
                                              int* biactive, const Eigen::VectorXd* previous, double sigma_ratio,
-                                             int* by_trend) const {
+                                             int* by_trend, std::vector<int>* biactive_pairs) const {
   std::vector<int> zero_side(static_cast<std::size_t>(n_pairs_), 0);
   int both = 0, trend = 0;
+  std::vector<std::pair<double, int>> biactive_by_size;  // (larger distance, pair)
   const double shrinking = std::sqrt(sigma_ratio);
   auto ratio = [&](int s) {
     const double before = std::abs(side_value(s, previous->data()));
@@ -249,10 +268,19 @@ std::vector<int> RelaxedNlp::choose_branches(const Eigen::Ref<const Eigen::Vecto
       }
     }
     zero_side[static_cast<std::size_t>(j)] = zero;
-    if (dg < biactive_threshold && dh < biactive_threshold) ++both;
+    if (dg < biactive_threshold && dh < biactive_threshold) {
+      ++both;
+      if (biactive_pairs) biactive_by_size.emplace_back(std::max(dg, dh), j);
+    }
   }
   if (biactive) *biactive = both;
   if (by_trend) *by_trend = trend;
+  if (biactive_pairs) {
+    std::stable_sort(biactive_by_size.begin(), biactive_by_size.end(),
+                     [](const auto& a, const auto& b) { return a.first > b.first; });
+    biactive_pairs->clear();
+    for (const auto& entry : biactive_by_size) biactive_pairs->push_back(entry.second);
+  }
   return zero_side;
 }
 
@@ -417,15 +445,7 @@ void RelaxedNlp::finalize_solution(Ipopt::SolverReturn, Ipopt::Index, const Ipop
                                    const Ipopt::Number* z_L, const Ipopt::Number* z_U, Ipopt::Index,
                                    const Ipopt::Number*, const Ipopt::Number* lambda, Ipopt::Number,
                                    const Ipopt::IpoptData*, Ipopt::IpoptCalculatedQuantities*) {
-  if (x == nullptr) return;
-  std::copy_n(x, n_, result_x_.data());
-  if (z_L) std::copy_n(z_L, n_, result_z_lower_.data());
-  else result_z_lower_.setZero();
-  if (z_U) std::copy_n(z_U, n_, result_z_upper_.data());
-  else result_z_upper_.setZero();
-  if (lambda) std::copy_n(lambda, m_total_, result_lambda_.data());
-  else result_lambda_.setZero();
-  has_result_ = true;
+  result_.store(x, z_L, z_U, lambda);
 }
 
 // ---- BranchNlp
@@ -582,10 +602,7 @@ BranchNlp::BranchNlp(const RelaxedNlp& relaxed, const std::vector<int>& zero_sid
   start_lambda_ = Eigen::VectorXd::Zero(m_total_);
   start_z_lower_ = Eigen::VectorXd::Zero(n_);
   start_z_upper_ = Eigen::VectorXd::Zero(n_);
-  result_x_ = Eigen::VectorXd::Zero(n_);
-  result_lambda_ = Eigen::VectorXd::Zero(m_total_);
-  result_z_lower_ = Eigen::VectorXd::Zero(n_);
-  result_z_upper_ = Eigen::VectorXd::Zero(n_);
+  result_.resize(n_, m_total_);
 }
 
 void BranchNlp::set_start(const Eigen::VectorXd& x, const Eigen::VectorXd& relaxed_lambda,
@@ -709,15 +726,7 @@ void BranchNlp::finalize_solution(Ipopt::SolverReturn, Ipopt::Index, const Ipopt
                                   const Ipopt::Number* z_L, const Ipopt::Number* z_U, Ipopt::Index,
                                   const Ipopt::Number*, const Ipopt::Number* lambda, Ipopt::Number,
                                   const Ipopt::IpoptData*, Ipopt::IpoptCalculatedQuantities*) {
-  if (x == nullptr) return;
-  std::copy_n(x, n_, result_x_.data());
-  if (z_L) std::copy_n(z_L, n_, result_z_lower_.data());
-  else result_z_lower_.setZero();
-  if (z_U) std::copy_n(z_U, n_, result_z_upper_.data());
-  else result_z_upper_.setZero();
-  if (lambda) std::copy_n(lambda, m_total_, result_lambda_.data());
-  else result_lambda_.setZero();
-  has_result_ = true;
+  if (!result_.store(x, z_L, z_U, lambda)) return;
   if (!has_fixed_) return;
   // Ipopt 3.11 (fixed_variable_treatment = make_parameter) reports z_L = z_U = 0 for the fixed
   // variables. Their multipliers follow from the Lagrangian's gradient r = grad f + J' lambda:
@@ -729,17 +738,17 @@ void BranchNlp::finalize_solution(Ipopt::SolverReturn, Ipopt::Index, const Ipopt
     problem_.jacobian_values(xv, jac_buffer_);
     const std::vector<SparseEntry>& jac = problem_.jacobian_structure();
     for (Eigen::Index e = 0; e < jac_buffer_.size(); ++e)
-      gradient_buffer_[jac[static_cast<std::size_t>(e)].col] += result_lambda_[jac[static_cast<std::size_t>(e)].row] * jac_buffer_[e];
+      gradient_buffer_[jac[static_cast<std::size_t>(e)].col] += result_.lambda[jac[static_cast<std::size_t>(e)].row] * jac_buffer_[e];
   }
   for (int k = 0; k < n_eq_ + n_ineq_; ++k) {
     const int s = row_side_[static_cast<std::size_t>(k)];
     for (int t = relaxed_.side_ptr_[s]; t < relaxed_.side_ptr_[s + 1]; ++t)
-      gradient_buffer_[relaxed_.side_var_[t]] += result_lambda_[m_ + k] * relaxed_.side_coef_[t];
+      gradient_buffer_[relaxed_.side_var_[t]] += result_.lambda[m_ + k] * relaxed_.side_coef_[t];
   }
   for (int i = 0; i < n_; ++i) {
     if (x_lower_[i] != x_upper_[i]) continue;
-    result_z_lower_[i] = std::max(gradient_buffer_[i], 0.0);
-    result_z_upper_[i] = std::max(-gradient_buffer_[i], 0.0);
+    result_.z_lower[i] = std::max(gradient_buffer_[i], 0.0);
+    result_.z_upper[i] = std::max(-gradient_buffer_[i], 0.0);
   }
 }
 

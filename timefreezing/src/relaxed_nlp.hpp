@@ -15,6 +15,19 @@ namespace saltus::timefreezing::detail {
 
 enum class RelaxationKind { Scholtes, Penalty };
 
+/// The primal-dual point Ipopt hands to finalize_solution, copied into buffers sized once (by
+/// resize), so that storing it allocates nothing. Shared by RelaxedNlp and BranchNlp.
+struct NlpResult {
+  Eigen::VectorXd x, lambda, z_lower, z_upper;  ///< sizes n, m (all rows), n, n
+  bool present = false;                         ///< Ipopt returned an iterate
+
+  /// Zero buffers for n variables and m rows; no result present.
+  void resize(int n, int m);
+  /// Copies Ipopt's arrays (a null multiplier array stores zeros) and sets `present`; does
+  /// nothing and returns false when x is null (Ipopt returned no iterate).
+  bool store(const double* x_in, const double* z_L, const double* z_U, const double* lambda_in);
+};
+
 /// Interval arithmetic on an affine expression c + sum_t a_t x_{var_t} over the box
 /// x_lower <= x <= x_upper: its least value, c + sum_t a_t (a_t > 0 ? x_lower : x_upper) (terms
 /// with a_t = 0 contribute nothing), -infinity when a needed bound is infinite. `magnitude`
@@ -70,9 +83,13 @@ class RelaxedNlp : public Ipopt::TNLP {
   /// x (ratio >= sqrt(sigma / sigma_previous)) while the other one does, the other one is zeroed
   /// (`by_trend` counts these pairs): G = 1e-5 holding still against H = 1e-4 falling with sigma
   /// is the branch H = 0.
+  /// `biactive_pairs` (optional) receives the biactive pairs' indices, largest first: by the
+  /// larger of the pair's two distances, descending (ties: lower index first), the order in
+  /// which the polish's fallback flips them one at a time.
   std::vector<int> choose_branches(const Eigen::Ref<const Eigen::VectorXd>& x, double biactive_threshold,
                                    int* biactive, const Eigen::VectorXd* previous = nullptr,
-                                   double sigma_ratio = 0.1, int* by_trend = nullptr) const;
+                                   double sigma_ratio = 0.1, int* by_trend = nullptr,
+                                   std::vector<int>* biactive_pairs = nullptr) const;
   const Eigen::VectorXd& x_lower() const { return x_lower_; }
   const Eigen::VectorXd& x_upper() const { return x_upper_; }
   const Eigen::VectorXd& g_lower() const { return g_lower_; }
@@ -87,12 +104,12 @@ class RelaxedNlp : public Ipopt::TNLP {
                  const Eigen::VectorXd& z_upper);
 
   /// Filled by finalize_solution (has_result() false when Ipopt returned no iterate).
-  bool has_result() const { return has_result_; }
-  void clear_result() { has_result_ = false; }
-  const Eigen::VectorXd& result_x() const { return result_x_; }
-  const Eigen::VectorXd& result_lambda() const { return result_lambda_; }  ///< size m_total
-  const Eigen::VectorXd& result_z_lower() const { return result_z_lower_; }
-  const Eigen::VectorXd& result_z_upper() const { return result_z_upper_; }
+  bool has_result() const { return result_.present; }
+  void clear_result() { result_.present = false; }
+  const Eigen::VectorXd& result_x() const { return result_.x; }
+  const Eigen::VectorXd& result_lambda() const { return result_.lambda; }  ///< size m_total
+  const Eigen::VectorXd& result_z_lower() const { return result_.z_lower; }
+  const Eigen::VectorXd& result_z_upper() const { return result_.z_upper; }
 
   /// max_j |G_j(x) H_j(x)| and the pair attaining it (-1 without pairs).
   double complementarity(const Eigen::Ref<const Eigen::VectorXd>& x, int* worst_pair = nullptr) const;
@@ -167,9 +184,7 @@ class RelaxedNlp : public Ipopt::TNLP {
   Eigen::VectorXd start_x_, start_lambda_, start_z_lower_, start_z_upper_;
   bool start_has_multipliers_ = false;
 
-  // Output of the last solve.
-  Eigen::VectorXd result_x_, result_lambda_, result_z_lower_, result_z_upper_;
-  bool has_result_ = false;
+  NlpResult result_;  ///< output of the last solve
 };
 
 /// The branch NLP (BNLP) of a polish step: the original problem with every pair fixed to one
@@ -211,15 +226,15 @@ class BranchNlp : public Ipopt::TNLP {
   void set_start(const Eigen::VectorXd& x, const Eigen::VectorXd& relaxed_lambda, const Eigen::VectorXd& z_lower,
                  const Eigen::VectorXd& z_upper, double sigma);
 
-  bool has_result() const { return has_result_; }
-  const Eigen::VectorXd& result_x() const { return result_x_; }
-  const Eigen::VectorXd& result_lambda() const { return result_lambda_; }  ///< size m_total
+  bool has_result() const { return result_.present; }
+  const Eigen::VectorXd& result_x() const { return result_.x; }
+  const Eigen::VectorXd& result_lambda() const { return result_.lambda; }  ///< size m_total
   /// Bound multipliers as Ipopt reports them, except for the fixed variables (x_l = x_u in the
   /// branch, among them any the problem fixes itself), for which Ipopt 3.11 reports zeros:
   /// z_L - z_U = grad f + J' lambda there (the branch Lagrangian's stationarity), split into
   /// its positive and negative parts.
-  const Eigen::VectorXd& result_z_lower() const { return result_z_lower_; }
-  const Eigen::VectorXd& result_z_upper() const { return result_z_upper_; }
+  const Eigen::VectorXd& result_z_lower() const { return result_.z_lower; }
+  const Eigen::VectorXd& result_z_upper() const { return result_.z_upper; }
 
   // ---- Ipopt::TNLP
   bool get_nlp_info(Ipopt::Index& n, Ipopt::Index& m, Ipopt::Index& nnz_jac_g, Ipopt::Index& nnz_h_lag,
@@ -260,8 +275,7 @@ class BranchNlp : public Ipopt::TNLP {
 
   Eigen::VectorXd jac_buffer_, hess_buffer_, gradient_buffer_, zero_multipliers_;
   Eigen::VectorXd start_x_, start_lambda_, start_z_lower_, start_z_upper_;
-  Eigen::VectorXd result_x_, result_lambda_, result_z_lower_, result_z_upper_;
-  bool has_result_ = false;
+  NlpResult result_;
   bool has_fixed_ = false;  ///< some x_lower_[i] == x_upper_[i]
 };
 

@@ -40,9 +40,22 @@
 //   step's x to the hyperplane Z = 0 (invariant to scaling a side; ties: the left side G). A pair
 //   with both distances below sqrt(complementarity_tolerance) is counted as biactive, and gets
 //   the same rule: its smaller side is zeroed and the other kept >= 0, the larger of the two
-//   branch NLPs (the tightened NLP, both zero, removes freedom the solution may need; a wrong
-//   guess costs one failed polish, after which the homotopy goes on and the next step guesses
-//   again from a better resolved iterate).
+//   branch NLPs (the tightened NLP, both zero, removes freedom the solution may need).
+//   Fallback (polish_fallback, off by default, measurements there; NOSBENCH 5.5's "move biactive
+//   pairs into single branches"): for a biactive pair the rule is a guess, and a wrong one can make
+//   the branch NLP infeasible (FESD time-freezing, an impact's frozen phase: the gap drifted to
+//   -1e-5 under the relaxation, its multiplier lambda_n and the step function sum(alpha) both ~1e-5;
+//   the rule zeroes lambda_n, which forces gap >= 0, infeasible; the right branch zeroes alpha, the
+//   clock stands still). When the first attempt fails (its branch infeasible by its bounds, Ipopt's
+//   failure, or the acceptance checks below), attempt 1 flips ALL biactive pairs to their other
+//   side; when that fails too and there are 2..polish_single_flip_max_biactive biactive pairs,
+//   attempts 2, 3, ... flip ONE biactive pair each against the first guess, largest first (by the
+//   larger of the pair's two distances), at most polish_single_flips of them. Each attempt is a
+//   polish step of its own (MpccHomotopyStep::polish_attempt), from the same step solution, with its
+//   own polish_max_iter. (Mixed flips beyond these are not tried: 2^|biactive| branches; the single
+//   flips cover the case of one wrong guess among several right ones, the flip of all the case of
+//   one physical mechanism, e.g. an impact, wrongly guessed in all its pairs.) When every attempt
+//   fails, the homotopy goes on and the next step guesses again from a better resolved iterate.
 //   A zero side becomes BOUNDS where it can: a side whose least value over the variable bounds is
 //   0 (interval arithmetic, as above: a single variable with lower bound 0, 1 - alpha, sums of
 //   alpha or of 1 - alpha over alpha in [0, 1]) is zero exactly when each of its variables sits at
@@ -51,7 +64,7 @@
 //   variable, a x_i + b, fixes x_i = -b / a. Any other zero side gets the equality row Z(x) = 0.
 //   The other side keeps a >= 0 row unless the branch's bounds keep it >= 0 (row pruning). Fixings
 //   that contradict each other or the bounds fail the polish without an Ipopt solve.
-// The polish succeeds when Ipopt's result is accepted as a step's would be (accept_acceptable,
+// A polish attempt succeeds when Ipopt's result is accepted as a step's would be (accept_acceptable,
 // within polish_max_iter iterations), its violation of the original constraints is <=
 // polish_feasibility_tolerance, the ORIGINAL pairs' residual is <= complementarity_tolerance
 // (zero sides held by fixed variables are exactly 0), and its objective exceeds the step's by
@@ -60,8 +73,9 @@
 // multipliers as Ipopt reports them, except for fixed variables, for which Ipopt 3.11 reports
 // zeros: there z_L - z_U is the gradient of the branch NLP's Lagrangian, grad f + J' lambda with
 // the branch rows included, split into its positive and negative parts (so a variable the branch
-// fixed carries its pair's multiplier in z_L or z_U). A failed polish is recorded and the homotopy goes on from the step's
-// own solution, which remains the result if no later polish succeeds.
+// fixed carries its pair's multiplier in z_L or z_U). A failed polish (all its attempts failed)
+// is recorded and the homotopy goes on from the step's own solution, which remains the result if
+// no later polish succeeds.
 #pragma once
 
 #include <saltus/timefreezing/mpcc.hpp>
@@ -108,7 +122,12 @@ struct MpccSolverOptions {
   int max_step_retries = 3;
 
   // ---- Ipopt, per step
-  double tol = 1e-10;       ///< Ipopt `tol` (> 0)
+  /// Ipopt `tol` (> 0). For OCPs 1e-8 with the Penalty relaxation is much faster (point-mass
+  /// time-freezing OCP, N = 10: 1e-10 cycles at mu = 1e-11 for hundreds of iterations, 6368
+  /// iterations in all against 1976 with 1e-8 and 422 with 1e-8 + Penalty); the FESD simulations
+  /// need 1e-10 (with 1e-8 the guiding example's homotopy fails in one control interval), so the
+  /// default stays 1e-10 (solve_time_freezing_ocp's docstring).
+  double tol = 1e-10;
   int max_iter = 3000;      ///< Ipopt `max_iter` per step (>= 0)
   int print_level = 0;      ///< Ipopt `print_level` (0..12); 0: no Ipopt output at all
   std::string mu_strategy = "adaptive";  ///< Ipopt `mu_strategy`
@@ -168,13 +187,30 @@ struct MpccSolverOptions {
   /// the relaxed optimum lies about sum_j w_j |G_j H_j| below the MPCC's, more means the branch
   /// NLP found another, worse local solution (a wrong or premature guess of the branch).
   double polish_objective_increase = 1e-4;
+  /// When a polish's first guess fails, try again with the biactive pairs on their other side
+  /// (all of them, then single ones; top of this file). false: one attempt per polish.
+  /// Off by default: on the chained FESD simulations (time-freezing Example 3 and the frictional
+  /// landing, one MPCC per control interval) the fallback does rescue the failed polishes, but
+  /// the exactly complementary interval end states (e.g. the gap exactly 0 through a frozen
+  /// phase) then lead a later interval to a worse local solution: Example 3 (4 elements, 2
+  /// stages) final error 1.4e-4 -> 8.2e-4 and not converged, 5567 -> 37729 Ipopt iterations;
+  /// 8 elements 1.41e-5 -> 1.64e-5 (2885 -> 9419 iterations); landing 2.0e-6 -> 7.8e-6 (3535 ->
+  /// 7343); 3 stages unchanged (no biactive pair in its failed polish).
+  bool polish_fallback = false;
+  /// Attempts that flip ONE biactive pair (largest first) after the flip of all of them failed
+  /// (>= 0; 0: stop after the flip of all). Each costs up to polish_max_iter iterations.
+  int polish_single_flips = 4;
+  /// Single flips only when the polish has at most this many biactive pairs (>= 0): with many,
+  /// one flip is unlikely to be the missing change and the cap would cover few of them.
+  int polish_single_flip_max_biactive = 16;
 
   /// Extra Ipopt options, applied last. An option Ipopt rejects throws InvalidArgument.
   std::vector<IpoptOption> ipopt_options;
 
   /// One line per Ipopt solve (homotopy step or retry) when not null: step, sigma (or rho),
   /// complementarity residual, objective, constraint violation, Ipopt iterations and status,
-  /// seconds. Not owned; must outlive the call.
+  /// seconds; per polish attempt also which attempt ("attempt 0 [first guess]", "attempt 1
+  /// [biactive flipped (3)]", "attempt 2 [flipped <pair name>]"), the branch, and why it failed. Not owned; must outlive the call.
   std::ostream* progress = nullptr;
 
   /// Throws InvalidArgument naming the first field out of its domain.
@@ -204,6 +240,11 @@ struct MpccHomotopyStep {
   int right_zero = 0;   ///< polish: pairs whose branch sets the right side H_j = 0
   int biactive = 0;     ///< polish: pairs with both sides within sqrt(complementarity_tolerance)
   int by_trend = 0;     ///< polish: pairs whose branch the trend decided against the distances
+  /// polish: 0 the first guess; 1 the biactive pairs flipped; 2, 3, ... one biactive pair
+  /// flipped (the fallback, top of this file).
+  int polish_attempt = 0;
+  int flipped = 0;        ///< polish: pairs whose branch differs from the first guess
+  int flipped_pair = -1;  ///< polish attempt >= 2: the pair flipped (index into the pairs)
   std::string note;     ///< polish: why it failed ("" when it succeeded)
   double complementarity = 0.0;       ///< max_j |G_j(x) H_j(x)| at the step's final iterate
   double objective = 0.0;             ///< original f at the step's final iterate (no penalty)

@@ -245,6 +245,13 @@ struct TimeFreezingOcpResult {
 /// provide) from (q0, v0) with FESD, by the MPCC homotopy, and recovers its reference in physical
 /// time. Returns the result whether or not the homotopy converged (converged() says; the message
 /// says why not). Throws InvalidArgument for bad options or states.
+/// Solver settings, measured on the point mass landing and sliding to a target (N = 10, N_fe = 3):
+/// the defaults (Scholtes, tol 1e-10) took 6368 Ipopt iterations; tol = 1e-8 with
+/// relaxation = Penalty took 422 (two homotopy steps and the polish) and found the cheaper of
+/// the two local optima (18.8 against 35.2). Known limit: at a touchdown inside an element the
+/// gap's switching function is exactly 0, its multipliers vanish and cross-complementarity cannot
+/// stop the active set from changing inside that element; such an impact is not a frozen run of
+/// elements and recover_reference misses it (the re-simulation then differs by O(1)).
 template <Scene S, class Ocp>
 TimeFreezingOcpResult<S> solve_time_freezing_ocp(const TimeFreezingSystem<S>& system, const Ocp& ocp, const Vec<S::nq>& q0,
                                                  const Vec<S::nq>& v0, const FesdOptions& fesd,
