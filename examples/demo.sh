@@ -24,6 +24,10 @@ for bench in contact_properties simulation_accuracy jump_gains simultaneous_impa
     echo "wrote $SALTUS_REPORT_DIR/$bench.json"
   fi
 done
+# The guiding example's time-freezing OCP (a few seconds): JSON on stdout, progress on stderr.
+echo
+echo "== guiding_example --json (time-freezing OCP) =="
+OPENBLAS_NUM_THREADS=1 "$build/examples/guiding_example" --json | tee "$SALTUS_REPORT_DIR/guiding_example_ocp.json"
 # Time-freezing + FESD against closed forms (about 5 minutes): run once; its progress lines (one per
 # configuration, on stderr) are the printed results, the table is in the JSON.
 if [ -x "$build/bench/fesd_accuracy" ]; then
