@@ -16,6 +16,7 @@
 
 #include <cmath>
 #include <iostream>
+#include <string>
 #include <vector>
 
 namespace saltus::timefreezing {
@@ -282,6 +283,27 @@ TEST(Fesd, RefusesBadOptionsAndStates) {
   o.control_lower = Eigen::VectorXd::Zero(3);
   EXPECT_THROW(FesdMpcc<PointMass>(system, {}, Vec<2>(0, 1), Vec<2>(0, 0), o), InvalidArgument);
   EXPECT_THROW(FesdMpcc<PointMass>(system, {}, Vec<2>(0, std::nan("")), Vec<2>(0, 0), FesdOptions{}), InvalidArgument);
+  // Below the table: refused, naming the contact.
+  try {
+    FesdMpcc<PointMass>(system, {}, Vec<2>(0, -0.1), Vec<2>(0, 0), FesdOptions{});
+    ADD_FAILURE() << "a penetrating initial state was accepted";
+  } catch (const InvalidArgument& e) {
+    EXPECT_NE(std::string(e.what()).find("penetrates contact 'table'"), std::string::npos) << e.what();
+  }
+  // The simulation driver checks the grid before splitting it (a message with the given value,
+  // not a crash on zero intervals).
+  o = FesdOptions{};
+  o.control_intervals = 0;
+  EXPECT_THROW(simulate_time_freezing(system, Vec<2>(0, 1), Vec<2>(0, 0), o), InvalidArgument);
+  o = FesdOptions{};
+  o.control_intervals = 10;
+  o.horizon = -1.0;
+  try {
+    simulate_time_freezing(system, Vec<2>(0, 1), Vec<2>(0, 0), o);
+    ADD_FAILURE() << "a negative horizon was accepted";
+  } catch (const InvalidArgument& e) {
+    EXPECT_NE(std::string(e.what()).find("got -1"), std::string::npos) << e.what();
+  }
 }
 
 constexpr double g_ex3 = scenes::Example3::gravity;

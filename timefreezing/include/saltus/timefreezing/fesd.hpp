@@ -78,6 +78,9 @@ struct FesdOptions {
   ClockConstraint clock = ClockConstraint::None;
   double physical_horizon = std::numeric_limits<double>::quiet_NaN();  ///< T [s], for the clock
   double initial_time = 0.0;  ///< t at tau = 0 [s] (the clock's initial value; clock rows count from it)
+  /// The initial configuration may penetrate a contact by at most this much [m] (InvalidArgument
+  /// beyond: the time-freezing system would slide along inside the obstacle, clock running).
+  double gap_tolerance = 1e-9;
   Eigen::VectorXd control_lower;  ///< size nu (empty: -infinity)
   Eigen::VectorXd control_upper;  ///< size nu (empty: +infinity)
 };
@@ -201,6 +204,11 @@ class FesdMpcc final : public Mpcc {
     y0_.template segment<nq>(nq) = v0;
     SALTUS_REQUIRE(std::isfinite(options.initial_time), "FESD: initial_time must be finite, got ", options.initial_time);
     y0_[System::clock_index] = options.initial_time;
+    for (int i = 0; i < nc; ++i) {
+      const double gap = system.scene().template gap<double>(i, q0);
+      SALTUS_REQUIRE(gap >= -options.gap_tolerance, "FESD: the initial state penetrates contact '",
+                     system.scene().contact(i).name, "' (gap ", gap, " < -", options.gap_tolerance, ")");
+    }
     n_ = options.control_intervals * interval_size();
     h0_ = options.horizon / (options.control_intervals * options.finite_elements);
     build_rows();

@@ -10,6 +10,7 @@
 #include <saltus/timefreezing/mpcc_solver.hpp>
 
 #include <algorithm>
+#include <cmath>
 #include <string>
 #include <vector>
 
@@ -175,6 +176,10 @@ TimeFreezingSimulation<S> simulate_time_freezing(const TimeFreezingSystem<S>& sy
                                                  const MpccSolverOptions& solver = {},
                                                  SimulationSplit split = SimulationSplit::PerControlInterval) {
   constexpr int nq = S::nq;
+  // Checked here too: the split below divides by them before FesdMpcc would see them.
+  SALTUS_REQUIRE(fesd.control_intervals >= 1, "FESD: control_intervals must be >= 1, got ", fesd.control_intervals);
+  SALTUS_REQUIRE(std::isfinite(fesd.horizon) && fesd.horizon > 0.0, "FESD: the numerical horizon must be > 0, got ",
+                 fesd.horizon);
   fesd.clock = ClockConstraint::None;
   fesd.speed_of_time_max = 1.0;
   fesd.speed_of_time_weight = 0.0;
