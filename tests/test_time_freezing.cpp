@@ -494,6 +494,9 @@ TEST(TimeFreezingOcp, PointMassReachesTheTargetOnTheTable) {
   for (const SwitchPoint& s : r.switch_points)
     if (s.switching_function == 0 && s.alpha_before > 0.5 && s.alpha_after < 0.5) touchdown = true;
   EXPECT_TRUE(touchdown);
+  // One impact, recovered as one event (its element's last stage is not frozen: element_frozen).
+  EXPECT_EQ(r.frozen_phases.size(), 1u);
+  EXPECT_EQ(r.reference.event_times.size(), 1u);
   for (const MpccHomotopyStep& s : r.solution.steps) EXPECT_GT(s.seconds, 0.0);
 }
 

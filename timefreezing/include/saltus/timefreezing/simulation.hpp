@@ -50,8 +50,28 @@ struct TimeFreezingSimulation {
 };
 
 namespace detail {
+/// An element takes part in a frozen phase when its clock stands still (advance below
+/// frozen_tolerance * h) or, with n_s >= 2, when its first stage is frozen (Theta < 1e-6): at the
+/// end of an impact the element's last stage sits on the switching surfaces (gap = 0, J_n v = 0),
+/// where both multipliers vanish and the step function, hence Theta and the clock there, is not
+/// determined by the complementarity; the clock then advances by h b_ns Theta_ns inside an
+/// element that is an impact (measured: 0.008 s for a dropped mass, a_n = 100). Such an element
+/// still ends the frozen run.
+template <int ny, int nsw, int nu>
+bool element_frozen(const std::vector<FesdPoint<ny, nsw, nu>>& pts, int stages, int e, double frozen_tolerance) {
+  const auto& start = e == 0 ? pts[0] : pts[static_cast<std::size_t>(e * stages)];
+  const auto& end = pts[static_cast<std::size_t>((e + 1) * stages)];
+  const double h = end.tau - start.tau;
+  if (!(h > 0.0)) return false;
+  constexpr int clock = ny - 2;
+  if (end.y[clock] - start.y[clock] <= frozen_tolerance * h) return true;
+  return stages >= 2 && pts[static_cast<std::size_t>(1 + e * stages)].ode_weight < 1e-6;
+}
+}  // namespace detail
+
+namespace detail {
 /// Reads frozen phases and switch points off a FESD solution (see TimeFreezingSimulation).
-/// An element is frozen when its clock advance is below frozen_tolerance * h.
+/// Frozen elements: detail::element_frozen.
 template <int ny, int nsw, int nu, int nx>
 void read_events(const std::vector<FesdPoint<ny, nsw, nu>>& pts, int stages, std::vector<double>& lengths,
                  std::vector<FrozenPhase<nx>>& frozen, std::vector<SwitchPoint>& switches, double frozen_tolerance = 1e-7) {
@@ -63,7 +83,7 @@ void read_events(const std::vector<FesdPoint<ny, nsw, nu>>& pts, int stages, std
   for (int e = 0; e < elements; ++e) {
     const double h = end_of(e).tau - start_of(e).tau;
     lengths.push_back(h);
-    is_frozen[e] = h > 0.0 && end_of(e).y[clock] - start_of(e).y[clock] <= frozen_tolerance * h;
+    is_frozen[e] = element_frozen(pts, stages, e, frozen_tolerance);
   }
   for (int e = 0; e < elements;) {
     if (!is_frozen[e]) {
@@ -98,7 +118,7 @@ void read_events(const std::vector<FesdPoint<ny, nsw, nu>>& pts, int stages, std
 /// Recovers the physical-time reference from a discrete time-freezing solution (time-freezing
 /// Theorem 5): the samples are the element boundaries at their physical times t (the clock
 /// state; interior Radau stages are left out: with a_12 < 0 their clocks need not increase); a
-/// run of frozen elements (clock advance below frozen_tolerance * h) is removed and becomes an
+/// run of frozen elements (detail::element_frozen) is removed and becomes an
 /// event: the sample at its start (x-) and at its end (x+) share the event's time, x- first, and
 /// the time is listed in event_times. Inputs are the applied inputs at the samples; at every
 /// control-interval boundary the sample is repeated with the next interval's input, so the
@@ -121,12 +141,8 @@ ImportedReference<S> recover_reference(const std::vector<FesdPoint<ny, nsw, nu>>
     ref.u.push_back(p.u);
   };
   const int elements = static_cast<int>((points.size() - 1) / stages);
-  auto start_of = [&](int e) -> const FesdPoint<ny, nsw, nu>& { return e == 0 ? points[0] : points[static_cast<std::size_t>(e * stages)]; };
   auto end_of = [&](int e) -> const FesdPoint<ny, nsw, nu>& { return points[static_cast<std::size_t>((e + 1) * stages)]; };
-  auto frozen = [&](int e) {
-    const double h = end_of(e).tau - start_of(e).tau;
-    return h > 0.0 && end_of(e).y[nx] - start_of(e).y[nx] <= frozen_tolerance * h;
-  };
+  auto frozen = [&](int e) { return detail::element_frozen(points, stages, e, frozen_tolerance); };
   add(points[0]);
   for (int e = 0; e < elements;) {
     if (frozen(e)) {
