@@ -191,20 +191,11 @@ struct Landing {
 
 Landing run_landing() {
   Landing l;
-  scenes::PointMassParameters p;
-  p.gravity = 10.0;
-  p.friction = Friction::Planar;
-  p.mu = 0.2;
-  const TimeFreezingSystem<PointMass> system(PointMass(p), 20.0);
-  FesdOptions o;
-  o.stages = 2;
-  o.control_intervals = 20;
-  o.finite_elements = 5;
-  o.horizon = 2.5;
+  using Case = scenes::FrictionalLanding;
   const auto start = std::chrono::steady_clock::now();
-  const auto sim = simulate_time_freezing(system, Vec<2>(0, 1), Vec<2>(3, 0), o);
+  const auto sim = simulate_time_freezing(Case::system(), Case::q0(), Case::v0(), Case::grid());
   l.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  l.stop_error = std::abs(sim.final_state()[0] - 2.45);
+  l.stop_error = std::abs(sim.final_state()[0] - Case::stop);
   l.converged = sim.converged();
   l.complementarity = sim.solution.complementarity;
   l.iterations = sim.solution.ipopt_iterations;

@@ -13,6 +13,7 @@
 #include <saltus/hybrid/vocabulary/trajectory_report.hpp>
 #include <saltus/timefreezing/simulation.hpp>
 #include "scenes/all_scenes.hpp"
+#include "scenes/time_freezing_examples.hpp"
 
 #include <nlohmann/json.hpp>
 
@@ -24,44 +25,14 @@
 
 namespace {
 
-/// Land and slide to x = 3 at rest on the table at T = 2 s, minimising the integral of u'u.
-struct ToTheTarget {
-  static constexpr int terminal_constraint_count = 4;
-  template <class T>
-  T running_cost(const saltus::VecT<T, 4>&, const saltus::VecT<T, 2>& u) const {
-    return u.squaredNorm();
-  }
-  template <class T>
-  saltus::VecT<T, 4> terminal_constraints(const saltus::VecT<T, 4>& x, const T&) const {
-    return x;
-  }
-  saltus::Vec<4> terminal_lower() const { return saltus::Vec<4>(3, 0, 0, 0); }
-  saltus::Vec<4> terminal_upper() const { return saltus::Vec<4>(3, 0, 0, 0); }
-};
-
 int time_freezing_ocp() {
   using namespace saltus;
   using namespace saltus::timefreezing;
-  scenes::PointMassParameters p;
-  p.friction = Friction::Planar;
-  p.mu = 0.2;
-  const scenes::PointMass mass(p);
-  const TimeFreezingSystem<scenes::PointMass> system(mass, 3.0 * p.gravity);
-  FesdOptions o;
-  o.stages = 2;
-  o.control_intervals = 10;
-  o.finite_elements = 3;
-  o.horizon = 2.0;
-  o.clock = ClockConstraint::Terminal;
-  o.physical_horizon = 2.0;
-  o.speed_of_time_max = 5.0;
-  o.control_lower = Eigen::VectorXd::Constant(2, -20.0);
-  o.control_upper = Eigen::VectorXd::Constant(2, 20.0);
-  MpccSolverOptions solver;
-  solver.relaxation = MpccSolverOptions::Relaxation::Penalty;
-  solver.tol = 1e-8;
+  using Case = scenes::PointMassToTheTarget;
+  MpccSolverOptions solver = Case::solver();
   solver.progress = &std::cerr;
-  const auto r = solve_time_freezing_ocp(system, ToTheTarget{}, Vec<2>(0, 1), Vec<2>(0, 0), o, solver);
+  const auto r = solve_time_freezing_ocp(Case::system(), Case{}, Case::q0(), Case::v0(), Case::grid(), solver);
+  const scenes::PointMass mass(Case::parameters());
   nlohmann::ordered_json j;
   j["converged"] = r.converged();
   j["complementarity"] = r.solution.complementarity;

@@ -351,19 +351,10 @@ TEST(TimeFreezingSimulation, GuidingExampleMatchesItsClosedForms) {
 // x = 3 sqrt(2/g) + (3 - mu sqrt(2 g))^2 / (2 mu g) = 2.45 exactly for g = 10, mu = 0.2
 // (the square roots cancel: 3/sqrt(5) - 0.3 sqrt(20) = 0).
 TEST(TimeFreezingSimulation, FrictionalLandingStopsAtTheClosedForm) {
-  scenes::PointMassParameters p;
-  p.gravity = 10.0;
-  p.friction = Friction::Planar;
-  p.mu = 0.2;
-  const TimeFreezingSystem<PointMass> system(PointMass(p), 20.0);
-  FesdOptions o;
-  o.stages = 2;
-  o.control_intervals = 20;
-  o.finite_elements = 5;
-  o.horizon = 2.5;
-  const auto sim = simulate_time_freezing(system, Vec<2>(0, 1), Vec<2>(3, 0), o);
+  using Case = scenes::FrictionalLanding;
+  const auto sim = simulate_time_freezing(Case::system(), Case::q0(), Case::v0(), Case::grid());
   ASSERT_TRUE(sim.converged()) << sim.solution.message;
-  const double error = std::abs(sim.final_state()[0] - 2.45);
+  const double error = std::abs(sim.final_state()[0] - Case::stop);
   std::cout << "frictional landing: stop error " << error << ", " << sim.solution.ipopt_iterations << " Ipopt iterations, "
             << sim.solution.seconds << " s\n";
   EXPECT_LT(error, 1e-5);  // measured 3.2e-6 (NOSNOC: 2e-5); same limit as in Example 3
@@ -435,43 +426,10 @@ TEST(TimeFreezingSimulation, PlankBoxFlatLandingAgreesWithTheEventDrivenSimulato
   EXPECT_LT(distance, 1e-3);  // measured 6e-5: the clock advances a little in the impact element
 }
 
-// A small OCP: the point mass with friction from rest at (0, 1) to rest on the table at x = 3 at
-// T = 2 s, minimising the integral of u'u over physical time, |u_i| <= 20. Penalty homotopy with
-// Ipopt tol 1e-8 (solve_time_freezing_ocp's docstring: the Scholtes defaults take 15x more
-// iterations here).
-struct PointMassToTheTarget {
-  static constexpr int terminal_constraint_count = 4;
-  template <class T>
-  T running_cost(const VecT<T, 4>&, const VecT<T, 2>& u) const {
-    return u.squaredNorm();
-  }
-  template <class T>
-  VecT<T, 4> terminal_constraints(const VecT<T, 4>& x, const T&) const {
-    return x;
-  }
-  Vec<4> terminal_lower() const { return Vec<4>(3, 0, 0, 0); }
-  Vec<4> terminal_upper() const { return Vec<4>(3, 0, 0, 0); }
-};
-
+// The small OCP (scenes::PointMassToTheTarget): land the point mass and slide it to x = 3.
 TEST(TimeFreezingOcp, PointMassReachesTheTargetOnTheTable) {
-  scenes::PointMassParameters p;
-  p.friction = Friction::Planar;
-  p.mu = 0.2;
-  const TimeFreezingSystem<PointMass> system(PointMass(p), 3.0 * p.gravity);
-  FesdOptions o;
-  o.stages = 2;
-  o.control_intervals = 10;
-  o.finite_elements = 3;
-  o.horizon = 2.0;
-  o.clock = ClockConstraint::Terminal;
-  o.physical_horizon = 2.0;
-  o.speed_of_time_max = 5.0;
-  o.control_lower = Eigen::VectorXd::Constant(2, -20.0);
-  o.control_upper = Eigen::VectorXd::Constant(2, 20.0);
-  MpccSolverOptions solver;
-  solver.relaxation = MpccSolverOptions::Relaxation::Penalty;
-  solver.tol = 1e-8;
-  const auto r = solve_time_freezing_ocp(system, PointMassToTheTarget{}, Vec<2>(0, 1), Vec<2>(0, 0), o, solver);
+  using Case = scenes::PointMassToTheTarget;
+  const auto r = solve_time_freezing_ocp(Case::system(), Case{}, Case::q0(), Case::v0(), Case::grid(), Case::solver());
   std::cout << "point-mass OCP: objective " << r.solution.objective << ", " << r.solution.steps.size() << " steps, "
             << r.solution.ipopt_iterations << " Ipopt iterations, " << r.solution.seconds << " s\n";
   ASSERT_TRUE(r.converged()) << r.solution.message;

@@ -1,9 +1,15 @@
-// The time-freezing paper's guiding example (Example 3) as a simulation case: its input law and
-// the closed form of its state at numerical time 3.5 (derivation: bench/fesd_accuracy.cpp, file
-// comment). Shared by tests/test_time_freezing.cpp and bench/fesd_accuracy.cpp.
+// The time-freezing cases shared by tests/test_time_freezing.cpp, bench/fesd_accuracy.cpp and
+// examples/guiding_example.cpp: the paper's guiding example (Example 3: its input law and the
+// closed form of its state at numerical time 3.5, derivation in bench/fesd_accuracy.cpp), NOSNOC's
+// frictional landing, and the point-mass OCP that lands and slides to a target.
 #pragma once
 
+#include "scenes/point_mass.hpp"
+
 #include <saltus/hybrid/vocabulary/scene.hpp>
+#include <saltus/timefreezing/fesd.hpp>
+#include <saltus/timefreezing/mpcc_solver.hpp>
+#include <saltus/timefreezing/time_freezing_system.hpp>
 
 #include <cmath>
 
@@ -29,6 +35,81 @@ struct Example3 {
             gravity * (t - 1.5) * (t - 1.5), t)
         .finished();
   }
+};
+
+/// NOSNOC's smallest time-freezing example: g = 10, mu = 0.2, a_n = 20, from q0 = (0, 1),
+/// v0 = (3, 0); 20 control intervals of 0.125, N_fe = 5, n_s = 2. The mass stops at x = 2.45
+/// exactly (tests/test_time_freezing.cpp derives it).
+struct FrictionalLanding {
+  static constexpr double stop = 2.45;
+  static PointMassParameters parameters() {
+    PointMassParameters p;
+    p.gravity = 10.0;
+    p.friction = Friction::Planar;
+    p.mu = 0.2;
+    return p;
+  }
+  static timefreezing::TimeFreezingSystem<PointMass> system() { return {PointMass(parameters()), 20.0}; }
+  static timefreezing::FesdOptions grid() {
+    timefreezing::FesdOptions o;
+    o.stages = 2;
+    o.control_intervals = 20;
+    o.finite_elements = 5;
+    o.horizon = 2.5;
+    return o;
+  }
+  static Vec<2> q0() { return Vec<2>(0, 1); }
+  static Vec<2> v0() { return Vec<2>(3, 0); }
+};
+
+/// A small time-freezing OCP: the point mass with friction (mu = 0.2, a_n = 3 g) from rest at
+/// (0, 1) to rest on the table at x = 3 at T = 2 s, minimising the integral of u'u over physical
+/// time, |u_i| <= 20; N = 10, N_fe = 3, n_s = 2, terminal clock, s_max = 5; penalty homotopy with
+/// Ipopt tol 1e-8 (solve_time_freezing_ocp's docstring: the Scholtes defaults take 15x more
+/// iterations here).
+struct PointMassToTheTarget {
+  static constexpr int terminal_constraint_count = 4;
+  template <class T>
+  T running_cost(const VecT<T, 4>&, const VecT<T, 2>& u) const {
+    return u.squaredNorm();
+  }
+  template <class T>
+  VecT<T, 4> terminal_constraints(const VecT<T, 4>& x, const T&) const {
+    return x;
+  }
+  Vec<4> terminal_lower() const { return Vec<4>(3, 0, 0, 0); }
+  Vec<4> terminal_upper() const { return Vec<4>(3, 0, 0, 0); }
+
+  static PointMassParameters parameters() {
+    PointMassParameters p;
+    p.friction = Friction::Planar;
+    p.mu = 0.2;
+    return p;
+  }
+  static timefreezing::TimeFreezingSystem<PointMass> system() {
+    return {PointMass(parameters()), 3.0 * parameters().gravity};
+  }
+  static timefreezing::FesdOptions grid() {
+    timefreezing::FesdOptions o;
+    o.stages = 2;
+    o.control_intervals = 10;
+    o.finite_elements = 3;
+    o.horizon = 2.0;
+    o.clock = timefreezing::ClockConstraint::Terminal;
+    o.physical_horizon = 2.0;
+    o.speed_of_time_max = 5.0;
+    o.control_lower = Eigen::VectorXd::Constant(2, -20.0);
+    o.control_upper = Eigen::VectorXd::Constant(2, 20.0);
+    return o;
+  }
+  static timefreezing::MpccSolverOptions solver() {
+    timefreezing::MpccSolverOptions s;
+    s.relaxation = timefreezing::MpccSolverOptions::Relaxation::Penalty;
+    s.tol = 1e-8;
+    return s;
+  }
+  static Vec<2> q0() { return Vec<2>(0, 1); }
+  static Vec<2> v0() { return Vec<2>(0, 0); }
 };
 
 }  // namespace saltus::scenes
