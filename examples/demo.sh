@@ -28,6 +28,23 @@ done
 echo
 echo "== guiding_example --json (time-freezing OCP) =="
 OPENBLAS_NUM_THREADS=1 "$build/examples/guiding_example" --json | tee "$SALTUS_REPORT_DIR/guiding_example_ocp.json"
+# Tracking designs along references with impacts: the stability check against 200 nonlinear
+# closed-loop runs per design on all cores (a minute; progress lines on stderr).
+echo
+echo "== tracking_stability =="
+"$build/examples/tracking_stability" --json > "$SALTUS_REPORT_DIR/tracking_stability.json" || {
+  echo "tracking_stability: a check and its Monte Carlo batch disagree (see the JSON)"; exit 1; }
+python3 - "$SALTUS_REPORT_DIR/tracking_stability.json" <<'PY'
+import json, sys
+d = json.load(open(sys.argv[1]))
+for c in d["cases"]:
+    print(f'{c["name"]:<26} {c["design"]:<34} {c["verdict"]:<9} bounds [{c["lower_bound"]}, {c["upper_bound"]}] '
+          f'rate pred {c["predicted_rate"]} obs {c["observed_rate"]} kept {c["kept_event_sequence"]}/{c["runs"]} '
+          f'agree {c["agree"]} check {c["seconds"]} s MC {c["monte_carlo_seconds"]} s')
+s = d["parallel_speedup"]
+print(f'Monte Carlo speed-up on {s["threads"]} threads: {s["speedup"]} ({s["one_thread_seconds"]} s -> {s["all_threads_seconds"]} s)')
+PY
+echo "wrote $SALTUS_REPORT_DIR/tracking_stability.json"
 # Time-freezing + FESD against closed forms (about 5 minutes): run once; its progress lines (one per
 # configuration, on stderr) are the printed results, the table is in the JSON.
 if [ -x "$build/bench/fesd_accuracy" ]; then

@@ -1,9 +1,9 @@
 // The Hopper scene's machinery, compiled once for every program of the project (see
-// saltus/hybrid/instantiate.hpp): simulation, derivatives, reference spreading and sensitivity.
+// saltus/hybrid/instantiate.hpp): simulation, derivatives and reference spreading; its
+// sensitivity machinery is in hopper_sensitivity.cpp (two files: they compile in parallel, and
+// a change to one module recompiles only its half).
 #include "scenes/hopper.hpp"
 
 #include <saltus/hybrid/instantiate.hxx>
-#include <saltus/sensitivity/instantiate.hxx>
 
 SALTUS_INSTANTIATE_SCENE(saltus::scenes::Hopper)
-SALTUS_INSTANTIATE_SCENE_SENSITIVITY(saltus::scenes::Hopper)

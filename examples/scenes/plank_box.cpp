@@ -1,9 +1,9 @@
 // The PlankBox scene's machinery, compiled once for every program of the project (see
-// saltus/hybrid/instantiate.hpp): simulation, derivatives, reference spreading and sensitivity.
+// saltus/hybrid/instantiate.hpp): simulation, derivatives and reference spreading; its
+// sensitivity machinery is in plank_box_sensitivity.cpp (two files: they compile in parallel, and
+// a change to one module recompiles only its half).
 #include "scenes/plank_box.hpp"
 
 #include <saltus/hybrid/instantiate.hxx>
-#include <saltus/sensitivity/instantiate.hxx>
 
 SALTUS_INSTANTIATE_SCENE(saltus::scenes::PlankBox)
-SALTUS_INSTANTIATE_SCENE_SENSITIVITY(saltus::scenes::PlankBox)

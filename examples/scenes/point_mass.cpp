@@ -1,9 +1,9 @@
 // The PointMass scene's machinery, compiled once for every program of the project (see
-// saltus/hybrid/instantiate.hpp): simulation, derivatives, reference spreading and sensitivity.
+// saltus/hybrid/instantiate.hpp): simulation, derivatives and reference spreading; its
+// sensitivity machinery is in point_mass_sensitivity.cpp (two files: they compile in parallel, and
+// a change to one module recompiles only its half).
 #include "scenes/point_mass.hpp"
 
 #include <saltus/hybrid/instantiate.hxx>
-#include <saltus/sensitivity/instantiate.hxx>
 
 SALTUS_INSTANTIATE_SCENE(saltus::scenes::PointMass)
-SALTUS_INSTANTIATE_SCENE_SENSITIVITY(saltus::scenes::PointMass)

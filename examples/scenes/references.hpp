@@ -64,6 +64,14 @@ Reference<scenes::PointMass> example3(double t_final = 2.0);
 Reference<scenes::PointMass> point_mass_with_friction();
 Vec<4> point_mass_with_friction_perturbation();
 
+/// A periodic hop of the point mass (period 1 s): at rest on the table, pushed by the vertical
+/// thrust u2 = m g - 6 + 8 cos(2 pi (t + 1/2)) N (u1 = 0), it lifts off through the release guard
+/// lambda_n = 6 - 8 cos(2 pi (t + 1/2)) = 0 at t = 0.385 s, flies 6 cm high and lands (into closed
+/// contact) at 0.864 s, at rest on the table again until the next release: the state at t = 1 is
+/// the state at t = 0. Simulated from 0 to t_final.
+inline constexpr double point_mass_hop_period = 1.0;
+Reference<scenes::PointMass> point_mass_hop(double t_final = 2.0);
+
 /// The hopper dropped from 5 cm (foot height) with legs bent (phi_hip = 0.4, phi_knee = -0.8)
 /// and 2 m/s forwards, under the open-loop torques (tau_hip, tau_knee) = (0, -10 t) N m (no
 /// controller: the knee torque grows and folds the leg): touchdown into slip, lift-off (release)

@@ -11,7 +11,9 @@
 //   SALTUS_INSTANTIATE_SCENE_SENSITIVITY(MyScene)
 //
 // Compiled per scene: feedback_gain, JumpGainSolver, jump_gains, ConewiseJumpGain, LinearisedSystem,
-// numerical_jump_gain, prediction_remainder and piece_remainder. The hybrid machinery they call must be
+// numerical_jump_gain, prediction_remainder, piece_remainder, and the tracking design and stability
+// check (GainSchedule, lqr_design, ReferenceSpreadingController, ClosedLoopLinearisation,
+// check_stability, check_periodic_stability, monte_carlo). The hybrid machinery they call must be
 // instantiated too (SALTUS_INSTANTIATE_SCENE). <saltus/sensitivity/header_only.hpp> is the header-only path.
 #pragma once
 
@@ -20,6 +22,7 @@
 #include <saltus/sensitivity/linearisation.hpp>
 #include <saltus/sensitivity/numerical_jump_gain.hpp>
 #include <saltus/sensitivity/prediction_check.hpp>
+#include <saltus/sensitivity/tracking.hpp>
 
 #define SALTUS_SENSITIVITY_TEMPLATES(prefix, S)                                                                  \
   prefix template void saltus::feedback_gain<S>(const saltus::InputLaw<S>&, double, const saltus::Vec<2 * S::nq>&, \
@@ -38,7 +41,19 @@
       const std::function<saltus::Vec<S::nu>(double)>&, const std::vector<double>&, const std::vector<double>&); \
   prefix template saltus::RemainderFit saltus::piece_remainder<S>(                                               \
       const saltus::LinearisedSystem<S>&, const saltus::SimulationOptions&, int, const saltus::Vec<2 * S::nq>&, \
-      const saltus::ConewisePiece<S>&, double, const std::vector<double>&);
+      const saltus::ConewisePiece<S>&, double, const std::vector<double>&);                                    \
+  prefix template class saltus::GainSchedule<S>;                                                                 \
+  prefix template saltus::LqrDesign<S> saltus::lqr_design<S>(const saltus::LinearisedSystem<S>&,                 \
+                                                             const saltus::LqrWeights<S>&, const saltus::LqrOptions&); \
+  prefix template class saltus::ReferenceSpreadingController<S>;                                                 \
+  prefix template class saltus::ClosedLoopLinearisation<S>;                                                      \
+  prefix template saltus::StabilityReport saltus::check_stability<S>(const saltus::ClosedLoopLinearisation<S>&,  \
+                                                                     const saltus::StabilityOptions<S>&, double); \
+  prefix template saltus::PeriodicStabilityReport saltus::check_periodic_stability<S>(                           \
+      const saltus::ClosedLoopLinearisation<S>&, double, const saltus::StabilityOptions<S>&, double);            \
+  prefix template saltus::MonteCarloReport saltus::monte_carlo<S>(                                               \
+      const S&, const saltus::SimulationOptions&, const saltus::ReferenceSpreadingController<S>&,                \
+      const saltus::ClosedLoopLinearisation<S>&, const saltus::MonteCarloOptions<S>&);
 
 /// In the scene's header, after SALTUS_DECLARE_SCENE: its sensitivity machinery is compiled elsewhere.
 #define SALTUS_DECLARE_SCENE_SENSITIVITY(S) SALTUS_SENSITIVITY_TEMPLATES(extern, S)

@@ -8,6 +8,7 @@
 #include <saltus/sensitivity/linearisation.hxx>
 #include <saltus/sensitivity/numerical_jump_gain.hxx>
 #include <saltus/sensitivity/prediction_check.hxx>
+#include <saltus/sensitivity/tracking.hxx>
 
 /// feedback_gain, JumpGainSolver, jump_gains, LinearisedSystem, numerical_jump_gain and
 /// prediction_remainder of scene S.

@@ -100,6 +100,7 @@ class LinearisedSystem {
   LinearisedSystem(const S& scene, const HybridTrajectory<S>& traj, LinearisationOptions options = {});
 
   const S& scene() const { return scene_; }
+  const LinearisationOptions& options() const { return options_; }
   const Reference& reference() const { return reference_; }
   /// The gain of every event; for a simultaneous event (conewise(i)) G_z and G_v are NaN (the
   /// other fields are left at their defaults): use conewise_gain(i).

@@ -1,6 +1,6 @@
 // saltus::sensitivity in one include: jump gains (thesis C.37-C.39) and their numerical twin,
 // the linearised time-triggered hybrid system, the first-order prediction and its check against
-// re-simulation.
+// re-simulation, the reference-spreading tracking design and its stability check.
 #pragma once
 
 #include <saltus/sensitivity/conewise_gain.hpp>
@@ -8,3 +8,4 @@
 #include <saltus/sensitivity/linearisation.hpp>
 #include <saltus/sensitivity/numerical_jump_gain.hpp>
 #include <saltus/sensitivity/prediction_check.hpp>
+#include <saltus/sensitivity/tracking.hpp>

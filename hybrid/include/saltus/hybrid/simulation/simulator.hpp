@@ -65,6 +65,16 @@ class Simulator {
   /// that penetrates a contact; NumericalFailure, ContactProblemFailure, NonSpdMassMatrix from
   /// the integration and the event physics.
   HybridTrajectory<S> run(const State& x0, double t0, double t_final, const InputLaw<S>& input);
+  /// Same under a segmented law (input_law.hpp), e.g. a reference-spreading tracking controller:
+  /// the law sees the index of the segment being integrated, which the plant's own events advance
+  /// (an initial impact at t0 makes the first flowing segment number 1, as in the trajectory).
+  /// The returned trajectory's `input` evaluates the law with the segment that contains t (the
+  /// later one at an event time), so that the trajectory can still be sampled and re-simulated;
+  /// its reference spreading past an event would use the next segment's law, which is not what
+  /// the segmented law means there (extend a trajectory of an ordinary law instead).
+  /// @throws as run above; whatever the law throws (e.g. a controller asked for a segment beyond
+  /// its reference) propagates unchanged.
+  HybridTrajectory<S> run(const State& x0, double t0, double t_final, const SegmentedInputLaw<S>& input);
   /// Same for a scene without inputs (nu = 0).
   HybridTrajectory<S> run(const State& x0, double t0, double t_final)
     requires(S::nu == 0)
@@ -86,8 +96,10 @@ class Simulator {
   void check_initial_mode(const State& x, const Mode<nc>& mode, const Input& u) const;
 
  private:
+  /// `segment`: the index the segmented law sees (null for an ordinary law), kept equal to the
+  /// index of the segment being integrated, advanced before an event is resolved.
   HybridTrajectory<S> run_impl(const State& x0, std::optional<Mode<nc>> mode0, double t0, double t_final,
-                               const InputLaw<S>& input);
+                               const InputLaw<S>& input, int* segment = nullptr);
   /// Records a touchdown event at t; true when a Zeno accumulation is detected (file comment).
   bool record_touchdown(double t, bool slower_than_rest, HybridTrajectory<S>& traj);
   /// The end-of-segment invariant (file comment). @throws NumericalFailure on a missed event.

@@ -1,6 +1,7 @@
 // Definitions of simulator.hpp (see there for the method).
 #pragma once
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <saltus/hybrid/simulation/simulator.hpp>
@@ -39,6 +40,26 @@ HybridTrajectory<S> Simulator<S>::run(const State& x0, double t0, double t_final
 }
 
 template <Scene S>
+HybridTrajectory<S> Simulator<S>::run(const State& x0, double t0, double t_final, const SegmentedInputLaw<S>& input) {
+  SALTUS_REQUIRE(static_cast<bool>(input), "the input law is empty");
+  int segment = 0;
+  // The law the integration and the event physics call: the segmented law at the current index.
+  const InputLaw<S> bound = [&input, &segment](double t, const State& x, const Mode<nc>& mode) {
+    return input(segment, t, x, mode);
+  };
+  HybridTrajectory<S> traj = run_impl(x0, std::nullopt, t0, t_final, bound, &segment);
+  // A self-contained law for the trajectory (simulator.hpp): the segment containing t.
+  std::vector<double> event_times;
+  event_times.reserve(traj.events.size());
+  for (const auto& ev : traj.events) event_times.push_back(ev.t);
+  traj.input = [input, event_times = std::move(event_times)](double t, const State& x, const Mode<nc>& mode) {
+    const int i = static_cast<int>(std::upper_bound(event_times.begin(), event_times.end(), t) - event_times.begin());
+    return input(i, t, x, mode);
+  };
+  return traj;
+}
+
+template <Scene S>
 HybridTrajectory<S> Simulator<S>::run(const State& x0, const Mode<nc>& mode0, double t0, double t_final,
                                       const InputLaw<S>& input) {
   return run_impl(x0, mode0, t0, t_final, input);
@@ -46,7 +67,7 @@ HybridTrajectory<S> Simulator<S>::run(const State& x0, const Mode<nc>& mode0, do
 
 template <Scene S>
 HybridTrajectory<S> Simulator<S>::run_impl(const State& x0, std::optional<Mode<nc>> mode0, double t0, double t_final,
-                                           const InputLaw<S>& input) {
+                                           const InputLaw<S>& input, int* segment) {
   const auto wall_start = std::chrono::steady_clock::now();
   require_finite(x0, "initial state x0");
   SALTUS_REQUIRE(std::isfinite(t0) && std::isfinite(t_final) && t_final > t0, 
@@ -75,6 +96,7 @@ HybridTrajectory<S> Simulator<S>::run_impl(const State& x0, std::optional<Mode<n
       traj.segments.push_back(Segment<S>{traj.events.back().mode_before, t, t, {}});
     }
   }
+  if (segment) *segment = static_cast<int>(traj.segments.size());
 
   SimulationStatistics& stats = traj.statistics;
   while (true) {
@@ -108,6 +130,8 @@ HybridTrajectory<S> Simulator<S>::run_impl(const State& x0, std::optional<Mode<n
     traj.segments.push_back(std::move(seg));
     if (!end.at_guard) break;
 
+    // A segmented law sees the post-event segment while the event is resolved (input_law.hpp).
+    if (segment) *segment = static_cast<int>(traj.segments.size());
     std::vector<Guard> fired;
     for (int k = 0; k < sys.guards().count; ++k)
       if (end.fired[k]) fired.push_back(sys.guards()[k]);

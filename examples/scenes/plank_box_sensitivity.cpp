@@ -1,0 +1,9 @@
+// The PlankBox scene's sensitivity machinery (jump gains, conewise gains, linearisation,
+// tracking design and stability check), compiled once for every program of the project (see
+// saltus/sensitivity/instantiate.hpp); its hybrid machinery is in plank_box.cpp.
+#include "scenes/plank_box.hpp"
+
+#include <saltus/hybrid/instantiate.hxx>
+#include <saltus/sensitivity/instantiate.hxx>
+
+SALTUS_INSTANTIATE_SCENE_SENSITIVITY(saltus::scenes::PlankBox)

@@ -1,0 +1,897 @@
+// Definitions of tracking.hpp (see there for the math).
+#pragma once
+
+#include <saltus/hybrid/simulation/simulator.hpp>
+#include <saltus/sensitivity/detail/ode.hxx>
+#include <saltus/sensitivity/linearisation.hxx>
+#include <saltus/sensitivity/tracking.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <memory>
+#include <ostream>
+#include <random>
+#include <thread>
+
+namespace saltus {
+
+// ---------------------------------------------------------------------------------------------
+// GainSchedule
+
+template <Scene S>
+GainSchedule<S>::GainSchedule(int segments, const Gain& K) {
+  SALTUS_REQUIRE(segments >= 0, "GainSchedule: negative segment count ", segments);
+  segments_.resize(segments);
+  for (auto& s : segments_) {
+    s.times = {0.0};
+    s.gains = {K};
+  }
+}
+
+template <Scene S>
+GainSchedule<S>::GainSchedule(std::vector<Gain> per_segment) {
+  segments_.resize(per_segment.size());
+  for (std::size_t i = 0; i < per_segment.size(); ++i) set_samples(static_cast<int>(i), {0.0}, {per_segment[i]});
+}
+
+template <Scene S>
+void GainSchedule<S>::set_samples(int i, std::vector<double> times, std::vector<Gain> gains) {
+  SALTUS_REQUIRE(i >= 0 && i < segment_count(), "GainSchedule: segment ", i, " out of range [0, ", segment_count(), ")");
+  SALTUS_REQUIRE(!times.empty() && times.size() == gains.size(), "GainSchedule: segment ", i, " needs as many gains (",
+                 gains.size(), ") as times (", times.size(), "), at least one");
+  for (std::size_t k = 0; k < times.size(); ++k) {
+    SALTUS_REQUIRE(std::isfinite(times[k]) && (k == 0 || times[k] > times[k - 1]), "GainSchedule: segment ", i,
+                   ": sample times must be finite and strictly increasing (sample ", k, ")");
+    SALTUS_REQUIRE(gains[k].allFinite(), "GainSchedule: segment ", i, ": gain ", k, " is not finite");
+  }
+  segments_[i].times = std::move(times);
+  segments_[i].gains = std::move(gains);
+}
+
+template <Scene S>
+auto GainSchedule<S>::operator()(int i, double t) const -> Gain {
+  SALTUS_REQUIRE(i >= 0 && i < segment_count(), "GainSchedule: segment ", i, " out of range [0, ", segment_count(), ")");
+  const Samples& s = segments_[i];
+  if (t <= s.times.front()) return s.gains.front();
+  if (t >= s.times.back()) return s.gains.back();
+  const auto k = static_cast<std::size_t>(std::upper_bound(s.times.begin(), s.times.end(), t) - s.times.begin());
+  const double w = (t - s.times[k - 1]) / (s.times[k] - s.times[k - 1]);
+  return (1.0 - w) * s.gains[k - 1] + w * s.gains[k];
+}
+
+namespace detail {
+
+// The Cholesky factor's transpose L' of an SPD W = L L' (so |z|_W = |L' z|) and its inverse.
+template <int n>
+void weight_factor(const Mat<n, n>& W, const char* what, Mat<n, n>& Lt, Mat<n, n>& Lt_inv) {
+  SALTUS_REQUIRE(W.allFinite() && (W - W.transpose()).norm() <= 1e-12 * std::max(1.0, W.norm()), what,
+                 ": the weight W must be finite and symmetric");
+  Eigen::LLT<Mat<n, n>> llt(W);
+  SALTUS_REQUIRE(llt.info() == Eigen::Success, what, ": the weight W is not positive definite");
+  Lt = llt.matrixU();
+  Lt_inv = Lt.inverse();
+}
+
+// |M|_{W -> Wout} = |C M N|_2 (C = Wout^(1/2), or L' for the norm W itself; N = L'^-1, or
+// E R^-1 on a subspace: z0 = N y with |y| = |z0|_W).
+template <int n, class InputMap>
+double weighted_norm(const Mat<n, n>& M, const Mat<n, n>& C, const InputMap& N) {
+  if constexpr (n == 0) return 0.0;
+  const Eigen::Matrix<double, n, Eigen::Dynamic, 0, n, n> P = C * M * N;
+  if (P.cols() == 0) return 0.0;
+  return Eigen::JacobiSVD<Eigen::Matrix<double, n, Eigen::Dynamic, 0, n, n>>(P).singularValues()(0);
+}
+
+// N with z0 = N y, |y| = |z0|_W, z0 ranging over range(E) (or all of R^n): E R^-1 with L' E = Q R.
+template <int n>
+Eigen::Matrix<double, n, Eigen::Dynamic, 0, n, n> initial_map(
+    const std::optional<Eigen::Matrix<double, n, Eigen::Dynamic, 0, n, n>>& E, const Mat<n, n>& Lt,
+    const Mat<n, n>& Lt_inv, const char* what) {
+  if (!E) return Lt_inv;
+  SALTUS_REQUIRE(E->cols() >= 1 && E->allFinite(), what, ": the initial subspace needs at least one finite column");
+  const Eigen::Matrix<double, n, Eigen::Dynamic, 0, n, n> B = Lt * *E;
+  const Eigen::HouseholderQR<Eigen::Matrix<double, n, Eigen::Dynamic, 0, n, n>> qr(B);
+  const Eigen::MatrixXd R = qr.matrixQR().topRows(B.cols()).template triangularView<Eigen::Upper>();
+  const double scale = std::max(1e-300, R.diagonal().cwiseAbs().maxCoeff());
+  SALTUS_REQUIRE(R.diagonal().cwiseAbs().minCoeff() > 1e-12 * scale, what,
+                 ": the initial subspace's columns are linearly dependent");
+  return *E * R.inverse();
+}
+
+// C with |z|_Wout = |C z|: the symmetric square root of a PSD Wout, or L' (W = L L') without one.
+template <int n>
+Mat<n, n> output_factor(const std::optional<Mat<n, n>>& Wout, const Mat<n, n>& Lt, const char* what) {
+  if (!Wout) return Lt;
+  SALTUS_REQUIRE(Wout->allFinite() && (*Wout - Wout->transpose()).norm() <= 1e-12 * std::max(1.0, Wout->norm()), what,
+                 ": the output weight W_out must be finite and symmetric");
+  if constexpr (n == 0) return Mat<n, n>();
+  const Eigen::SelfAdjointEigenSolver<Mat<n, n>> es(*Wout);
+  SALTUS_REQUIRE(es.eigenvalues().minCoeff() >= -1e-12 * std::max(1.0, Wout->norm()), what,
+                 ": the output weight W_out must be positive semidefinite (smallest eigenvalue ",
+                 es.eigenvalues().minCoeff(), ")");
+  const Vec<n> root = es.eigenvalues().cwiseMax(0.0).cwiseSqrt();
+  return es.eigenvectors() * root.asDiagonal() * es.eigenvectors().transpose();
+}
+
+template <int n>
+void require_symmetric_psd(const Mat<n, n>& Q, const char* name) {
+  SALTUS_REQUIRE(Q.allFinite() && (Q - Q.transpose()).norm() <= 1e-12 * std::max(1.0, Q.norm()), "lqr_design: ",
+                 name, " must be finite and symmetric");
+  if constexpr (n > 0) {
+    const double lo = Eigen::SelfAdjointEigenSolver<Mat<n, n>>(Q).eigenvalues().minCoeff();
+    SALTUS_REQUIRE(lo >= -1e-12 * std::max(1.0, Q.norm()), "lqr_design: ", name,
+                   " must be positive semidefinite (smallest eigenvalue ", lo, ")");
+  }
+}
+
+// Bounds on a growth factor (an amplification or a spectral radius) to a verdict: below 1 for
+// sure, above 1 for sure, or between.
+inline StabilityVerdict verdict(double lower, double upper) {
+  return upper < 1.0 ? StabilityVerdict::Stable : lower > 1.0 ? StabilityVerdict::Unstable : StabilityVerdict::Undecided;
+}
+
+template <Scene S>
+void require_signal_treatment(const LinearisedSystem<S>& open_loop, const char* who) {
+  SALTUS_REQUIRE(open_loop.options().gains.feedback == FeedbackTreatment::Signal, who,
+                 ": the LinearisedSystem must linearise the reference with FeedbackTreatment::Signal (the tracking "
+                 "controller replaces the reference's own law; its feedback enters through the gain schedule)");
+}
+
+}  // namespace detail
+
+// ---------------------------------------------------------------------------------------------
+// LQR
+
+template <Scene S>
+LqrDesign<S> lqr_design(const LinearisedSystem<S>& ol, const LqrWeights<S>& weights, const LqrOptions& options) {
+  constexpr int nx = 2 * S::nq, nu = S::nu;
+  using Matrix = Mat<nx, nx>;
+  using Gain = Mat<nu, nx>;
+  if constexpr (nu == 0) {
+    SALTUS_REQUIRE(nu > 0, "lqr_design: the scene has no inputs (nu = 0): there is nothing to design");
+    return {};
+  } else {
+  const auto start = std::chrono::steady_clock::now();
+  detail::require_signal_treatment(ol, "lqr_design");
+  detail::require_symmetric_psd<nx>(weights.Q, "Q");
+  detail::require_symmetric_psd<nx>(weights.Q_final, "Q_final");
+  SALTUS_REQUIRE(weights.R.allFinite() && (weights.R - weights.R.transpose()).norm() <= 1e-12 * std::max(1.0, weights.R.norm()),
+                 "lqr_design: R must be finite and symmetric");
+  const Eigen::LLT<Mat<nu, nu>> R(weights.R);
+  SALTUS_REQUIRE(R.info() == Eigen::Success, "lqr_design: R is not positive definite");
+  SALTUS_REQUIRE(options.sample_step > 0, "lqr_design: sample_step must be > 0");
+
+  const int n = ol.segment_count();
+  LqrDesign<S> design;
+  design.gains = GainSchedule<S>(n, Gain::Zero());
+  design.P_begin.resize(n);
+  design.P_end.resize(n);
+  design.worst_piece.assign(std::max(0, n - 1), -1);
+  design.jump_iterations.assign(std::max(0, n - 1), 0);
+
+  using Flat = Eigen::Matrix<double, nx * nx, 1>;
+  using FlatMap = Eigen::Map<Matrix>;
+  using ConstFlatMap = Eigen::Map<const Matrix>;
+  Matrix A;
+  Mat<nx, nu> B;
+  const auto gain_at = [&](int i, double t, const Matrix& P) -> Gain {
+    ol.jacobians(i, t, A, B);
+    return -R.solve(B.transpose() * P);
+  };
+
+  Matrix P = weights.Q_final;
+  for (int i = n - 1; i >= 0; --i) {
+    design.P_end[i] = P;
+    const double tb = ol.t_begin(i), te = ol.t_end(i);
+    std::vector<double> times;
+    std::vector<Matrix> Ps;
+    times.push_back(te);
+    Ps.push_back(P);
+    if (te > tb) {
+      // Backwards from te: -P' = A'P + PA - P B R^-1 B' P + Q, sampled every sample_step.
+      auto rhs = [&](double t, const Flat& y, Flat& dydt) {
+        const ConstFlatMap Pm(y.data());
+        ol.jacobians(i, t, A, B);
+        Matrix D = A.transpose() * Pm + Pm * A + weights.Q;
+        const Mat<nu, nx> BtP = B.transpose() * Pm;
+        D.noalias() -= BtP.transpose() * R.solve(BtP);
+        FlatMap(dydt.data()) = -0.5 * (D + D.transpose());
+      };
+      detail::Dopri5Settings settings;
+      settings.relative_tolerance = options.riccati.relative;
+      settings.absolute_tolerance = options.riccati.absolute;
+      settings.initial_step = options.riccati.initial_step;
+      settings.max_steps = options.riccati.max_steps;
+      settings.what = "backward Riccati integration";
+      detail::Dopri5Stepper<Flat> stepper;
+      detail::Dopri5Steps steps;
+      Flat y;
+      FlatMap(y.data()) = P;
+      double t = te;
+      double next = te - options.sample_step;
+      detail::dopri5_integrate(stepper, rhs, t, y, tb, settings, steps,
+                               [&](double ta, const Flat& ya, const Flat& fa, double tb_, const Flat& yb, const Flat& fb) {
+                                 Flat ys;
+                                 while (next > tb_ && next > tb) {
+                                   stepper.calc_state(next, ys, ya, fa, ta, yb, fb, tb_);
+                                   times.push_back(next);
+                                   Ps.push_back(ConstFlatMap(ys.data()));
+                                   next -= options.sample_step;
+                                 }
+                                 return false;
+                               });
+      P = ConstFlatMap(y.data());
+      P = (0.5 * (P + P.transpose())).eval();
+      times.push_back(tb);
+      Ps.push_back(P);
+    }
+    design.P_begin[i] = P;
+    // The schedule in increasing time.
+    std::reverse(times.begin(), times.end());
+    std::reverse(Ps.begin(), Ps.end());
+    std::vector<Gain> Ks(times.size());
+    for (std::size_t k = 0; k < times.size(); ++k) Ks[k] = gain_at(i, times[k], Ps[k]);
+    if (times.size() > 1 && times[1] <= times[0]) {  // te == tb: a single sample
+      times.resize(1);
+      Ks.resize(1);
+    }
+    design.gains.set_samples(i, times, Ks);
+    if (i == 0) break;
+
+    // The cost-to-go jump through event i - 1 (at t* = tb, from segment i - 1 to i).
+    const int e = i - 1;
+    const double ts = ol.t_end(e);
+    std::vector<std::pair<Matrix, Mat<nx, nu>>> candidates;  // (G_z, G_v) of the gain or of each nominal piece
+    if (ol.conewise(e)) {
+      auto& cg = ol.conewise_gain(e);
+      cg.build_all();
+      for (const auto* piece : cg.pieces())
+        if (piece->nominal_outcome) candidates.emplace_back(piece->G_z, piece->G_v);
+      SALTUS_CHECK_NUMERICS(!candidates.empty(), "lqr_design: every piece of the simultaneous event at t = ", ts,
+                            " has an outcome other than the nominal one");
+    } else {
+      candidates.emplace_back(ol.gains()[e].G_z, ol.gains()[e].G_v);
+    }
+    const Matrix P_plus = P;
+    double worst = -std::numeric_limits<double>::infinity();
+    Matrix P_minus = Matrix::Zero();
+    for (std::size_t c = 0; c < candidates.size(); ++c) {
+      const auto& [Gz, Gv] = candidates[c];
+      // P- = J' P+ J with J = G_z + G_v K(P-): fixed point from K = 0 (exact in one step when G_v = 0).
+      Matrix Pm = Gz.transpose() * P_plus * Gz;
+      int it = 1;
+      if (Gv.norm() > 0) {
+        for (;; ++it) {
+          const Gain K = gain_at(e, ts, Pm);
+          const Matrix J = Gz + Gv * K;
+          const Matrix next = J.transpose() * P_plus * J;
+          const double change = (next - Pm).norm() / std::max(1e-300, next.norm());
+          Pm = 0.5 * (next + next.transpose());
+          if (change <= options.jump_tolerance) break;
+          SALTUS_CHECK_NUMERICS(it < options.jump_iterations, "lqr_design: the cost-to-go jump at the event at t = ",
+                                ts, " does not converge in ", options.jump_iterations,
+                                " fixed-point iterations (relative change ", change, ")");
+        }
+      }
+      const double lmax = nx > 0 ? Eigen::SelfAdjointEigenSolver<Matrix>(Pm).eigenvalues().maxCoeff() : 0.0;
+      if (lmax > worst) {
+        worst = lmax;
+        P_minus = Pm;
+        design.jump_iterations[e] = it;
+        design.worst_piece[e] = ol.conewise(e) ? static_cast<int>(c) : -1;
+      }
+    }
+    P = P_minus;
+  }
+  design.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return design;
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// The controller
+
+template <Scene S>
+ReferenceSpreadingController<S>::ReferenceSpreadingController(const ExtendedReference<S>& reference,
+                                                              GainSchedule<S> gains)
+    : reference_(reference), gains_(std::move(gains)) {
+  SALTUS_REQUIRE(gains_.segment_count() == reference_.segment_count(), "ReferenceSpreadingController: the gain ",
+                 "schedule has ", gains_.segment_count(), " segments, the reference ", reference_.segment_count());
+  for (const auto& ev : reference_.reference().events)
+    simultaneous_.push_back(!ev.transitions.empty() && ev.transitions.front().guards.size() > 1);
+}
+
+template <Scene S>
+auto ReferenceSpreadingController<S>::input(int i, double t, const State& x) const -> Input {
+  SALTUS_REQUIRE(i >= 0 && i < reference_.segment_count(), "ReferenceSpreadingController: segment ", i,
+                 " out of range [0, ", reference_.segment_count(), ")");
+  // Beyond the extended interval the reference is held at the extension's end (tracking.hpp).
+  const double tc = std::clamp(t, reference_.reached_before(i), reference_.reached_after(i));
+  Input u = reference_.input(i, tc);
+  if constexpr (nu > 0) u.noalias() += gains_(i, t) * (x - reference_.state(i, tc));
+  return u;
+}
+
+template <Scene S>
+auto ReferenceSpreadingController<S>::next_phase(const Phase& before, const Mode<nc>& mode) const -> Phase {
+  const int j = before.segment;
+  if (j + 1 >= reference_.segment_count())
+    throw UnplannedEvent(detail::concat("reference spreading: the plant has an event after reference segment ", j,
+                                        ", the reference's last (it has ", reference_.segment_count() - 1,
+                                        " events): no segment to compare with"));
+  if (before.intermediate || simultaneous_[j]) {
+    if (mode == reference_.reference().segments[j + 1].mode) return Phase{j + 1, false};
+    return Phase{j, true};
+  }
+  return Phase{j + 1, false};
+}
+
+template <Scene S>
+SegmentedInputLaw<S> ReferenceSpreadingController<S>::law() const {
+  // The plant's history: the phase of every plant segment finished so far, and the last mode seen
+  // with each index (the simulator calls the law with segment k's actual mode while it
+  // integrates k; while it resolves the event after k it calls with k + 1 and candidate modes).
+  struct History {
+    std::vector<Phase> phase{Phase{}};
+    std::vector<Mode<nc>> mode;
+  };
+  auto history = std::make_shared<History>();
+  return [this, history](int k, double t, const State& x, const Mode<nc>& mode) -> Input {
+    History& h = *history;
+    SALTUS_REQUIRE(k >= 0, "ReferenceSpreadingController: negative plant segment ", k);
+    if (static_cast<int>(h.mode.size()) <= k) h.mode.resize(k + 1, mode);
+    // Phases of the plant segments before k are final: their modes were the ones integrated.
+    while (static_cast<int>(h.phase.size()) < k) {
+      const std::size_t j = h.phase.size();
+      h.phase.push_back(next_phase(h.phase[j - 1], h.mode[j]));
+    }
+    const Phase p = k == 0 ? h.phase[0]
+                    : k < static_cast<int>(h.phase.size()) ? h.phase[k]
+                                                           : next_phase(h.phase[k - 1], mode);
+    h.mode[k] = mode;
+    if (p.intermediate)  // ante-event feedforward (file comment)
+      return reference_.input(p.segment, std::clamp(t, reference_.reached_before(p.segment),
+                                                     reference_.reached_after(p.segment)));
+    return input(p.segment, t, x);
+  };
+}
+
+// ---------------------------------------------------------------------------------------------
+// Closed-loop linearisation
+
+template <Scene S>
+ClosedLoopLinearisation<S>::ClosedLoopLinearisation(const LinearisedSystem<S>& open_loop, GainSchedule<S> gains,
+                                                    std::optional<detail::OdeTolerances> tolerances)
+    : open_loop_(open_loop),
+      gains_(std::move(gains)),
+      tolerances_(tolerances ? *tolerances : open_loop.options().variational) {
+  detail::require_signal_treatment(open_loop, "ClosedLoopLinearisation");
+  SALTUS_REQUIRE(gains_.segment_count() == open_loop.segment_count(), "ClosedLoopLinearisation: the gain schedule ",
+                 "has ", gains_.segment_count(), " segments, the reference ", open_loop.segment_count());
+  SALTUS_REQUIRE(tolerances_.relative > 0 && tolerances_.absolute > 0, "ClosedLoopLinearisation: tolerances must be > 0");
+  segment_transition_.resize(segment_count());
+}
+
+template <Scene S>
+auto ClosedLoopLinearisation<S>::segment_transition(int i) const -> const Matrix& {
+  auto& cached = segment_transition_.at(i);
+  if (!cached) cached = flow_transition(i, open_loop_.t_end(i), open_loop_.t_begin(i));
+  return *cached;
+}
+
+template <Scene S>
+std::vector<double> ReferenceSpreadingController<S>::breakpoints() const {
+  std::vector<double> out;
+  for (int i = 0; i < gains_.segment_count(); ++i)
+    if (gains_.times(i).size() > 1) out.insert(out.end(), gains_.times(i).begin(), gains_.times(i).end());
+  std::sort(out.begin(), out.end());
+  out.erase(std::unique(out.begin(), out.end()), out.end());
+  return out;
+}
+
+template <Scene S>
+auto ClosedLoopLinearisation<S>::closed_loop_matrix(int i, double t) const -> Matrix {
+  Matrix A;
+  Mat<nx, nu> B;
+  open_loop_.jacobians(i, t, A, B);
+  if constexpr (nu > 0) A.noalias() += B * gains_(i, t);
+  return A;
+}
+
+template <Scene S>
+auto ClosedLoopLinearisation<S>::flow_transition(int i, double t1, double t0) const -> Matrix {
+  using Flat = Eigen::Matrix<double, nx * nx, 1>;
+  Flat y;
+  Eigen::Map<Matrix>(y.data()).setIdentity();
+  if (t1 == t0) return Matrix::Identity();
+  auto rhs = [&](double t, const Flat& a, Flat& dadt) {
+    Eigen::Map<Matrix>(dadt.data()).noalias() = closed_loop_matrix(i, t) * Eigen::Map<const Matrix>(a.data());
+  };
+  // The schedule's sample times are kinks of K (linear interpolation): the integration stops at
+  // each, so no step straddles one (a kink inside a step makes the error control cut the step
+  // to round-off size; measured on the plank-box's LQR: 7.5 s for the check, see tracking.hpp).
+  // Each piece starts with its own length as the first step (it is smooth inside).
+  const std::vector<double>& kinks = gains_.times(i);
+  const double direction = t1 > t0 ? 1.0 : -1.0;
+  detail::OdeTolerances tol = tolerances_;
+  double t = t0;
+  auto k = direction > 0 ? std::upper_bound(kinks.begin(), kinks.end(), t0) : std::lower_bound(kinks.begin(), kinks.end(), t0);
+  while (t != t1) {
+    double next = t1;
+    if (direction > 0) {
+      if (k != kinks.end() && *k < t1) next = *k++;
+    } else if (k != kinks.begin() && *(k - 1) > t1) {
+      next = *--k;
+    }
+    tol.initial_step = std::abs(next - t);
+    detail::integrate_adaptive(rhs, y, t, next, tol);
+    t = next;
+  }
+  return Eigen::Map<const Matrix>(y.data());
+}
+
+template <Scene S>
+auto ClosedLoopLinearisation<S>::jump(int i) const -> Matrix {
+  if (open_loop_.conewise(i))
+    throw SimultaneousActivation(detail::concat("ClosedLoopLinearisation::jump: the event at t = ", open_loop_.t_end(i),
+                                                " is simultaneous: its closed-loop jump is conewise (jump_pieces)"));
+  const JumpGain<S>& g = open_loop_.gains().at(i);
+  Matrix J = g.G_z;
+  if constexpr (nu > 0) J.noalias() += g.G_v * gains_(i, open_loop_.t_end(i));
+  return J;
+}
+
+template <Scene S>
+auto ClosedLoopLinearisation<S>::jump_pieces(int i) const -> std::vector<Matrix> {
+  if (!open_loop_.conewise(i)) return {jump(i)};
+  auto& cg = open_loop_.conewise_gain(i);
+  cg.build_all();
+  std::vector<Matrix> out;
+  for (const auto* piece : cg.pieces()) {
+    if (!piece->nominal_outcome) continue;
+    Matrix J = piece->G_z;
+    if constexpr (nu > 0) J.noalias() += piece->G_v * gains_(i, open_loop_.t_end(i));
+    out.push_back(J);
+  }
+  return out;
+}
+
+template <Scene S>
+int ClosedLoopLinearisation<S>::off_nominal_pieces(int i) const {
+  if (!open_loop_.conewise(i)) return 0;
+  auto& cg = open_loop_.conewise_gain(i);
+  cg.build_all();
+  int k = 0;
+  for (const auto* piece : cg.pieces()) k += piece->nominal_outcome ? 0 : 1;
+  return k;
+}
+
+template <Scene S>
+auto ClosedLoopLinearisation<S>::apply_jump(int i, const State& z) const -> State {
+  if (!open_loop_.conewise(i)) return jump(i) * z;
+  Mat<nu, nx> K = gains_(i, open_loop_.t_end(i));
+  Vec<nu> v = Vec<nu>::Zero();
+  if constexpr (nu > 0) v = K * z;
+  const ConewisePiece<S>& piece = open_loop_.conewise_gain(i).piece(z, v);
+  if (!piece.nominal_outcome)
+    throw SimultaneousActivation(detail::concat("ClosedLoopLinearisation: at the simultaneous event at t = ",
+                                                open_loop_.t_end(i), " the deviation lies in the cone of an order whose ",
+                                                "outcome is not the nominal one: no segment to continue on"));
+  State out = piece.G_z * z;
+  if constexpr (nu > 0) out.noalias() += piece.G_v * v;
+  return out;
+}
+
+template <Scene S>
+auto ClosedLoopLinearisation<S>::propagate(const State& z0, double t) const -> State {
+  const auto& traj = open_loop_.reference().reference();
+  const int last = traj.segment_at(t);
+  State z = z0;
+  for (int i = 0; i < last; ++i) z = apply_jump(i, segment_transition(i) * z);
+  return flow_transition(last, t, open_loop_.t_begin(last)) * z;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Stability along a finite reference
+
+template <Scene S>
+StabilityReport check_stability(const ClosedLoopLinearisation<S>& cl, const StabilityOptions<S>& options,
+                                double t_final) {
+  constexpr int nx = 2 * S::nq;
+  using Matrix = Mat<nx, nx>;
+  using State = Vec<nx>;
+  const auto start = std::chrono::steady_clock::now();
+  const LinearisedSystem<S>& ol = cl.open_loop();
+  const auto& traj = ol.reference().reference();
+  Matrix Lt, Lt_inv;
+  detail::weight_factor<nx>(options.weight, "check_stability", Lt, Lt_inv);
+  const Matrix C = detail::output_factor<nx>(options.output_weight, Lt, "check_stability");
+  const auto N = detail::initial_map<nx>(options.initial_subspace, Lt, Lt_inv, "check_stability");
+  SALTUS_REQUIRE(options.samples_per_segment >= 1, "check_stability: samples_per_segment must be >= 1");
+  const double t0 = ol.t_begin(0);
+  const double T = t_final < 0 ? ol.t_end(ol.segment_count() - 1) : t_final;
+  SALTUS_REQUIRE(T > t0 && T <= ol.t_end(ol.segment_count() - 1) * (1 + 1e-15) + 1e-300,
+                 "check_stability: t_final = ", T, " is outside the reference (", t0, ", ",
+                 ol.t_end(ol.segment_count() - 1), "]");
+  const int L = traj.segment_at(T);
+  const auto norm = [&](const Matrix& M) { return detail::weighted_norm<nx>(M, C, N); };
+  const auto wnorm = [&](const State& z) { return (Lt * z).norm(); };  // of the initial deviation
+  const auto onorm = [&](const State& z) { return (C * z).norm(); };   // of the deviation at t
+
+  // Per segment: sample times in (t_begin, t_end] (to T on the last) and Phi_i(t_k, t_begin).
+  std::vector<std::vector<Matrix>> samples(L + 1);
+  std::vector<std::vector<double>> sample_times(L + 1);
+  for (int i = 0; i <= L; ++i) {
+    const double tb = ol.t_begin(i), te = i == L ? T : ol.t_end(i);
+    Matrix Phi = Matrix::Identity();
+    double t = tb;
+    for (int k = 1; k <= options.samples_per_segment; ++k) {
+      const double tk = k == options.samples_per_segment ? te : tb + (te - tb) * k / options.samples_per_segment;
+      if (tk > t) Phi = (cl.flow_transition(i, tk, t) * Phi).eval();
+      t = tk;
+      samples[i].push_back(Phi);
+      sample_times[i].push_back(tk);
+    }
+  }
+  // The jumps: every nominal piece's closed-loop matrix.
+  std::vector<std::vector<Matrix>> jumps(L);
+  StabilityReport r;
+  r.t0 = t0;
+  r.t_final = T;
+  long sequences = 1;
+  for (int e = 0; e < L; ++e) {
+    jumps[e] = cl.jump_pieces(e);
+    r.off_nominal_pieces += cl.off_nominal_pieces(e);
+    SALTUS_CHECK_NUMERICS(!jumps[e].empty(), "check_stability: the simultaneous event at t = ", ol.t_end(e),
+                          " has no piece with the nominal outcome");
+    if (sequences <= options.max_sequences) sequences *= static_cast<long>(jumps[e].size());
+  }
+  r.tail_amplification = norm(samples[L].back());
+  const double t_last = ol.t_begin(L);
+  r.tail_rate = T > t_last ? std::log(r.tail_amplification) / (T - t_last) : 0.0;
+
+  // Upper bounds: exhaustive over piece sequences, else sub-multiplicative.
+  std::vector<Matrix> finals;  // Phi_s(T, t0) per enumerated sequence
+  if (sequences <= options.max_sequences) {
+    r.sequences = sequences;
+    std::vector<int> choice(L, 0);
+    for (long s = 0; s < sequences; ++s) {
+      long rest = s;
+      for (int e = 0; e < L; ++e) {
+        choice[e] = static_cast<int>(rest % static_cast<long>(jumps[e].size()));
+        rest /= static_cast<long>(jumps[e].size());
+      }
+      Matrix Psi = Matrix::Identity();
+      for (int i = 0; i <= L; ++i) {
+        for (std::size_t k = 0; k < samples[i].size(); ++k) {
+          const double a = norm(samples[i][k] * Psi);
+          if (a > r.peak_upper) {
+            r.peak_upper = a;
+            r.peak_time = sample_times[i][k];
+          }
+        }
+        Psi = (samples[i].back() * Psi).eval();
+        if (i < L) Psi = (jumps[i][choice[i]] * Psi).eval();
+      }
+      finals.push_back(Psi);
+      r.upper_bound = std::max(r.upper_bound, norm(Psi));
+    }
+  } else {
+    r.exhaustive = false;
+    r.sequences = 0;
+    double running = 1.0;
+    for (int i = 0; i <= L; ++i) {
+      for (std::size_t k = 0; k < samples[i].size(); ++k) {
+        const double a = running * norm(samples[i][k]);
+        if (a > r.peak_upper) {
+          r.peak_upper = a;
+          r.peak_time = sample_times[i][k];
+        }
+      }
+      running *= norm(samples[i].back());
+      if (i < L) {
+        double worst = 0.0;
+        for (const Matrix& J : jumps[i]) worst = std::max(worst, norm(J));
+        running *= worst;
+      }
+    }
+    r.upper_bound = running;
+  }
+
+  // Lower bounds: what the conewise map itself does to candidate deviations.
+  std::vector<State> candidates;
+  for (const Matrix& F : finals) {
+    using Wide = Eigen::Matrix<double, nx, Eigen::Dynamic, 0, nx, nx>;
+    const Wide P = C * F * N;
+    const Eigen::JacobiSVD<Wide> svd(P, Eigen::ComputeFullV);
+    const State v = N * svd.matrixV().col(0);
+    candidates.push_back(v);
+    candidates.push_back(-v);
+  }
+  std::mt19937_64 rng(options.seed);
+  std::normal_distribution<double> normal;
+  for (int k = 0; k < options.random_directions; ++k) {
+    Eigen::VectorXd y(N.cols());
+    for (auto& c : y) c = normal(rng);
+    candidates.push_back(N * y);
+  }
+  for (const State& z0 : candidates) {
+    const double n0 = wnorm(z0);
+    if (!(n0 > 0)) continue;
+    State z = z0;
+    try {
+      for (int i = 0; i <= L; ++i) {
+        for (const Matrix& M : samples[i]) r.peak_lower = std::max(r.peak_lower, onorm(M * z) / n0);
+        z = samples[i].back() * z;
+        if (i < L) z = cl.apply_jump(i, z);
+      }
+    } catch (const SimultaneousActivation&) {
+      continue;  // an off-nominal order: no reference-spreading error to measure
+    }
+    r.lower_bound = std::max(r.lower_bound, onorm(z) / n0);
+  }
+  if (r.exhaustive) r.lower_bound = std::min(r.lower_bound, r.upper_bound);  // round-off of the same matrix
+  r.upper_rate = std::log(r.upper_bound) / (T - t0);
+  r.lower_rate = std::log(r.lower_bound) / (T - t0);
+  r.verdict = detail::verdict(r.lower_bound, r.upper_bound);
+  r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return r;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Periodic references
+
+template <Scene S>
+PeriodicStabilityReport check_periodic_stability(const ClosedLoopLinearisation<S>& cl, double period,
+                                                 const StabilityOptions<S>& options, double tolerance) {
+  constexpr int nx = 2 * S::nq;
+  using Matrix = Mat<nx, nx>;
+  using State = Vec<nx>;
+  const auto start = std::chrono::steady_clock::now();
+  const LinearisedSystem<S>& ol = cl.open_loop();
+  const auto& traj = ol.reference().reference();
+  Matrix Lt, Lt_inv;
+  detail::weight_factor<nx>(options.weight, "check_periodic_stability", Lt, Lt_inv);
+  const double t0 = ol.t_begin(0), T = t0 + period;
+  const double t_end = ol.t_end(ol.segment_count() - 1);
+  SALTUS_REQUIRE(period > 0 && T <= t_end * (1 + 1e-15) + 1e-300, "check_periodic_stability: the period ", period,
+                 " must be > 0 and end inside the reference (which ends at ", t_end, ")");
+  const int L = traj.segment_at(T);
+  const State x0 = traj.state(0, t0), xT = traj.state(L, T);
+  SALTUS_REQUIRE((xT - x0).norm() <= tolerance * std::max(1.0, x0.norm()) &&
+                     traj.segments[L].mode == traj.segments[0].mode,
+                 "check_periodic_stability: the reference does not repeat after ", period, " s: |x(t0 + P) - x(t0)| = ",
+                 (xT - x0).norm(), " (tolerance ", tolerance, ", relative), modes ", describe(ol.scene(), traj.segments[0].mode),
+                 " and ", describe(ol.scene(), traj.segments[L].mode));
+  const auto norm = [&](const Matrix& M) { return detail::weighted_norm<nx>(M, Lt, Lt_inv); };
+
+  std::vector<Matrix> flows(L + 1);
+  for (int i = 0; i <= L; ++i) flows[i] = i < L ? cl.segment_transition(i) : cl.flow_transition(L, T, ol.t_begin(L));
+  std::vector<std::vector<Matrix>> jumps(L);
+  long sequences = 1;
+  for (int e = 0; e < L; ++e) {
+    jumps[e] = cl.jump_pieces(e);
+    SALTUS_CHECK_NUMERICS(!jumps[e].empty(), "check_periodic_stability: the simultaneous event at t = ", ol.t_end(e),
+                          " has no piece with the nominal outcome");
+    sequences *= static_cast<long>(jumps[e].size());
+    SALTUS_REQUIRE(sequences <= options.max_sequences, "check_periodic_stability: more than ", options.max_sequences,
+                   " piece sequences in one period");
+  }
+  PeriodicStabilityReport r;
+  r.period = period;
+  r.sequences = sequences;
+  std::vector<Matrix> M(sequences);
+  std::vector<int> choice(L, 0);
+  for (long s = 0; s < sequences; ++s) {
+    long rest = s;
+    Matrix Psi = Matrix::Identity();
+    for (int i = 0; i <= L; ++i) {
+      Psi = (flows[i] * Psi).eval();
+      if (i < L) {
+        choice[i] = static_cast<int>(rest % static_cast<long>(jumps[i].size()));
+        rest /= static_cast<long>(jumps[i].size());
+        Psi = (jumps[i][choice[i]] * Psi).eval();
+      }
+    }
+    M[s] = Psi;
+  }
+  const auto rho = [](const Matrix& A) {
+    if constexpr (nx == 0) return 0.0;
+    return Eigen::EigenSolver<Matrix>(A, false).eigenvalues().cwiseAbs().maxCoeff();
+  };
+  if (sequences == 1) {
+    Eigen::VectorXd moduli = Eigen::EigenSolver<Matrix>(M[0], false).eigenvalues().cwiseAbs();
+    std::sort(moduli.data(), moduli.data() + moduli.size(), std::greater<double>());
+    r.eigenvalue_moduli.assign(moduli.data(), moduli.data() + moduli.size());
+    r.spectral_radius_upper = r.spectral_radius_lower = moduli.size() ? moduli(0) : 0.0;
+    r.jsr_depth = 0;
+  } else {
+    // Upper: min over k of max over products of length k of |p|_W^(1/k) (Jungers 2009, Prop. 1.6).
+    r.spectral_radius_upper = std::numeric_limits<double>::infinity();
+    for (int k = 1; k <= options.jsr_depth; ++k) {
+      long count = 1;
+      for (int j = 0; j < k && count <= options.max_sequences; ++j) count *= sequences;
+      if (count > options.max_sequences) break;
+      double worst = 0.0;
+      for (long p = 0; p < count; ++p) {
+        long rest = p;
+        Matrix prod = Matrix::Identity();
+        for (int j = 0; j < k; ++j) {
+          prod = (M[rest % sequences] * prod).eval();
+          rest /= sequences;
+        }
+        worst = std::max(worst, std::pow(norm(prod), 1.0 / k));
+      }
+      if (worst < r.spectral_radius_upper) {
+        r.spectral_radius_upper = worst;
+        r.jsr_depth = k;
+      }
+    }
+    // Lower: sequences that repeat themselves along their own dominant eigenvector.
+    for (long s = 0; s < sequences; ++s) {
+      Eigen::EigenSolver<Matrix> es(M[s], true);
+      int top = 0;
+      es.eigenvalues().cwiseAbs().maxCoeff(&top);
+      const auto lambda = es.eigenvalues()(top);
+      if (std::abs(lambda.imag()) > 1e-12 * std::abs(lambda) || lambda.real() <= 0) continue;
+      State z0 = es.eigenvectors().col(top).real();
+      z0 /= z0.norm();
+      State z = z0;
+      try {
+        for (int i = 0; i <= L; ++i) {
+          z = flows[i] * z;
+          if (i < L) z = cl.apply_jump(i, z);
+        }
+      } catch (const SimultaneousActivation&) {
+        continue;
+      }
+      if ((z - lambda.real() * z0).norm() <= 1e-8 * std::max(1.0, std::abs(lambda.real())))
+        r.spectral_radius_lower = std::max(r.spectral_radius_lower, rho(M[s]));
+    }
+  }
+  r.verdict = detail::verdict(r.spectral_radius_lower, r.spectral_radius_upper);
+  r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return r;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Monte Carlo
+
+template <Scene S>
+MonteCarloReport monte_carlo(const S& scene, const SimulationOptions& simulation,
+                             const ReferenceSpreadingController<S>& controller, const ClosedLoopLinearisation<S>& cl,
+                             const MonteCarloOptions<S>& options) {
+  constexpr int nx = 2 * S::nq;
+  using Matrix = Mat<nx, nx>;
+  using State = Vec<nx>;
+  using Phase = typename ReferenceSpreadingController<S>::Phase;
+  SALTUS_REQUIRE(options.runs >= 1, "monte_carlo: runs must be >= 1, got ", options.runs);
+  SALTUS_REQUIRE(options.size > 0 && std::isfinite(options.size), "monte_carlo: size must be > 0, got ", options.size);
+  SALTUS_REQUIRE(options.scale.allFinite(), "monte_carlo: the scale must be finite");
+  const LinearisedSystem<S>& ol = cl.open_loop();
+  const auto& ref = ol.reference().reference();
+  Matrix Lt, Lt_inv;
+  detail::weight_factor<nx>(options.weight, "monte_carlo", Lt, Lt_inv);
+  const Matrix C = detail::output_factor<nx>(options.output_weight, Lt, "monte_carlo");
+  const double t0 = ol.t_begin(0);
+  const double T = options.t_final < 0 ? ol.t_end(ol.segment_count() - 1) : options.t_final;
+  SALTUS_REQUIRE(T > t0, "monte_carlo: t_final = ", T, " is not after the reference's start ", t0);
+  const int last = ref.segment_at(T);
+  const State x0 = ref.state(0, t0);
+
+  // Perturbations and their first-order predictions, in this thread (deterministic; the
+  // linearisation builds conewise pieces on demand and is not thread-safe).
+  MonteCarloReport report;
+  report.runs = options.runs;
+  report.run.resize(options.runs);
+  std::vector<State> d(options.runs);
+  std::mt19937_64 rng(options.seed);
+  std::normal_distribution<double> normal;
+  for (int r = 0; r < options.runs; ++r) {
+    for (int j = 0; j < nx; ++j) d[r][j] = options.scale[j] * normal(rng);
+    if (options.project) d[r] = options.project(d[r]);
+    SALTUS_REQUIRE(d[r].allFinite() && (Lt * d[r]).norm() > 0, "monte_carlo: perturbation ", r, " is zero or not finite");
+    try {
+      report.run[r].predicted = (C * cl.propagate(d[r], T)).norm() / (Lt * d[r]).norm();
+    } catch (const SimultaneousActivation&) {
+      report.run[r].predicted = std::numeric_limits<double>::quiet_NaN();
+    }
+  }
+
+  unsigned hw = std::thread::hardware_concurrency();
+  const int threads = std::max(1, std::min(options.runs, options.threads > 0 ? options.threads : static_cast<int>(hw ? hw : 1)));
+  report.threads = threads;
+  // The gains' kinks as breakpoints of the plant's integration (ReferenceSpreadingController::breakpoints).
+  SimulationOptions plant = simulation;
+  const std::vector<double> kinks = controller.breakpoints();
+  plant.breakpoints.insert(plant.breakpoints.end(), kinks.begin(), kinks.end());
+  std::vector<std::unique_ptr<Simulator<S>>> simulators;
+  for (int w = 0; w < threads; ++w) simulators.push_back(std::make_unique<Simulator<S>>(scene, plant));
+  const auto wall = std::chrono::steady_clock::now();
+  auto body = [&](int r, int worker) {
+    MonteCarloRun& out = report.run[r];
+    try {
+      const State xs = x0 + options.size * d[r];
+      const HybridTrajectory<S> traj = simulators[worker]->run(xs, t0, T, controller.law());
+      if (traj.status != SimulationStatus::Completed) {
+        out.failed = true;
+        out.reason = detail::concat("simulation ended with status ", to_string(traj.status));
+        return;
+      }
+      out.events = static_cast<int>(traj.events.size());
+      // The plant's phase after each of its events (the controller's own bookkeeping).
+      Phase phase;
+      bool kept = true;
+      const ExtendedReference<S>& extended = controller.reference();
+      for (int k = 1; k < traj.segment_count(); ++k) {
+        const Phase before = phase;
+        phase = controller.next_phase(phase, traj.segments[k].mode);
+        if (!phase.intermediate && !(traj.segments[k].mode == ref.segments[phase.segment].mode)) kept = false;
+        // The controller held the reference beyond an extension (tracking.hpp): not a valid run.
+        const double te = traj.events[k - 1].t;
+        if (te > extended.reached_after(before.segment) || te < extended.reached_before(phase.segment)) {
+          out.failed = true;
+          out.reason = detail::concat("the plant's event at t = ", te, " lies beyond the extension of reference segment ",
+                                      te > extended.reached_after(before.segment) ? before.segment : phase.segment,
+                                      " (make ExtensionOptions::before/after longer)");
+          return;
+        }
+      }
+      out.kept_event_sequence = kept && !phase.intermediate && phase.segment == last;
+      const State e = traj.final_state() - controller.reference().state(phase.segment, T);
+      out.observed = (C * e).norm() / (Lt * (options.size * d[r])).norm();
+    } catch (const std::exception& ex) {
+      out.failed = true;
+      out.reason = ex.what();
+    }
+  };
+  auto after_batch = [&](int done) {
+    if (!options.progress) return;
+    int failed = 0, kept = 0;
+    for (int r = 0; r < options.runs; ++r) {
+      failed += report.run[r].failed ? 1 : 0;
+      kept += report.run[r].kept_event_sequence ? 1 : 0;
+    }
+    *options.progress << "monte carlo: " << done << "/" << options.runs << " runs, " << failed << " failed, " << kept
+                      << " kept the event sequence, "
+                      << std::chrono::duration<double>(std::chrono::steady_clock::now() - wall).count() << " s ("
+                      << threads << " threads)\n"
+                      << std::flush;
+  };
+  detail::parallel_for(options.runs, threads, std::max(1, options.batch), body, after_batch);
+  report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall).count();
+
+  std::map<std::string, int> reasons;
+  std::vector<double> rates;
+  report.observed_rate_max = report.predicted_rate_max = -std::numeric_limits<double>::infinity();
+  for (const MonteCarloRun& r : report.run) {
+    if (r.failed) {
+      ++report.failed;
+      ++reasons[r.reason];
+      continue;
+    }
+    if (!r.kept_event_sequence) continue;
+    ++report.kept_event_sequence;
+    const double rate = std::log(r.observed) / (T - t0);
+    rates.push_back(rate);
+    report.observed_rate_max = std::max(report.observed_rate_max, rate);
+    if (std::isfinite(r.predicted)) {
+      report.predicted_rate_max = std::max(report.predicted_rate_max, std::log(r.predicted) / (T - t0));
+      report.max_log_discrepancy = std::max(report.max_log_discrepancy, std::abs(std::log(r.observed / r.predicted)));
+    }
+    (r.observed > 1 ? report.grew : report.shrank) += 1;
+  }
+  if (!rates.empty()) {
+    std::nth_element(rates.begin(), rates.begin() + rates.size() / 2, rates.end());
+    report.observed_rate_median = rates[rates.size() / 2];
+  }
+  if (rates.empty()) report.observed_rate_max = std::numeric_limits<double>::quiet_NaN();
+  if (!std::isfinite(report.predicted_rate_max)) report.predicted_rate_max = std::numeric_limits<double>::quiet_NaN();
+  for (const auto& [reason, count] : reasons) report.failure_reasons.push_back(detail::concat(count, " x ", reason));
+  return report;
+}
+
+}  // namespace saltus
