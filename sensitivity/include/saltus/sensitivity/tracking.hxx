@@ -7,6 +7,7 @@
 #include <saltus/sensitivity/tracking.hpp>
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -811,8 +812,19 @@ MonteCarloReport monte_carlo(const S& scene, const SimulationOptions& simulation
   std::vector<std::unique_ptr<Simulator<S>>> simulators;
   for (int w = 0; w < threads; ++w) simulators.push_back(std::make_unique<Simulator<S>>(scene, plant));
   const auto wall = std::chrono::steady_clock::now();
+  // Counts for the progress lines: atomics, so that a line never reads another worker's run.
+  std::atomic<int> failed_so_far{0}, kept_so_far{0};
   auto body = [&](int r, int worker) {
     MonteCarloRun& out = report.run[r];
+    struct Count {  // counts this run once its result is final, however the body returns
+      const MonteCarloRun& run;
+      std::atomic<int>& failed;
+      std::atomic<int>& kept;
+      ~Count() {
+        if (run.failed) ++failed;
+        if (run.kept_event_sequence) ++kept;
+      }
+    } count{out, failed_so_far, kept_so_far};
     try {
       const State xs = x0 + options.size * d[r];
       const HybridTrajectory<S> traj = simulators[worker]->run(xs, t0, T, controller.law());
@@ -850,12 +862,8 @@ MonteCarloReport monte_carlo(const S& scene, const SimulationOptions& simulation
   };
   auto after_batch = [&](int done) {
     if (!options.progress) return;
-    int failed = 0, kept = 0;
-    for (int r = 0; r < options.runs; ++r) {
-      failed += report.run[r].failed ? 1 : 0;
-      kept += report.run[r].kept_event_sequence ? 1 : 0;
-    }
-    *options.progress << "monte carlo: " << done << "/" << options.runs << " runs, " << failed << " failed, " << kept
+    *options.progress << "monte carlo: " << done << "/" << options.runs << " runs, " << failed_so_far.load()
+                      << " failed, " << kept_so_far.load()
                       << " kept the event sequence, "
                       << std::chrono::duration<double>(std::chrono::steady_clock::now() - wall).count() << " s ("
                       << threads << " threads)\n"
