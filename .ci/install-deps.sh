@@ -1,12 +1,13 @@
 #!/usr/bin/env bash
 # Installs the Debian packages Saltus builds against, only those missing (no-op when all are
-# present). Used by tests/run.sh, examples/demo.sh and .ci/run.
+# present). Used by tests/run.sh, examples/demo.sh and .ci/run. Extra package names given as
+# arguments are installed too (.ci/run: clang for the sanitizer stage).
 set -euo pipefail
 # Only what the build uses. ninja-build: the generator (it compiles a target's objects while its
 # dependencies still link); ccache: cached rebuilds; coinor-libipopt-dev: Ipopt 3.11 with MUMPS for
 # timefreezing/ (found through pkg-config).
 packages=(build-essential cmake ninja-build ccache pkg-config libeigen3-dev libboost-dev libsundials-dev
-          nlohmann-json3-dev libgtest-dev libgmock-dev libbenchmark-dev coinor-libipopt-dev)
+          nlohmann-json3-dev libgtest-dev libgmock-dev libbenchmark-dev coinor-libipopt-dev "$@")
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

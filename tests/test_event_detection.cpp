@@ -12,6 +12,7 @@
 #include <saltus/hybrid/header_only.hpp>
 
 #include <cmath>
+#include <numbers>
 #include <sstream>
 
 namespace saltus::testing {
@@ -246,6 +247,59 @@ INSTANTIATE_TEST_SUITE_P(Depths, SkimmingPointMass, ::testing::Values(-1e-3, -1e
                            return std::string(d < 0 ? "below_1e" : "above_1e") +
                                   std::to_string(static_cast<int>(std::round(-std::log10(std::abs(d)))));
                          });
+
+// Case 4 of the guard scan (simulation/guard_scan.hxx): a release guard that dips below zero and
+// back within one step. The point mass rests on the frictionless table under the thrust
+// u_y(t) = m g - 6 + A cos(2 pi (t + 1/2)) N: the normal force lambda_n = 6 - A cos(...) goes
+// negative when cos(2 pi (t + 1/2)) > 6 / A, so for A = 8 the mass leaves the table at
+// t_r + k, t_r = 1/2 - arccos(3/4) / (2 pi), and lands again before the next release. At rest
+// the flow is constant and the integrator's steps grow past the thrust's period: every release
+// after a landing falls inside one step (before case 4 the second one was missed). For A = 6 the
+// normal force touches zero once per period without going below it: a grazing release, no event.
+class RestingPointMassUnderThrust : public ::testing::TestWithParam<IntegratorKind> {};
+
+TEST_P(RestingPointMassUnderThrust, ReleaseDipInsideOneStepIsFound) {
+  const scenes::PointMass mass;
+  const double m = mass.parameters().mass, grav = mass.parameters().gravity;
+  auto thrust = [m, grav](double amplitude) -> InputLaw<scenes::PointMass> {
+    return [=](double t, const Vec<4>&, const Mode<1>&) {
+      return Vec<2>(0.0, m * grav - 6.0 + amplitude * std::cos(2.0 * std::numbers::pi * (t + 0.5)));
+    };
+  };
+  SimulationOptions options;
+  options.integrator.kind = GetParam();
+  Simulator<scenes::PointMass> sim(mass, options);
+  const auto hops = sim.run(Vec<4>::Zero(), 0.0, 3.2, thrust(8.0));
+  ASSERT_EQ(hops.status, SimulationStatus::Completed);
+  const double t_r = 0.5 - std::acos(0.75) / (2.0 * std::numbers::pi);
+  std::vector<double> releases;
+  for (const auto& e : hops.events)
+    for (const auto& g : e.guards())
+      if (g.kind == GuardKind::Release) releases.push_back(e.t);
+  ASSERT_EQ(releases.size(), 3u) << "releases expected at " << t_r << " + k";
+  for (int k = 0; k < 3; ++k) EXPECT_NEAR(releases[k], t_r + k, 1e-9) << "release " << k;
+  EXPECT_EQ(hops.events.size(), 6u);  // three releases, three landings
+
+  const auto grazing = sim.run(Vec<4>::Zero(), 0.0, 3.2, thrust(6.0));
+  ASSERT_EQ(grazing.status, SimulationStatus::Completed);
+  EXPECT_TRUE(grazing.events.empty()) << grazing.events.size() << " events, the first at " << grazing.events[0].t;
+  EXPECT_LT(grazing.final_state().cwiseAbs().maxCoeff(), 1e-12);
+}
+
+INSTANTIATE_TEST_SUITE_P(Backends, RestingPointMassUnderThrust,
+                         ::testing::Values(IntegratorKind::DormandPrince, IntegratorKind::CvodeBdf),
+                         [](const auto& info) {
+                           return std::string(info.param == IntegratorKind::DormandPrince ? "dopri5" : "cvode_bdf");
+                         });
+
+TEST(GuardScan, GuardSamplesOutsideTheirRangeAreRefused) {
+  const scenes::PointMass mass;
+  SimulationOptions options;
+  options.integrator.guard_samples = 15;
+  Simulator<scenes::PointMass> sim(mass, options);
+  const InputLaw<scenes::PointMass> none = [](double, const Vec<4>&, const Mode<1>&) { return Vec<2>::Zero(); };
+  EXPECT_THROW(sim.run(Vec<4>(0.0, 1.0, 0.0, 0.0), 0.0, 1.0, none), InvalidArgument);
+}
 
 // Issue case 3: over every scene's reference motions, no open contact is below -gap_tolerance
 // at any point of the dense output, and no closed one drifts below 1e-8.

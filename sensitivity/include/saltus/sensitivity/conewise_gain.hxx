@@ -4,6 +4,7 @@
 #include <saltus/hybrid/simulation/mode_system.hpp>
 #include <saltus/hybrid/simulation/transition.hpp>
 #include <saltus/sensitivity/conewise_gain.hpp>
+#include <saltus/sensitivity/detail/dense.hpp>
 
 #include <algorithm>
 #include <chrono>
@@ -85,9 +86,9 @@ inline double hull_distance_from_origin(const Eigen::MatrixXd& R) {
     }
     Eigen::MatrixXd D(n, s - 1);
     for (int j = 1; j < s; ++j) D.col(j - 1) = R.row(idx[j]).transpose() - p0;
-    const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(D);
-    if (qr.rank() < s - 1) continue;  // affinely dependent: a smaller subset attains the same point
-    const Eigen::VectorXd mu = qr.solve(Eigen::VectorXd(-p0));
+    Eigen::VectorXd mu;
+    // Affinely dependent: a smaller subset attains the same point.
+    if (rank_revealing_solve(D, Eigen::VectorXd(-p0), mu) < s - 1) continue;
     if (mu.minCoeff() < -1e-12 || mu.sum() > 1 + 1e-12) continue;  // the nearest point of the affine hull is outside
     best = std::min(best, (p0 + D * mu).norm());
   }

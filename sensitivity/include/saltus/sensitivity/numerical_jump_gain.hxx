@@ -2,7 +2,7 @@
 #pragma once
 
 #include <Eigen/LU>
-#include <Eigen/SVD>
+#include <saltus/sensitivity/detail/dense.hpp>
 #include <algorithm>
 #include <array>
 #include <limits>
@@ -168,11 +168,8 @@ NumericalJumpGain<S> numerical_jump_gain(const S& scene, const HybridTrajectory<
       constraint_row_values(xm, j, -1.0);
       C.col(j) /= 2 * h;
     }
-    const Eigen::JacobiSVD<Eigen::MatrixXd> svd(Eigen::MatrixXd(C), Eigen::ComputeFullV);
-    const double tol = 1e-6 * std::max(1.0, svd.singularValues()[0]);
     int rank = 0;
-    while (rank < svd.singularValues().size() && svd.singularValues()[rank] > tol) ++rank;
-    T = svd.matrixV().rightCols(nx - rank);
+    T = detail::null_space(C, 1e-6, rank);
   }
   // Back onto the constraints c(x) = c(x_a) (constraints.hpp: the kinetic-metric projection;
   // perturbations are ~1e-5 along admissible directions, so the correction is ~1e-10).
@@ -203,14 +200,13 @@ NumericalJumpGain<S> numerical_jump_gain(const S& scene, const HybridTrajectory<
         },
         h);
   }
-  const Eigen::PartialPivLU<Mat<nx, nx>> plus_lu(Phi_plus);
   NumericalJumpGain<S> g;
   g.window = w;
   g.basis = B;
-  g.G_z_basis = plus_lu.solve(P);
+  g.G_z_basis = detail::lu_solve(Phi_plus, P);
   g.dt_basis = dt_basis;
   g.full = r == nx;
-  if (g.full) g.G_z = g.G_z_basis * Mat<nx, nx>(B).inverse();
+  if (g.full) g.G_z = g.G_z_basis * detail::lu_solve(B, Mat<nx, nx>::Identity());
 
   if constexpr (nu > 0) {
     const Vec<nu> u_star = traj.input(ts, ev.x_minus, ev.mode_before);
@@ -233,8 +229,8 @@ NumericalJumpGain<S> numerical_jump_gain(const S& scene, const HybridTrajectory<
       Psi_plus.col(j) = difference([&](double k) { return smooth(ev.mode_after, shifted(k), ts, ev.x_plus, tb); }, h);
     }
     // G_z Psi- = (G_z B) c with B c = Psi- (least squares; exact when Psi- is admissible).
-    const Eigen::MatrixXd c = Eigen::MatrixXd(B).completeOrthogonalDecomposition().solve(Eigen::MatrixXd(Psi_minus));
-    g.G_v = plus_lu.solve(P_v - Psi_plus) - g.G_z_basis * c;
+    const Eigen::MatrixXd c = detail::minimum_norm_solve(B, Psi_minus);
+    g.G_v = detail::lu_solve(Phi_plus, P_v - Psi_plus) - g.G_z_basis * c;
     // The run's event time moves by dt_dz Psi- v + dt_dv v = dt_basis c v + dt_dv v.
     g.dt_dv = dt_v - g.dt_basis * c;
   }

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <saltus/hybrid/simulation/simulator.hpp>
+#include <saltus/sensitivity/detail/dense.hpp>
 #include <saltus/sensitivity/detail/ode.hxx>
 #include <saltus/sensitivity/linearisation.hxx>
 #include <saltus/sensitivity/tracking.hpp>
@@ -70,10 +71,10 @@ template <int n>
 void weight_factor(const Mat<n, n>& W, const char* what, Mat<n, n>& Lt, Mat<n, n>& Lt_inv) {
   SALTUS_REQUIRE(W.allFinite() && (W - W.transpose()).norm() <= 1e-12 * std::max(1.0, W.norm()), what,
                  ": the weight W must be finite and symmetric");
-  Eigen::LLT<Mat<n, n>> llt(W);
-  SALTUS_REQUIRE(llt.info() == Eigen::Success, what, ": the weight W is not positive definite");
-  Lt = llt.matrixU();
-  Lt_inv = Lt.inverse();
+  Eigen::MatrixXd U;
+  SALTUS_REQUIRE(cholesky_upper(W, U), what, ": the weight W is not positive definite");
+  Lt = U;
+  Lt_inv = lu_solve(U, Mat<n, n>::Identity());
 }
 
 // |M|_{W -> Wout} = |C M N|_2 (C = Wout^(1/2), or L' for the norm W itself; N = L'^-1, or
@@ -82,8 +83,7 @@ template <int n, class InputMap>
 double weighted_norm(const Mat<n, n>& M, const Mat<n, n>& C, const InputMap& N) {
   if constexpr (n == 0) return 0.0;
   const Eigen::Matrix<double, n, Eigen::Dynamic, 0, n, n> P = C * M * N;
-  if (P.cols() == 0) return 0.0;
-  return Eigen::JacobiSVD<Eigen::Matrix<double, n, Eigen::Dynamic, 0, n, n>>(P).singularValues()(0);
+  return largest_singular_value(P);
 }
 
 // N with z0 = N y, |y| = |z0|_W, z0 ranging over range(E) (or all of R^n): E R^-1 with L' E = Q R.
@@ -94,12 +94,11 @@ Eigen::Matrix<double, n, Eigen::Dynamic, 0, n, n> initial_map(
   if (!E) return Lt_inv;
   SALTUS_REQUIRE(E->cols() >= 1 && E->allFinite(), what, ": the initial subspace needs at least one finite column");
   const Eigen::Matrix<double, n, Eigen::Dynamic, 0, n, n> B = Lt * *E;
-  const Eigen::HouseholderQR<Eigen::Matrix<double, n, Eigen::Dynamic, 0, n, n>> qr(B);
-  const Eigen::MatrixXd R = qr.matrixQR().topRows(B.cols()).template triangularView<Eigen::Upper>();
+  const Eigen::MatrixXd R = qr_upper_factor(B);
   const double scale = std::max(1e-300, R.diagonal().cwiseAbs().maxCoeff());
   SALTUS_REQUIRE(R.diagonal().cwiseAbs().minCoeff() > 1e-12 * scale, what,
                  ": the initial subspace's columns are linearly dependent");
-  return *E * R.inverse();
+  return *E * lu_solve(R, Eigen::MatrixXd::Identity(R.rows(), R.cols()));
 }
 
 // C with |z|_Wout = |C z|: the symmetric square root of a PSD Wout, or L' (W = L L') without one.
@@ -109,12 +108,12 @@ Mat<n, n> output_factor(const std::optional<Mat<n, n>>& Wout, const Mat<n, n>& L
   SALTUS_REQUIRE(Wout->allFinite() && (*Wout - Wout->transpose()).norm() <= 1e-12 * std::max(1.0, Wout->norm()), what,
                  ": the output weight W_out must be finite and symmetric");
   if constexpr (n == 0) return Mat<n, n>();
-  const Eigen::SelfAdjointEigenSolver<Mat<n, n>> es(*Wout);
-  SALTUS_REQUIRE(es.eigenvalues().minCoeff() >= -1e-12 * std::max(1.0, Wout->norm()), what,
-                 ": the output weight W_out must be positive semidefinite (smallest eigenvalue ",
-                 es.eigenvalues().minCoeff(), ")");
-  const Vec<n> root = es.eigenvalues().cwiseMax(0.0).cwiseSqrt();
-  return es.eigenvectors() * root.asDiagonal() * es.eigenvectors().transpose();
+  Eigen::MatrixXd V;
+  const Eigen::VectorXd lambda = symmetric_eigenvalues(*Wout, &V);
+  SALTUS_REQUIRE(lambda.minCoeff() >= -1e-12 * std::max(1.0, Wout->norm()), what,
+                 ": the output weight W_out must be positive semidefinite (smallest eigenvalue ", lambda.minCoeff(), ")");
+  const Eigen::VectorXd root = lambda.cwiseMax(0.0).cwiseSqrt();
+  return V * root.asDiagonal() * V.transpose();
 }
 
 template <int n>
@@ -122,7 +121,7 @@ void require_symmetric_psd(const Mat<n, n>& Q, const char* name) {
   SALTUS_REQUIRE(Q.allFinite() && (Q - Q.transpose()).norm() <= 1e-12 * std::max(1.0, Q.norm()), "lqr_design: ",
                  name, " must be finite and symmetric");
   if constexpr (n > 0) {
-    const double lo = Eigen::SelfAdjointEigenSolver<Mat<n, n>>(Q).eigenvalues().minCoeff();
+    const double lo = symmetric_eigenvalues(Q).minCoeff();
     SALTUS_REQUIRE(lo >= -1e-12 * std::max(1.0, Q.norm()), "lqr_design: ", name,
                    " must be positive semidefinite (smallest eigenvalue ", lo, ")");
   }
@@ -132,6 +131,37 @@ void require_symmetric_psd(const Mat<n, n>& Q, const char* name) {
 // sure, above 1 for sure, or between.
 inline StabilityVerdict verdict(double lower, double upper) {
   return upper < 1.0 ? StabilityVerdict::Stable : lower > 1.0 ? StabilityVerdict::Unstable : StabilityVerdict::Undecided;
+}
+
+// The jump gains (G_z, G_v) through event e of the open loop: the event's own gain, or at a
+// simultaneous event every conewise piece with the nominal outcome (the pieces a deviation that
+// stays on the reference's event sequence can meet). Shared by lqr_design (the worst piece) and
+// ClosedLoopLinearisation::jump_pieces.
+template <Scene S>
+std::vector<std::pair<Mat<2 * S::nq, 2 * S::nq>, Mat<2 * S::nq, S::nu>>> nominal_jump_gains(
+    const LinearisedSystem<S>& open_loop, int e, const char* who) {
+  std::vector<std::pair<Mat<2 * S::nq, 2 * S::nq>, Mat<2 * S::nq, S::nu>>> out;
+  if (!open_loop.conewise(e)) {
+    out.emplace_back(open_loop.gains().at(e).G_z, open_loop.gains().at(e).G_v);
+    return out;
+  }
+  auto& cg = open_loop.conewise_gain(e);
+  cg.build_all();
+  for (const auto* piece : cg.pieces())
+    if (piece->nominal_outcome) out.emplace_back(piece->G_z, piece->G_v);
+  SALTUS_CHECK_NUMERICS(!out.empty(), who, ": every piece of the simultaneous event at t = ", open_loop.t_end(e),
+                        " has an outcome other than the nominal one");
+  return out;
+}
+
+// The piece sequences of a run through events with radices[e] pieces each, numbered in mixed
+// radix: sequence s chooses piece digits[e] = (s / prod_{f<e} radices[f]) % radices[e] at event e.
+inline void piece_sequence(long s, const std::vector<std::size_t>& radices, std::vector<int>& digits) {
+  digits.resize(radices.size());
+  for (std::size_t e = 0; e < radices.size(); ++e) {
+    digits[e] = static_cast<int>(s % static_cast<long>(radices[e]));
+    s /= static_cast<long>(radices[e]);
+  }
 }
 
 template <Scene S>
@@ -161,8 +191,11 @@ LqrDesign<S> lqr_design(const LinearisedSystem<S>& ol, const LqrWeights<S>& weig
   detail::require_symmetric_psd<nx>(weights.Q_final, "Q_final");
   SALTUS_REQUIRE(weights.R.allFinite() && (weights.R - weights.R.transpose()).norm() <= 1e-12 * std::max(1.0, weights.R.norm()),
                  "lqr_design: R must be finite and symmetric");
-  const Eigen::LLT<Mat<nu, nu>> R(weights.R);
-  SALTUS_REQUIRE(R.info() == Eigen::Success, "lqr_design: R is not positive definite");
+  // R^-1 once (SPD: Cholesky); the Riccati right-hand side multiplies by it at every stage.
+  Eigen::MatrixXd R_inverse_dynamic;
+  SALTUS_REQUIRE(detail::spd_solve(weights.R, Mat<nu, nu>::Identity(), R_inverse_dynamic),
+                 "lqr_design: R is not positive definite");
+  const Mat<nu, nu> R_inverse = R_inverse_dynamic;
   SALTUS_REQUIRE(options.sample_step > 0, "lqr_design: sample_step must be > 0");
 
   const int n = ol.segment_count();
@@ -180,7 +213,7 @@ LqrDesign<S> lqr_design(const LinearisedSystem<S>& ol, const LqrWeights<S>& weig
   Mat<nx, nu> B;
   const auto gain_at = [&](int i, double t, const Matrix& P) -> Gain {
     ol.jacobians(i, t, A, B);
-    return -R.solve(B.transpose() * P);
+    return -R_inverse * (B.transpose() * P);
   };
 
   Matrix P = weights.Q_final;
@@ -198,7 +231,7 @@ LqrDesign<S> lqr_design(const LinearisedSystem<S>& ol, const LqrWeights<S>& weig
         ol.jacobians(i, t, A, B);
         Matrix D = A.transpose() * Pm + Pm * A + weights.Q;
         const Mat<nu, nx> BtP = B.transpose() * Pm;
-        D.noalias() -= BtP.transpose() * R.solve(BtP);
+        D.noalias() -= BtP.transpose() * (R_inverse * BtP);
         FlatMap(dydt.data()) = -0.5 * (D + D.transpose());
       };
       detail::Dopri5Settings settings;
@@ -245,17 +278,7 @@ LqrDesign<S> lqr_design(const LinearisedSystem<S>& ol, const LqrWeights<S>& weig
     // The cost-to-go jump through event i - 1 (at t* = tb, from segment i - 1 to i).
     const int e = i - 1;
     const double ts = ol.t_end(e);
-    std::vector<std::pair<Matrix, Mat<nx, nu>>> candidates;  // (G_z, G_v) of the gain or of each nominal piece
-    if (ol.conewise(e)) {
-      auto& cg = ol.conewise_gain(e);
-      cg.build_all();
-      for (const auto* piece : cg.pieces())
-        if (piece->nominal_outcome) candidates.emplace_back(piece->G_z, piece->G_v);
-      SALTUS_CHECK_NUMERICS(!candidates.empty(), "lqr_design: every piece of the simultaneous event at t = ", ts,
-                            " has an outcome other than the nominal one");
-    } else {
-      candidates.emplace_back(ol.gains()[e].G_z, ol.gains()[e].G_v);
-    }
+    const auto candidates = detail::nominal_jump_gains(ol, e, "lqr_design");  // (G_z, G_v) per nominal piece
     const Matrix P_plus = P;
     double worst = -std::numeric_limits<double>::infinity();
     Matrix P_minus = Matrix::Zero();
@@ -277,7 +300,7 @@ LqrDesign<S> lqr_design(const LinearisedSystem<S>& ol, const LqrWeights<S>& weig
                                 " fixed-point iterations (relative change ", change, ")");
         }
       }
-      const double lmax = nx > 0 ? Eigen::SelfAdjointEigenSolver<Matrix>(Pm).eigenvalues().maxCoeff() : 0.0;
+      const double lmax = nx > 0 ? detail::symmetric_eigenvalues(Pm).maxCoeff() : 0.0;
       if (lmax > worst) {
         worst = lmax;
         P_minus = Pm;
@@ -448,13 +471,10 @@ auto ClosedLoopLinearisation<S>::jump(int i) const -> Matrix {
 template <Scene S>
 auto ClosedLoopLinearisation<S>::jump_pieces(int i) const -> std::vector<Matrix> {
   if (!open_loop_.conewise(i)) return {jump(i)};
-  auto& cg = open_loop_.conewise_gain(i);
-  cg.build_all();
   std::vector<Matrix> out;
-  for (const auto* piece : cg.pieces()) {
-    if (!piece->nominal_outcome) continue;
-    Matrix J = piece->G_z;
-    if constexpr (nu > 0) J.noalias() += piece->G_v * gains_(i, open_loop_.t_end(i));
+  for (const auto& [Gz, Gv] : detail::nominal_jump_gains(open_loop_, i, "ClosedLoopLinearisation::jump_pieces")) {
+    Matrix J = Gz;
+    if constexpr (nu > 0) J.noalias() += Gv * gains_(i, open_loop_.t_end(i));
     out.push_back(J);
   }
   return out;
@@ -558,13 +578,11 @@ StabilityReport check_stability(const ClosedLoopLinearisation<S>& cl, const Stab
   std::vector<Matrix> finals;  // Phi_s(T, t0) per enumerated sequence
   if (sequences <= options.max_sequences) {
     r.sequences = sequences;
-    std::vector<int> choice(L, 0);
+    std::vector<std::size_t> radices(L);
+    for (int e = 0; e < L; ++e) radices[e] = jumps[e].size();
+    std::vector<int> choice;
     for (long s = 0; s < sequences; ++s) {
-      long rest = s;
-      for (int e = 0; e < L; ++e) {
-        choice[e] = static_cast<int>(rest % static_cast<long>(jumps[e].size()));
-        rest /= static_cast<long>(jumps[e].size());
-      }
+      detail::piece_sequence(s, radices, choice);
       Matrix Psi = Matrix::Identity();
       for (int i = 0; i <= L; ++i) {
         for (std::size_t k = 0; k < samples[i].size(); ++k) {
@@ -607,8 +625,7 @@ StabilityReport check_stability(const ClosedLoopLinearisation<S>& cl, const Stab
   for (const Matrix& F : finals) {
     using Wide = Eigen::Matrix<double, nx, Eigen::Dynamic, 0, nx, nx>;
     const Wide P = C * F * N;
-    const Eigen::JacobiSVD<Wide> svd(P, Eigen::ComputeFullV);
-    const State v = N * svd.matrixV().col(0);
+    const State v = N * detail::top_right_singular_vector(P);
     candidates.push_back(v);
     candidates.push_back(-v);
   }
@@ -685,26 +702,24 @@ PeriodicStabilityReport check_periodic_stability(const ClosedLoopLinearisation<S
   r.period = period;
   r.sequences = sequences;
   std::vector<Matrix> M(sequences);
-  std::vector<int> choice(L, 0);
+  std::vector<std::size_t> radices(L);
+  for (int e = 0; e < L; ++e) radices[e] = jumps[e].size();
+  std::vector<int> choice;
   for (long s = 0; s < sequences; ++s) {
-    long rest = s;
+    detail::piece_sequence(s, radices, choice);
     Matrix Psi = Matrix::Identity();
     for (int i = 0; i <= L; ++i) {
       Psi = (flows[i] * Psi).eval();
-      if (i < L) {
-        choice[i] = static_cast<int>(rest % static_cast<long>(jumps[i].size()));
-        rest /= static_cast<long>(jumps[i].size());
-        Psi = (jumps[i][choice[i]] * Psi).eval();
-      }
+      if (i < L) Psi = (jumps[i][choice[i]] * Psi).eval();
     }
     M[s] = Psi;
   }
   const auto rho = [](const Matrix& A) {
     if constexpr (nx == 0) return 0.0;
-    return Eigen::EigenSolver<Matrix>(A, false).eigenvalues().cwiseAbs().maxCoeff();
+    return detail::eigenvalues(A).cwiseAbs().maxCoeff();
   };
   if (sequences == 1) {
-    Eigen::VectorXd moduli = Eigen::EigenSolver<Matrix>(M[0], false).eigenvalues().cwiseAbs();
+    Eigen::VectorXd moduli = detail::eigenvalues(M[0]).cwiseAbs();
     std::sort(moduli.data(), moduli.data() + moduli.size(), std::greater<double>());
     r.eigenvalue_moduli.assign(moduli.data(), moduli.data() + moduli.size());
     r.spectral_radius_upper = r.spectral_radius_lower = moduli.size() ? moduli(0) : 0.0;
@@ -717,13 +732,12 @@ PeriodicStabilityReport check_periodic_stability(const ClosedLoopLinearisation<S
       for (int j = 0; j < k && count <= options.max_sequences; ++j) count *= sequences;
       if (count > options.max_sequences) break;
       double worst = 0.0;
+      const std::vector<std::size_t> words(k, static_cast<std::size_t>(sequences));  // products of k period maps
+      std::vector<int> word;
       for (long p = 0; p < count; ++p) {
-        long rest = p;
+        detail::piece_sequence(p, words, word);
         Matrix prod = Matrix::Identity();
-        for (int j = 0; j < k; ++j) {
-          prod = (M[rest % sequences] * prod).eval();
-          rest /= sequences;
-        }
+        for (int j = 0; j < k; ++j) prod = (M[word[j]] * prod).eval();
         worst = std::max(worst, std::pow(norm(prod), 1.0 / k));
       }
       if (worst < r.spectral_radius_upper) {
@@ -733,12 +747,13 @@ PeriodicStabilityReport check_periodic_stability(const ClosedLoopLinearisation<S
     }
     // Lower: sequences that repeat themselves along their own dominant eigenvector.
     for (long s = 0; s < sequences; ++s) {
-      Eigen::EigenSolver<Matrix> es(M[s], true);
+      Eigen::MatrixXcd vectors;
+      const Eigen::VectorXcd values = detail::eigenvalues(M[s], &vectors);
       int top = 0;
-      es.eigenvalues().cwiseAbs().maxCoeff(&top);
-      const auto lambda = es.eigenvalues()(top);
+      values.cwiseAbs().maxCoeff(&top);
+      const auto lambda = values(top);
       if (std::abs(lambda.imag()) > 1e-12 * std::abs(lambda) || lambda.real() <= 0) continue;
-      State z0 = es.eigenvectors().col(top).real();
+      State z0 = vectors.col(top).real();
       z0 /= z0.norm();
       State z = z0;
       try {

@@ -11,8 +11,15 @@
 #pragma once
 
 #include <algorithm>
-#include <boost/numeric/odeint.hpp>
-#include <boost/numeric/odeint/external/eigen/eigen.hpp>
+// Only the parts of Odeint used here (<boost/numeric/odeint.hpp> parses every stepper: 2.4 s more
+// per translation unit).
+#include <boost/numeric/odeint/algebra/algebra_dispatcher.hpp>  // before the Eigen dispatcher
+#include <boost/numeric/odeint/algebra/vector_space_algebra.hpp>
+#include <boost/numeric/odeint/external/eigen/eigen_algebra.hpp>
+#include <boost/numeric/odeint/external/eigen/eigen_algebra_dispatcher.hpp>
+#include <boost/numeric/odeint/external/eigen/eigen_resize.hpp>
+#include <boost/numeric/odeint/stepper/controlled_runge_kutta.hpp>
+#include <boost/numeric/odeint/stepper/runge_kutta_dopri5.hpp>
 #include <cmath>
 #include <saltus/hybrid/vocabulary/errors.hpp>
 

@@ -19,15 +19,32 @@
 //     located in [t_M, t_s]; if that maximum is below zero the contact never really left and it
 //     touches at t_M with zero normal velocity; without a maximum (approaching from the start)
 //     it touches at t_lo.
+//  4. any other guard (release, stop, slip onset: functions of the contact force or of the
+//     tangential velocity, with no cheap exact rate) dips below zero and back between check
+//     points. These guards depend on the input, which the integrator's error control does not
+//     see: at rest on a table the flow is constant and the steps grow past the time scale of
+//     the input, so a normal force that goes below zero and back within one step would be
+//     missed (a silently wrong trajectory: no release). The samples of the step tell where a
+//     minimum can hide: an interior check point lower than both neighbours (the minimum is
+//     within the two intervals around it), or a step end lower than its neighbour where the
+//     parabola through the three nearest check points has its vertex in the end interval. Where
+//     such a sampled minimum is within dip_reach times the local variation of the samples of
+//     zero, Brent's method locates the true minimum on that bracket; below
+//     -dip_relative * max |gamma_k| at the check points, the crossing is located between the
+//     bracket's left end and the minimum. A dip that no check point sees (narrower than the
+//     spacing of the check points) stays invisible: raise guard_samples or limit max_step.
 // Cases 2 and 3 make the step's post-condition an invariant: no open contact ends an accepted
 // step below -gap_tolerance unless it started the step lower still (the drift of a contact
 // released below the surface, which rises).
 #pragma once
 
+#include <boost/math/tools/minima.hpp>
 #include <boost/math/tools/roots.hpp>
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <string>
+#include <saltus/hybrid/vocabulary/errors.hpp>
 #include <saltus/hybrid/simulation/integrator.hpp>
 #include <saltus/hybrid/simulation/mode_system.hpp>
 
@@ -41,9 +58,22 @@ struct GuardScanSettings {
   /// m: a dip between check points fires only below -dip_depth (1e-3 gap_tolerance), so that a
   /// motion that grazes the surface (a minimum at zero up to round-off) is left unchanged.
   double dip_depth = 1e-12;
+  /// Case 4: a sampled minimum of a non-touchdown guard is searched when it is within dip_reach
+  /// times the variation of the samples around it of zero...
+  double dip_reach = 8.0;
+  /// ...and it fires when the minimum is below -dip_relative * max |gamma_k| at the check points
+  /// (a minimum at zero up to round-off is a grazing motion and fires nothing).
+  double dip_relative = 1e-10;
+
+  /// Most interior check points per step (the samples of a step live on the stack).
+  static constexpr int max_samples = 14;
 
   /// The settings of a backend's options and the simulator's tolerances.
+  /// @throws InvalidArgument if options.guard_samples is outside [0, max_samples].
   static GuardScanSettings of(const IntegratorOptions& options, double gap_tolerance, double simultaneity) {
+    if (options.guard_samples < 0 || options.guard_samples > max_samples)
+      throw InvalidArgument("IntegratorOptions::guard_samples = " + std::to_string(options.guard_samples) +
+                            " is outside [0, " + std::to_string(max_samples) + "]");
     return {options.guard_samples, gap_tolerance, simultaneity, options.root_tolerance, 1e-3 * gap_tolerance};
   }
 };
@@ -90,13 +120,36 @@ bool scan_step_for_events(ModeSystem<S>& sys, StateAt&& state_at, double ta, dou
     return root_between([&](double t) { return rate(k, t); }, t0, r0, t1, r1);
   };
 
-  double t_lo = ta;
-  Values g_lo = g_a, r_lo = r_a, g_s{}, r_s{};
-  const int samples = std::max(settings.samples, 0);
-  for (int s = 1; s <= samples + 1; ++s) {
-    const double ts = s == samples + 1 ? tb : ta + (tb - ta) * double(s) / (samples + 1);
-    state_at(ts, xs);
-    sys.guard_values(ts, xs, g_s, &r_s);
+  // All check points of the step first: case 4 looks at a check point's neighbours on both sides.
+  const int m = settings.samples + 1;  // check points after ta; t_0 = ta, t_m = tb
+  std::array<double, GuardScanSettings::max_samples + 2> tk;
+  std::array<Values, GuardScanSettings::max_samples + 2> gk, rk;
+  tk[0] = ta;
+  gk[0] = g_a;
+  rk[0] = r_a;
+  for (int s = 1; s <= m; ++s) {
+    tk[s] = s == m ? tb : ta + (tb - ta) * double(s) / m;
+    state_at(tk[s], xs);
+    sys.guard_values(tk[s], xs, gk[s], &rk[s]);
+  }
+  // Case 4 on the bracket [a, b] of guard k: the root, or NaN when the minimum is not below zero.
+  auto dip = [&](int k, double a, double ga, double b, double scale) {
+    const auto [t_min, g_min] =
+        boost::math::tools::brent_find_minima([&](double t) { return guard(k, t); }, a, b, 30);
+    if (!(g_min < -settings.dip_relative * scale)) return std::numeric_limits<double>::quiet_NaN();
+    return crossing(k, a, ga, t_min, g_min);
+  };
+  // Vertex of the parabola through (t0, g0), (t1, g1), (t2, g2), or NaN if it is not convex.
+  auto vertex = [](double t0, double g0, double t1, double g1, double t2, double g2) {
+    const double d01 = (g1 - g0) / (t1 - t0), d12 = (g2 - g1) / (t2 - t1), curvature = (d12 - d01) / (t2 - t0);
+    if (!(curvature > 0.0)) return std::numeric_limits<double>::quiet_NaN();
+    return 0.5 * (t0 + t1) - d01 / (2.0 * curvature);
+  };
+  constexpr double round_off = 64.0 * std::numeric_limits<double>::epsilon();
+
+  for (int s = 1; s <= m; ++s) {
+    const double t_lo = tk[s - 1], ts = tk[s];
+    const Values &g_lo = gk[s - 1], &r_lo = rk[s - 1], &g_s = gk[s], &r_s = rk[s];
     std::array<double, 2 * S::nc + 1> root;
     root.fill(std::numeric_limits<double>::quiet_NaN());
     bool any = false;
@@ -120,6 +173,28 @@ bool scan_step_for_events(ModeSystem<S>& sys, StateAt&& state_at, double ta, dou
         } else {
           root[k] = t_lo;
         }
+      } else if (!touchdown && m >= 2 && g_lo[k] >= 0.0 && g_s[k] >= 0.0) {
+        // Case 4, on the brackets that end at t_s (the earlier check points are clear of roots).
+        double scale = 0.0;
+        for (int j = 0; j <= m; ++j) scale = std::max(scale, std::abs(gk[j][k]));
+        const double noise = round_off * scale;
+        if (s >= 2 && g_lo[k] <= gk[s - 2][k] && g_lo[k] <= g_s[k]) {
+          // t_lo is a sampled minimum: the true one is in [t_{s-2}, t_s].
+          const double variation = std::max(gk[s - 2][k], g_s[k]) - g_lo[k];
+          if (variation > noise && g_lo[k] <= settings.dip_reach * variation)
+            root[k] = dip(k, tk[s - 2], gk[s - 2][k], ts, scale);
+        }
+        const bool first = s == 1 && g_lo[k] < g_s[k], last = s == m && g_s[k] < g_lo[k];
+        if (!std::isfinite(root[k]) && (first || last)) {
+          // A step end is the sampled minimum: search the end interval if the parabola through
+          // the three nearest check points has its vertex there.
+          const int j0 = first ? 0 : m - 2;
+          const double tv = vertex(tk[j0], gk[j0][k], tk[j0 + 1], gk[j0 + 1][k], tk[j0 + 2], gk[j0 + 2][k]);
+          const double g_end = first ? g_lo[k] : g_s[k];
+          const double variation = std::abs(g_s[k] - g_lo[k]);
+          if (tv > t_lo && tv < ts && variation > noise && g_end <= settings.dip_reach * variation)
+            root[k] = dip(k, t_lo, g_lo[k], ts, scale);
+        }
       }
       any = any || std::isfinite(root[k]);
     }
@@ -132,12 +207,9 @@ bool scan_step_for_events(ModeSystem<S>& sys, StateAt&& state_at, double ta, dou
         end.fired[k] = std::isfinite(root[k]) && std::abs(root[k] - first) <= settings.simultaneity;
       return true;
     }
-    t_lo = ts;
-    g_lo = g_s;
-    r_lo = r_s;
   }
-  g_a = g_lo;
-  r_a = r_lo;
+  g_a = gk[m];
+  r_a = rk[m];
   return false;
 }
 
