@@ -285,7 +285,7 @@ TYPED_TEST_P(SceneBattery, ContactLawsAndEnergyHoldOverRandomImpacts) {
     ImpactSolver<S> solver(scene);
     std::mt19937 rng(12345);
     double worst_signorini = 0, worst_coulomb = 0, worst_gain = -1;
-    for (int trial = 0; trial < 10000; ++trial) {
+    for (int trial = 0; trial < 10000 / sanitizer_slowdown_divisor; ++trial) {
       const Vec<2 * S::nq> x = scenes::random_pre_impact_state(scene, rng);
       const auto& r = solver.solve(x);
       singular += r.singular_delassus;
@@ -315,7 +315,7 @@ TYPED_TEST_P(SceneBattery, ContactLawsAndEnergyHoldOverRandomImpacts) {
   check(this->scene, "scene's e_n", singular, 1e-12);
   ::testing::Test::RecordProperty("singular_cases", singular);
   if constexpr (std::is_same_v<S, scenes::PlankBox> || std::is_same_v<S, scenes::SpatialBox>) {
-    EXPECT_GT(singular, 500) << "the redundant (flat) cases must be exercised";
+    EXPECT_GT(singular, 500 / sanitizer_slowdown_divisor) << "the redundant (flat) cases must be exercised";
   }
   for (const double e : {0.5, 1.0}) {
     auto p = this->scene.parameters();
