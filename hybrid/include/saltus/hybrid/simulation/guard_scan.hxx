@@ -178,8 +178,10 @@ bool scan_step_for_events(ModeSystem<S>& sys, StateAt&& state_at, double ta, dou
         double scale = 0.0;
         for (int j = 0; j <= m; ++j) scale = std::max(scale, std::abs(gk[j][k]));
         const double noise = round_off * scale;
-        if (s >= 2 && g_lo[k] <= gk[s - 2][k] && g_lo[k] <= g_s[k]) {
-          // t_lo is a sampled minimum: the true one is in [t_{s-2}, t_s].
+        if (s >= 2 && gk[s - 2][k] >= 0.0 && g_lo[k] <= gk[s - 2][k] && g_lo[k] <= g_s[k]) {
+          // t_lo is a sampled minimum: the true one is in [t_{s-2}, t_s] (its left end >= 0, so
+          // that the crossing is bracketed: a guard that starts the step at round-off below zero
+          // is not searched from there).
           const double variation = std::max(gk[s - 2][k], g_s[k]) - g_lo[k];
           if (variation > noise && g_lo[k] <= settings.dip_reach * variation)
             root[k] = dip(k, tk[s - 2], gk[s - 2][k], ts, scale);
