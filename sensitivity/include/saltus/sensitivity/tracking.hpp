@@ -313,7 +313,7 @@ const char* to_string(StabilityVerdict v);
 struct StabilityReport {
   StabilityVerdict verdict = StabilityVerdict::Undecided;
   double t0 = 0.0, t_final = 0.0;
-  double upper_bound = 0.0;  ///< of a(T) = |z(T)|_W / |z(t0)|_W over first-order deviations
+  double upper_bound = 0.0;  ///< of a(T) = |z(T)|_Wout / |z(t0)|_W over first-order deviations (Wout = W unless output_weight is set)
   double lower_bound = 0.0;  ///< realised by the conewise map (equal to upper without simultaneous events)
   double upper_rate = 0.0, lower_rate = 0.0;  ///< log(bound) / (T - t0), 1/s
   double peak_upper = 0.0, peak_lower = 0.0;  ///< sup over the sampled t of a(t): bounds
