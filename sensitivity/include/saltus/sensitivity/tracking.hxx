@@ -472,9 +472,10 @@ template <Scene S>
 auto ClosedLoopLinearisation<S>::jump_pieces(int i) const -> std::vector<Matrix> {
   if (!open_loop_.conewise(i)) return {jump(i)};
   std::vector<Matrix> out;
+  const Mat<nu, nx> K = gains_(i, open_loop_.t_end(i));  // the ante-event gain, the same for every piece
   for (const auto& [Gz, Gv] : detail::nominal_jump_gains(open_loop_, i, "ClosedLoopLinearisation::jump_pieces")) {
     Matrix J = Gz;
-    if constexpr (nu > 0) J.noalias() += Gv * gains_(i, open_loop_.t_end(i));
+    if constexpr (nu > 0) J.noalias() += Gv * K;
     out.push_back(J);
   }
   return out;
