@@ -8,8 +8,19 @@
 // normal force reaches zero and the foot lifts off (the state-input release guard).
 // The controller is a feedback law u(t, x, mode); the simulator evaluates it inside the flow, and
 // the gains and the linearisation are closed-loop: d u / dx enters them (jump_gain.hpp).
+//
+// `hopper --json` instead solves the flagship OCP, the hopper over three holes (time-freezing
+// paper Section 6; scenes/hopper_holes.hpp), with the paper's discretisation and homotopy from
+// the paper's initialisation (the start state at every node, zero torques), and prints
+// {"converged", "complementarity", "max_path_violation", "worst_path_constraint", "target_error",
+// "objective", "homotopy_steps", "ipopt_iterations", "solve_seconds", "steps": [...], "events":
+// [...], "resim_max_error"}; progress lines (one per homotopy step) on stderr. Exit status 0 only
+// when it converged. The re-simulation needs a converged solution (resim_max_error null otherwise).
+#include <saltus/hybrid/reference/resimulation.hpp>
 #include <saltus/hybrid/vocabulary/trajectory_report.hpp>
+#include <saltus/timefreezing/simulation.hpp>
 #include "scenes/all_scenes.hpp"
+#include "scenes/hopper_holes.hpp"
 
 #include <saltus/sensitivity/sensitivity.hpp>
 
@@ -18,10 +29,64 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <fstream>
+#include <iostream>
 
-int main() {
+namespace {
+
+int optimal_hop_over_three_holes() {
   using namespace saltus;
+  using namespace saltus::timefreezing;
+  using Ocp = scenes::HopperOverThreeHoles;
+  MpccSolverOptions solver = Ocp::solver();
+  solver.progress = &std::cerr;
+  const Ocp ocp;
+  const auto r = solve_time_freezing_ocp(Ocp::system(), ocp, Ocp::q0(), Ocp::v0(), Ocp::grid(), solver);
+  const Ocp::Feasibility f = Ocp::feasibility(r.points);
+  nlohmann::ordered_json j;
+  j["converged"] = r.converged();
+  j["message"] = r.solution.message;
+  j["complementarity"] = r.solution.complementarity;
+  j["max_path_violation"] = f.path_violation;
+  j["worst_path_constraint"] = f.worst_row >= 0 ? nlohmann::ordered_json(Ocp::path_names[f.worst_row]) : nullptr;
+  j["target_error"] = f.target_error;
+  j["constraint_violation"] = r.solution.constraint_violation;
+  j["objective"] = r.solution.objective;
+  j["homotopy_steps"] = r.solution.steps.size();
+  j["ipopt_iterations"] = r.solution.ipopt_iterations;
+  j["solve_seconds"] = r.solution.seconds;
+  auto steps = nlohmann::ordered_json::array();
+  for (const MpccHomotopyStep& s : r.solution.steps)
+    steps.push_back({{"sigma", s.sigma}, {"polish", s.polish}, {"complementarity", s.complementarity},
+                     {"objective", s.objective}, {"constraint_violation", s.constraint_violation},
+                     {"ipopt_iterations", s.ipopt_iterations}, {"ipopt_status", s.ipopt_status}, {"seconds", s.seconds}});
+  j["steps"] = steps;
+  auto events = nlohmann::ordered_json::array();
+  for (const auto& p : r.frozen_phases) events.push_back({{"kind", "impact"}, {"t", p.time}});
+  for (const SwitchPoint& s : r.switch_points)
+    events.push_back({{"kind", s.switching_function % 3 == 0 ? "gap" : (s.switching_function % 3 == 1 ? "normal velocity" : "tangential velocity")},
+                      {"t", s.time}, {"alpha_before", s.alpha_before}, {"alpha_after", s.alpha_after}});
+  j["events"] = events;
+  if (r.converged()) {
+    try {
+      j["resim_max_error"] = polish(scenes::Hopper{}, r.reference).state_distance;
+    } catch (const Error& e) {
+      j["resim_max_error"] = nullptr;
+      j["resim_failure"] = e.what();
+    }
+  } else {
+    j["resim_max_error"] = nullptr;  // an unconverged solution is not a motion to re-simulate
+  }
+  std::cout << j.dump(2) << "\n";
+  return r.converged() ? 0 : 1;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  using namespace saltus;
+  if (argc > 1 && std::strcmp(argv[1], "--json") == 0) return optimal_hop_over_three_holes();
   using H = scenes::Hopper;
   H hopper;  // masses, lengths and inertias: scenes/hopper.hpp
 

@@ -1,0 +1,176 @@
+// The flagship OCP of the time-freezing paper (Section 6): the one-legged hopper (scenes/hopper.hpp)
+// travels from rest at x = 0 to x = 3 in T = 2.5 s over three holes, minimising the integral of
+// u'u over physical time. Shared by examples/hopper.cpp (--json), tests/test_hopper_ocp.cpp and
+// bench/hopper_ocp.cpp.
+//
+// q = (x, z, phi_hip, phi_knee), u = (tau_hip, tau_knee) with |u_i| <= 60 N m; foot contact with
+// mu = 0.8, e_n = 0, auxiliary acceleration a_n = 200 (paper).
+// Start q0 = (0, 0.4, 0, 0) at rest: the leg hangs straight down and the foot touches the ground
+// (gap 0). Target q(T) = (3, 0.4, 0, 0), the velocity left free (the paper's terminal constraint;
+// a target at rest is an option, `terminal_at_rest`).
+//
+// Path constraints, at every stage point of every finite element (FesdMpcc):
+//   0  x        >= -0.05          (hip)
+//   1  foot_x   >= -0.05
+//   2  knee_x   >= -0.05
+//   3  0.2 <= z <= 0.55
+//   4  |phi_hip|  <= 3 pi / 8
+//   5  |phi_knee| <= pi / 2
+//   6  knee_z   >= 0.05
+//   7  -0.005 <= foot_z <= 0.2
+//   8..10  ((foot_x - x_c) / a)^2 + (foot_z / b)^2 >= 1,  x_c = 0.5, 1.5, 2.5,  a = 0.25, b = 0.1.
+// The holes' half-width: the paper's text calls a_k = 0.5 "the width" of a hole; read as the
+// semi-axis, holes at x_c = 0.5, 1.5, 2.5 would leave only the single points x = 0, 1, 2, 3 of
+// ground to stand on (the foot could never land with any slack), so a = 0.25 is the semi-axis and
+// 0.5 the full width: the ground in [-0.05, 0.25], [0.75, 1.25], [1.75, 2.25], [2.75, oo) remains.
+// `hole_level` beta in [0, 1] is the lower bound of the three ellipse rows: the excluded region is
+// the ellipse of semi-axes sqrt(beta) (a, b), from no hole at all (beta = 0: the rows always hold)
+// to the problem itself (beta = 1); a continuation on the holes moves beta.
+#pragma once
+
+#include "scenes/hopper.hpp"
+
+#include <saltus/timefreezing/fesd.hpp>
+#include <saltus/timefreezing/mpcc_solver.hpp>
+#include <saltus/timefreezing/time_freezing_system.hpp>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <numbers>
+
+namespace saltus::scenes {
+
+struct HopperOverThreeHoles {
+  static constexpr double horizon = 2.5;          ///< T [s]
+  static constexpr double torque_limit = 60.0;    ///< |u_i| [N m]
+  static constexpr double auxiliary_acceleration = 200.0;  ///< a_n of the time-freezing system
+  static constexpr std::array<double, 3> hole_centres{0.5, 1.5, 2.5};  ///< x_c [m]
+  static constexpr double hole_half_width = 0.25;  ///< a [m] (file comment)
+  static constexpr double hole_depth = 0.1;        ///< b [m]
+  static constexpr int path_constraint_count = 11;
+  static constexpr int terminal_constraint_count = 4;
+
+  Hopper hopper{};
+  double hole_level = 1.0;  ///< beta in [0, 1] (file comment); 1: the problem itself
+
+  static Vec<4> q0() { return Vec<4>(0.0, 0.4, 0.0, 0.0); }
+  static Vec<4> v0() { return Vec<4>::Zero(); }
+  static Vec<4> q_target() { return Vec<4>(3.0, 0.4, 0.0, 0.0); }
+
+  static timefreezing::TimeFreezingSystem<Hopper> system() { return {Hopper{}, auxiliary_acceleration}; }
+
+  template <class T>
+  T running_cost(const VecT<T, 8>&, const VecT<T, 2>& u) const {
+    return u.squaredNorm();
+  }
+
+  template <class T>
+  VecT<T, 11> path_constraints(const VecT<T, 8>& x, const VecT<T, 2>&) const {
+    const VecT<T, 4> q = x.template head<4>();
+    const VecT<T, 2> foot = hopper.foot<T>(q);
+    const VecT<T, 2> knee = hopper.knee<T>(q);
+    VecT<T, 11> c;
+    c[0] = q[0];
+    c[1] = foot[0];
+    c[2] = knee[0];
+    c[3] = q[1];
+    c[4] = q[2];
+    c[5] = q[3];
+    c[6] = knee[1];
+    c[7] = foot[1];
+    const double a = hole_half_width, b = hole_depth;
+    for (int k = 0; k < 3; ++k) {
+      const T dx = (foot[0] - hole_centres[k]) / a, dz = foot[1] / b;
+      c[8 + k] = dx * dx + dz * dz;
+    }
+    return c;
+  }
+  Vec<11> path_lower() const {
+    const double pi = std::numbers::pi;
+    Vec<11> l;
+    l << -0.05, -0.05, -0.05, 0.2, -3 * pi / 8, -pi / 2, 0.05, -0.005, hole_level, hole_level, hole_level;
+    return l;
+  }
+  Vec<11> path_upper() const {
+    const double pi = std::numbers::pi, inf = std::numeric_limits<double>::infinity();
+    Vec<11> u;
+    u << inf, inf, inf, 0.55, 3 * pi / 8, pi / 2, inf, 0.2, inf, inf, inf;
+    return u;
+  }
+
+  template <class T>
+  VecT<T, 4> terminal_constraints(const VecT<T, 8>& x, const T&) const {
+    return x.template head<4>();
+  }
+  Vec<4> terminal_lower() const { return q_target(); }
+  Vec<4> terminal_upper() const { return q_target(); }
+
+  /// The paper's discretisation (TF Section 6, NOSNOC's script: nosnoc_hopper_baseline.md section 4):
+  /// N = 20 control intervals, 3 finite elements each, Radau IIA with n_s stages, numerical horizon
+  /// T~ = T with the terminal clock constraint t(T~) = T, speed of time s in [1, 5] with
+  /// rho_s = 0.01, heuristic step equilibration rho_h = 1, |u_i| <= 60.
+  static timefreezing::FesdOptions grid(int control_intervals = 20, int finite_elements = 3, int stages = 2) {
+    timefreezing::FesdOptions o;
+    o.stages = stages;
+    o.control_intervals = control_intervals;
+    o.finite_elements = finite_elements;
+    o.horizon = horizon;
+    o.clock = timefreezing::ClockConstraint::Terminal;
+    o.physical_horizon = horizon;
+    o.speed_of_time_max = 5.0;
+    o.speed_of_time_weight = 0.01;
+    o.step_equilibration_weight = 1.0;
+    o.control_lower = Eigen::VectorXd::Constant(2, -torque_limit);
+    o.control_upper = Eigen::VectorXd::Constant(2, torque_limit);
+    return o;
+  }
+  /// The paper's homotopy: Scholtes, sigma_0 = 1, kappa = 0.1, 10 steps, at most 1500 Ipopt
+  /// iterations per step; Ipopt tol 1e-8 (1e-10 only adds iterations at mu = 1e-11 on these OCPs:
+  /// solve_time_freezing_ocp's docstring).
+  static timefreezing::MpccSolverOptions solver() {
+    timefreezing::MpccSolverOptions s;
+    s.relaxation = timefreezing::MpccSolverOptions::Relaxation::Scholtes;
+    s.sigma_0 = 1.0;
+    s.kappa = 0.1;
+    s.max_homotopy_steps = 10;
+    s.max_iter = 1500;
+    s.tol = 1e-8;
+    return s;
+  }
+
+  /// The largest violation of the path constraints (at the FULL holes, hole_level 1) over the
+  /// given stage points, and which row; and the target error max_i |q_i(T) - q_target,i|.
+  struct Feasibility {
+    double path_violation = 0.0;
+    int worst_row = -1;  ///< index into path_names, -1 when none is violated
+    double target_error = 0.0;
+  };
+  template <class Points>
+  static Feasibility feasibility(const Points& points) {
+    const HopperOverThreeHoles full;
+    const Vec<11> lo = full.path_lower(), hi = full.path_upper();
+    Feasibility f;
+    for (const auto& p : points) {
+      const Vec<11> c = full.path_constraints<double>(p.y.template head<8>(), p.u);
+      for (int i = 0; i < 11; ++i) {
+        const double v = std::max(lo[i] - c[i], c[i] - hi[i]);
+        if (v > f.path_violation) {
+          f.path_violation = v;
+          f.worst_row = i;
+        }
+      }
+    }
+    f.target_error = (points.back().y.template head<4>() - q_target()).cwiseAbs().maxCoeff();
+    return f;
+  }
+
+  /// Names of the path constraints, for reports.
+  static constexpr std::array<const char*, 11> path_names{
+      "hip x >= -0.05", "foot x >= -0.05", "knee x >= -0.05", "0.2 <= z <= 0.55", "|phi_hip| <= 3 pi/8",
+      "|phi_knee| <= pi/2", "knee z >= 0.05", "-0.005 <= foot z <= 0.2", "outside hole 1", "outside hole 2",
+      "outside hole 3"};
+};
+
+}  // namespace saltus::scenes
