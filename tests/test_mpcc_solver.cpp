@@ -365,6 +365,71 @@ TEST(MpccSolver, PenaltyReachesTheUniqueBStationaryPoint) {
   EXPECT_NE(progress.str().find("rho"), std::string::npos);
 }
 
+// ---- min (x - 2)^2 + y^2  s.t.  0 <= x _|_ y >= 0: solution (2, 0), where the objective pulls y
+// to the bound, so the Scholtes row x y <= sigma is INACTIVE (x y = 0 at every relaxed solution);
+// the smoothing equality x y = sigma holds the pair on its curve, y = sigma / x -> sigma / 2.
+class InactivePair : public Mpcc {
+ public:
+  explicit InactivePair(bool smoothable) { pairs_[0].smoothable = smoothable; }
+  int variable_count() const override { return 2; }
+  int constraint_count() const override { return 0; }
+  void bounds(Eigen::Ref<Eigen::VectorXd> xl, Eigen::Ref<Eigen::VectorXd> xu, Eigen::Ref<Eigen::VectorXd>,
+              Eigen::Ref<Eigen::VectorXd>) const override {
+    xl.setZero();
+    xu.setConstant(inf);
+  }
+  void initial_point(Eigen::Ref<Eigen::VectorXd> x) const override { x << 1.0, 1.0; }
+  double objective(const Eigen::Ref<const Eigen::VectorXd>& x) const override {
+    return (x[0] - 2.0) * (x[0] - 2.0) + x[1] * x[1];
+  }
+  void objective_gradient(const Eigen::Ref<const Eigen::VectorXd>& x, Eigen::Ref<Eigen::VectorXd> d) const override {
+    d << 2.0 * (x[0] - 2.0), 2.0 * x[1];
+  }
+  void constraints(const Eigen::Ref<const Eigen::VectorXd>&, Eigen::Ref<Eigen::VectorXd>) const override {}
+  const std::vector<SparseEntry>& jacobian_structure() const override { return jac_; }
+  void jacobian_values(const Eigen::Ref<const Eigen::VectorXd>&, Eigen::Ref<Eigen::VectorXd>) const override {}
+  const std::vector<SparseEntry>& hessian_structure() const override { return hess_; }
+  void hessian_values(const Eigen::Ref<const Eigen::VectorXd>&, double s, const Eigen::Ref<const Eigen::VectorXd>&,
+                      Eigen::Ref<Eigen::VectorXd> v) const override {
+    v.setConstant(2.0 * s);
+  }
+  const std::vector<ComplementarityPair>& complementarity_pairs() const override { return pairs_; }
+
+ private:
+  std::vector<SparseEntry> jac_;
+  std::vector<SparseEntry> hess_{{0, 0}, {1, 1}};
+  std::vector<ComplementarityPair> pairs_{{variable(0), variable(1), "x _|_ y"}};
+};
+
+// Relaxation::Smoothing puts a smoothable pair on its curve G H = sigma_k at every step; an
+// unmarked pair (and every pair under Scholtes) keeps the inequality, inactive here.
+TEST(MpccSolver, SmoothingHoldsASmoothablePairOnItsCurve) {
+  MpccSolverOptions options;
+  options.polish = false;
+  options.relaxation = MpccSolverOptions::Relaxation::Smoothing;
+  const InactivePair marked(true), unmarked(false);
+  for (int steps = 1; steps <= 4; ++steps) {
+    options.max_homotopy_steps = steps;
+    const MpccSolution s = solve_mpcc(marked, options);
+    const double sigma = s.steps.back().sigma;
+    EXPECT_NEAR(s.x[0] * s.x[1], sigma, 1e-8 * sigma) << "step " << steps;
+    EXPECT_NEAR(s.x[1], sigma / s.x[0], 1e-8 * sigma);
+    // The inactive inequality leaves the product at Ipopt's tolerance level (about 1e-5 here).
+    if (steps <= 2) {
+      EXPECT_LT(solve_mpcc(unmarked, options).complementarity, 1e-2 * sigma) << "step " << steps;
+    }
+  }
+  options.max_homotopy_steps = 30;
+  const MpccSolution smoothed = solve_mpcc(marked, options);
+  ASSERT_TRUE(smoothed.converged) << smoothed.message;
+  EXPECT_NEAR(smoothed.x[0], 2.0, 1e-8);
+  EXPECT_GT(smoothed.x[1], 0.0);
+  EXPECT_LE(smoothed.complementarity, 1e-9);
+  options.relaxation = MpccSolverOptions::Relaxation::Scholtes;
+  options.max_homotopy_steps = 2;
+  EXPECT_LT(solve_mpcc(marked, options).complementarity, 1e-3);  // sigma = 0.1
+}
+
 TEST(MpccSolver, StartsFromAGivenPointAndMultipliers) {
   SmallMpcc problem;
   const MpccSolution first = solve_mpcc(problem);

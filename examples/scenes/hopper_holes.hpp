@@ -39,6 +39,7 @@
 #include <cmath>
 #include <limits>
 #include <numbers>
+#include <vector>
 
 namespace saltus::scenes {
 
@@ -110,7 +111,9 @@ struct HopperOverThreeHoles {
   /// The paper's discretisation (TF Section 6, NOSNOC's script: nosnoc_hopper_baseline.md section 4):
   /// N = 20 control intervals, 3 finite elements each, Radau IIA with n_s stages, numerical horizon
   /// T~ = T with the terminal clock constraint t(T~) = T, speed of time s in [1, 5] with
-  /// rho_s = 0.01, heuristic step equilibration rho_h = 1, |u_i| <= 60.
+  /// rho_s = 0.01, heuristic step equilibration rho_h = 1, |u_i| <= 60; one change:
+  /// cross-complementarity for the gap only (FesdOptions::velocity_switch_detection = false: the
+  /// foot's velocities change sign in flight, bench/README.md).
   static timefreezing::FesdOptions grid(int control_intervals = 20, int finite_elements = 3, int stages = 2) {
     timefreezing::FesdOptions o;
     o.stages = stages;
@@ -124,14 +127,30 @@ struct HopperOverThreeHoles {
     o.step_equilibration_weight = 1.0;
     o.control_lower = Eigen::VectorXd::Constant(2, -torque_limit);
     o.control_upper = Eigen::VectorXd::Constant(2, torque_limit);
+    o.velocity_switch_detection = false;
     return o;
   }
-  /// The paper's homotopy: Scholtes, sigma_0 = 1, kappa = 0.1, 10 steps, at most 1500 Ipopt
-  /// iterations per step; Ipopt tol 1e-8 (1e-10 only adds iterations at mu = 1e-11 on these OCPs:
+  /// The continuation on the holes that precedes the homotopy
+  /// (solve_time_freezing_ocp_by_continuation): hole levels 1e-4, 1e-3, 1e-2, 0.05, 0.2, 0.5, 1 at
+  /// the first relaxation parameter. Nothing in it hints at the contact timing: the start is still
+  /// the start state at every node with zero torques.
+  static std::vector<HopperOverThreeHoles> hole_continuation() {
+    std::vector<HopperOverThreeHoles> stages;
+    for (double level : {1e-4, 1e-3, 1e-2, 0.05, 0.2, 0.5, 1.0}) {
+      HopperOverThreeHoles o;
+      o.hole_level = level;
+      stages.push_back(o);
+    }
+    return stages;
+  }
+  /// The paper's homotopy (sigma_0 = 1, kappa = 0.1, 10 steps, at most 1500 Ipopt iterations per
+  /// step) with the smoothing relaxation (mpcc_solver.hpp: the stage-wise pairs as equalities
+  /// G H = sigma; the paper's Scholtes inequalities leave the step functions free in a band and
+  /// Ipopt wanders); Ipopt tol 1e-8 (1e-10 only adds iterations at mu = 1e-11 on these OCPs:
   /// solve_time_freezing_ocp's docstring).
   static timefreezing::MpccSolverOptions solver() {
     timefreezing::MpccSolverOptions s;
-    s.relaxation = timefreezing::MpccSolverOptions::Relaxation::Scholtes;
+    s.relaxation = timefreezing::MpccSolverOptions::Relaxation::Smoothing;
     s.sigma_0 = 1.0;
     s.kappa = 0.1;
     s.max_homotopy_steps = 10;

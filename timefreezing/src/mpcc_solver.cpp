@@ -208,7 +208,10 @@ MpccSolution solve_from(const Mpcc& problem, const MpccStart& start, bool with_m
   const Clock::time_point solve_start = Clock::now();
   const bool penalty = options.relaxation == MpccSolverOptions::Relaxation::Penalty;
   Ipopt::SmartPtr<detail::RelaxedNlp> nlp =
-      new detail::RelaxedNlp(problem, penalty ? detail::RelaxationKind::Penalty : detail::RelaxationKind::Scholtes);
+      new detail::RelaxedNlp(problem, penalty ? detail::RelaxationKind::Penalty
+                                      : (options.relaxation == MpccSolverOptions::Relaxation::Smoothing
+                                             ? detail::RelaxationKind::Smoothing
+                                             : detail::RelaxationKind::Scholtes));
   const Ipopt::SmartPtr<Ipopt::TNLP> tnlp = Ipopt::GetRawPtr(nlp);
   const int n = nlp->variable_count(), m = nlp->original_constraint_count(), m_total = nlp->total_constraint_count();
 

@@ -121,8 +121,8 @@ RelaxedNlp::RelaxedNlp(const Mpcc& problem, RelaxationKind kind) : problem_(prob
     }
     sign_row_of_side_[s] = it->second;
   }
-  const bool scholtes = kind_ == RelaxationKind::Scholtes;
-  m_total_ = m_ + n_sign_rows_ + (scholtes ? n_pairs_ : 0);
+  const bool relaxation_rows = kind_ != RelaxationKind::Penalty;
+  m_total_ = m_ + n_sign_rows_ + (relaxation_rows ? n_pairs_ : 0);
 
   // Jacobian: the problem's entries merged into unique positions (ordered by row, column).
   const std::vector<SparseEntry>& jac = problem.jacobian_structure();
@@ -148,7 +148,7 @@ RelaxedNlp::RelaxedNlp(const Mpcc& problem, RelaxationKind kind) : problem_(prob
   }
   relax_jac_offset_ = static_cast<int>(jac_row_.size());
   pair_jac_ptr_.assign(1, 0);
-  if (scholtes) {
+  if (relaxation_rows) {
     for (int j = 0; j < n_pairs_; ++j) {
       // The row G_j H_j has an entry at every variable of either side; a variable in both
       // sides gets one entry with both coefficients.
@@ -321,8 +321,10 @@ bool RelaxedNlp::get_bounds_info(Ipopt::Index, Ipopt::Number* x_l, Ipopt::Number
     g_l[r] = 0.0;
     g_u[r] = inf;
   }
+  const std::vector<ComplementarityPair>& pairs = problem_.complementarity_pairs();
   for (int r = m_ + n_sign_rows_; r < m_total_; ++r) {
-    g_l[r] = -inf;
+    const bool smoothed = kind_ == RelaxationKind::Smoothing && pairs[static_cast<std::size_t>(r - m_ - n_sign_rows_)].smoothable;
+    g_l[r] = smoothed ? sigma_ : -inf;
     g_u[r] = sigma_;
   }
   return true;
@@ -400,7 +402,7 @@ bool RelaxedNlp::eval_jac_g(Ipopt::Index, const Ipopt::Number* x, bool, Ipopt::I
     for (Eigen::Index e = 0; e < jac_buffer_.size(); ++e) values[jac_map_[e]] += jac_buffer_[e];
   }
   std::copy(sign_jac_value_.begin(), sign_jac_value_.end(), values + sign_jac_offset_);
-  if (kind_ == RelaxationKind::Scholtes) {
+  if (kind_ != RelaxationKind::Penalty) {
     for (int j = 0; j < n_pairs_; ++j) {
       const double gv = side_value(2 * j, x), hv = side_value(2 * j + 1, x);
       for (int t = pair_jac_ptr_[j]; t < pair_jac_ptr_[j + 1]; ++t)
@@ -432,7 +434,7 @@ bool RelaxedNlp::eval_h(Ipopt::Index, const Ipopt::Number* x, bool, Ipopt::Numbe
     for (Eigen::Index e = 0; e < hess_buffer_.size(); ++e) values[hess_map_[e]] += hess_buffer_[e];
   }
   for (int j = 0; j < n_pairs_; ++j) {
-    const double weight = (kind_ == RelaxationKind::Scholtes)
+    const double weight = (kind_ != RelaxationKind::Penalty)
                               ? (lambda != nullptr ? lambda[m_ + n_sign_rows_ + j] : 0.0)
                               : obj_factor / sigma_;
     for (int t = pair_hess_ptr_[j]; t < pair_hess_ptr_[j + 1]; ++t)

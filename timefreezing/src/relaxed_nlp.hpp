@@ -13,7 +13,7 @@
 
 namespace saltus::timefreezing::detail {
 
-enum class RelaxationKind { Scholtes, Penalty };
+enum class RelaxationKind { Scholtes, Smoothing, Penalty };
 
 /// The primal-dual point Ipopt hands to finalize_solution, copied into buffers sized once (by
 /// resize), so that storing it allocates nothing. Shared by RelaxedNlp and BranchNlp.
@@ -46,7 +46,8 @@ double interval_slack(double magnitude);
 ///                                to rounding; e.g. a single variable with lower bound >= 0, or
 ///                                FESD's sums of step functions alpha in [0, 1] and
 ///                                n_s - sum alpha), and one row per distinct expression,
-///   rows [m + n_sign, m_total)   G_j H_j <= sigma (Scholtes only), one per pair.
+///   rows [m + n_sign, m_total)   G_j H_j <= sigma (Scholtes; Smoothing: = sigma for the pairs marked
+///                                smoothable), one per pair; none under Penalty.
 /// Structures are merged once, in the constructor: the problem's Jacobian and Hessian entries
 /// may repeat (mpcc.hpp), and a pair's Hessian a_G a_H' + a_H a_G' lands on entries of f and g
 /// too. Ipopt 3.11's triplet matrices add repeated entries (IpGenTMatrix.hpp: "If nonzero
@@ -72,7 +73,7 @@ class RelaxedNlp : public Ipopt::TNLP {
   /// The weight of pair j's product in the Lagrangian at a solution with multipliers lambda (size
   /// m_total) of this NLP at `sigma`: Scholtes: the relaxation row's multiplier; Penalty: rho.
   double pair_weight(const Eigen::VectorXd& lambda, int j, double sigma) const {
-    return kind_ == RelaxationKind::Scholtes ? lambda[m_ + n_sign_rows_ + j] : 1.0 / sigma;
+    return kind_ != RelaxationKind::Penalty ? lambda[m_ + n_sign_rows_ + j] : 1.0 / sigma;
   }
   /// The branch of every pair for a polish step at x: zero_side[j] = 0 sets G_j = 0, 1 sets
   /// H_j = 0: the side with the smaller |side(x)| / ||a_side||_2 (the Euclidean distance from x

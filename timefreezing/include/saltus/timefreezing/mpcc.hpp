@@ -54,6 +54,15 @@ struct ComplementarityPair {
   AffineExpression left;
   AffineExpression right;
   std::string name;
+  /// The equality G H = sigma is a well-posed smoothing of this pair: under the solver's
+  /// Relaxation::Smoothing its relaxed row is G H = sigma instead of G H <= sigma. Set it where the
+  /// equalities determine the sides given the rest of the problem: a stage's step function alpha
+  /// and its multipliers (c = lambda_p - lambda_n given, lambda_n alpha = sigma and
+  /// lambda_p (1 - alpha) = sigma have exactly one solution with alpha in (0, 1), a smooth sigmoid
+  /// alpha(c)); never on pairs whose equalities would over-determine the sides (FESD's
+  /// cross-complementarity: one element's sum of step functions against several points'
+  /// multipliers).
+  bool smoothable = false;
 };
 
 /// An MPCC with exact first and second derivatives (sizes: n variables, m constraints).

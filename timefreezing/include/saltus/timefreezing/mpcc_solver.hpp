@@ -6,6 +6,16 @@
 //   Scholtes (inequality form; NOSNOC's SCHOLTES_INEQ): step k solves
 //       min f(x)   s.t.  g_lower <= g(x) <= g_upper,  x_lower <= x <= x_upper,
 //                        G_j(x) >= 0,  H_j(x) >= 0,  G_j(x) H_j(x) <= sigma_k       (all pairs j)
+//   Smoothing: as Scholtes, but the pairs marked `smoothable` (mpcc.hpp) get the EQUALITY
+//       G_j(x) H_j(x) = sigma_k (Scholtes' equality form, NOSNOC's SCHOLTES_EQ, restricted to the
+//       pairs where it is well posed); the others keep G_j H_j <= sigma_k. Why: under the
+//       inequality a relaxed FESD time-freezing NLP leaves every step function free in a band
+//       (alpha in [0, 1] wherever |c| < sigma / lambda), a continuum of equally good solutions that
+//       Ipopt wanders along (reduced Hessian singular, steps of norm 1-8 that change the objective
+//       by 1e-6): the hopper standing still took 1465 iterations at sigma = 1 and never converged
+//       from sigma = 0.1 on; with the equality each stage's alpha is a smooth sigmoid of its
+//       switching function, and the same problem took 140, 23, 56, 56, 13, 17 iterations for
+//       sigma = 1 .. 1e-5 (bench/README.md, "Hopper over three holes").
 //   Penalty (elastic): step k solves
 //       min f(x) + rho_k sum_j G_j(x) H_j(x)   s.t. the same, without the rows G_j H_j <= sigma_k,
 //   with sigma_{k+1} = kappa sigma_k, sigma_0 given, rho_k = 1 / sigma_k.
@@ -101,8 +111,9 @@ struct IpoptOption {
 /// where the brief and the evidence agree; deviations are explained per field.
 struct MpccSolverOptions {
   enum class Relaxation {
-    Scholtes,  ///< G_j H_j <= sigma_k as constraint rows (the most robust in NOSBENCH-S)
-    Penalty    ///< rho_k sum_j G_j H_j in the objective, rho_k = 1 / sigma_k
+    Scholtes,   ///< G_j H_j <= sigma_k as constraint rows (the most robust in NOSBENCH-S)
+    Smoothing,  ///< G_j H_j = sigma_k for the smoothable pairs, <= sigma_k for the others (top of file)
+    Penalty     ///< rho_k sum_j G_j H_j in the objective, rho_k = 1 / sigma_k
   };
   Relaxation relaxation = Relaxation::Scholtes;
   /// First relaxation parameter (Penalty: rho_0 = 1 / sigma_0). NOSBENCH 5.4: sigma_0 in [0.1, 10];

@@ -14,6 +14,7 @@
 #include <limits>
 #include <string>
 #include <vector>
+#include <utility>
 
 namespace saltus::timefreezing {
 
@@ -264,8 +265,27 @@ struct TimeFreezingOcpResult {
   std::vector<FrozenPhase<nx>> frozen_phases;  ///< the impacts
   std::vector<SwitchPoint> switch_points;      ///< touchdowns, lift-offs, slip-stick
   ImportedReference<S> reference;              ///< recovered in physical time (recover_reference)
+  /// solve_time_freezing_ocp_by_continuation: one relaxed NLP per continuation stage, in order
+  /// (their iterations and seconds are included in solution.ipopt_iterations and seconds).
+  std::vector<MpccHomotopyStep> continuation_steps;
   bool converged() const { return solution.converged; }
 };
+
+namespace detail {
+/// Solves `problem` from `start` and reads the discrete solution, its events and its reference.
+template <Scene S, class Problem>
+TimeFreezingOcpResult<S> solve_and_read(const Problem& problem, const MpccStart& start, const FesdOptions& fesd,
+                                        const MpccSolverOptions& solver) {
+  TimeFreezingOcpResult<S> out;
+  out.solution = solve_mpcc(problem, start, solver);
+  const auto pts = problem.points(out.solution.x);
+  out.points.assign(pts.begin(), pts.end());
+  read_events<FesdMpcc<S>::ny, FesdMpcc<S>::nsw, S::nu, 2 * S::nq>(out.points, fesd.stages, out.element_lengths,
+                                                                  out.frozen_phases, out.switch_points);
+  out.reference = recover_reference<S>(out.points, fesd.stages);
+  return out;
+}
+}  // namespace detail
 
 /// Solves the time-freezing OCP described by `ocp` (FesdMpcc's docstring lists what it may
 /// provide) from (q0, v0) with FESD, by the MPCC homotopy, and recovers its reference in physical
@@ -283,13 +303,70 @@ TimeFreezingOcpResult<S> solve_time_freezing_ocp(const TimeFreezingSystem<S>& sy
                                                  const Vec<S::nq>& v0, const FesdOptions& fesd,
                                                  const MpccSolverOptions& solver = {}) {
   const FesdMpcc<S, Ocp> problem(system, ocp, q0, v0, fesd);
-  TimeFreezingOcpResult<S> out;
-  out.solution = solve_mpcc(problem, solver);
-  const auto pts = problem.points(out.solution.x);
-  out.points.assign(pts.begin(), pts.end());
-  detail::read_events<FesdMpcc<S>::ny, FesdMpcc<S>::nsw, S::nu, 2 * S::nq>(out.points, fesd.stages, out.element_lengths,
-                                                                          out.frozen_phases, out.switch_points);
-  out.reference = recover_reference<S>(out.points, fesd.stages);
+  MpccStart start;
+  start.x.resize(problem.variable_count());
+  problem.initial_point(start.x);
+  return detail::solve_and_read<S>(problem, start, fesd, solver);
+}
+
+/// A continuation on the OCP's data before the homotopy: the relaxed NLP at the first relaxation
+/// parameter solver.sigma_0 is solved for each OCP of `continuation` in turn (one homotopy step
+/// each, no polish), the first from FesdMpcc's initial point and each later one from the previous
+/// one's primal-dual solution (the OCPs must give problems of the same size: the same grid, only
+/// bounds or data changed); then the whole homotopy runs on `ocp` from the last of them. E.g. the
+/// hopper over three holes (scenes/hopper_holes.hpp): the holes grow from nothing (hole level
+/// 1e-4) to their size while the relaxation is loose, so the iterates never face a full hole
+/// across the straight path from the start to the target (without it: Ipopt's
+/// Infeasible_Problem_Detected in the first step, the foot stopped at a hole's edge).
+/// A continuation stage that Ipopt does not solve (its status in continuation_steps) ends the
+/// continuation: the homotopy then starts from that stage's iterate (or from the last successful
+/// one), and the result says so in solution.message. Throws InvalidArgument as
+/// solve_time_freezing_ocp, and for an empty continuation.
+template <Scene S, class Ocp>
+TimeFreezingOcpResult<S> solve_time_freezing_ocp_by_continuation(const TimeFreezingSystem<S>& system,
+                                                                 const std::vector<Ocp>& continuation, const Ocp& ocp,
+                                                                 const Vec<S::nq>& q0, const Vec<S::nq>& v0,
+                                                                 const FesdOptions& fesd,
+                                                                 const MpccSolverOptions& solver = {}) {
+  SALTUS_REQUIRE(!continuation.empty(), "solve_time_freezing_ocp_by_continuation: the continuation is empty");
+  MpccSolverOptions one_step = solver;
+  one_step.max_homotopy_steps = 1;
+  one_step.polish = false;
+  MpccStart start;
+  std::vector<MpccHomotopyStep> steps;
+  int iterations = 0;
+  double seconds = 0.0;
+  std::string interrupted;
+  for (std::size_t c = 0; c < continuation.size(); ++c) {
+    const FesdMpcc<S, Ocp> stage(system, continuation[c], q0, v0, fesd);
+    if (c == 0) {
+      start.x.resize(stage.variable_count());
+      stage.initial_point(start.x);
+    }
+    SALTUS_REQUIRE(start.x.size() == stage.variable_count(),
+                   "solve_time_freezing_ocp_by_continuation: continuation stage ", c, " has ", stage.variable_count(),
+                   " variables, the first has ", start.x.size());
+    const MpccSolution r = solve_mpcc(stage, start, one_step);
+    for (MpccHomotopyStep st : r.steps) steps.push_back(st);
+    iterations += r.ipopt_iterations;
+    seconds += r.seconds;
+    if (solver.progress) *solver.progress << "continuation stage " << c + 1 << " of " << continuation.size() << " done\n";
+    start.x = r.x;
+    start.constraint_multipliers = r.constraint_multipliers;
+    start.bound_multipliers_lower = r.bound_multipliers_lower;
+    start.bound_multipliers_upper = r.bound_multipliers_upper;
+    if (r.steps.empty() || !r.steps.back().ipopt_succeeded) {
+      interrupted = "continuation stopped at stage " + std::to_string(c + 1) + " of " + std::to_string(continuation.size()) +
+                    " (" + (r.steps.empty() ? std::string("no solve") : r.steps.back().ipopt_status) + "); ";
+      break;
+    }
+  }
+  const FesdMpcc<S, Ocp> problem(system, ocp, q0, v0, fesd);
+  TimeFreezingOcpResult<S> out = detail::solve_and_read<S>(problem, start, fesd, solver);
+  out.continuation_steps = std::move(steps);
+  out.solution.ipopt_iterations += iterations;
+  out.solution.seconds += seconds;
+  out.solution.message = interrupted + out.solution.message;
   return out;
 }
 
