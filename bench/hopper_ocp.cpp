@@ -4,11 +4,12 @@
 //   hopper_ocp [--json] [--only NAME]
 //
 // Every variant starts from the paper's initialisation (the start state at every stage point,
-// zero torques; FesdMpcc::initial_point) and runs the homotopy of solve_mpcc; one progress line
-// per homotopy step on stderr. Columns, per variant:
+// zero torques; FesdMpcc::initial_point), on the paper's grid (N = 20, 3 elements, n_s = 2), with
+// sigma_0 = 1, kappa = 0.1, 10 steps, 1500 Ipopt iterations per step, Ipopt tol 1e-8; one
+// progress line per Ipopt solve on stderr. Columns, per variant:
 //   conv          the homotopy converged (complementarity <= 1e-9 at a successful step)
-//   steps         Ipopt solves run (homotopy steps, retries and polish attempts)
-//   iters         total Ipopt iterations, and per solve
+//   steps         Ipopt solves run (continuation stages, homotopy steps, retries, polish attempts)
+//   iters         total Ipopt iterations (per solve in the JSON)
 //   compl         max_j |G_j H_j| at the returned point
 //   path viol     largest violation of the 11 path rows at every stage point, at the FULL holes
 //   target        max_i |q_i(T) - q_target,i|
@@ -37,26 +38,22 @@ using Ocp = scenes::HopperOverThreeHoles;
 struct Variant {
   const char* name;
   const char* what;
+  MpccSolverOptions::Relaxation relaxation = MpccSolverOptions::Relaxation::Smoothing;
+  bool velocity_switch_detection = false;
+  bool hole_continuation = true;
   int control_intervals = 20;
-  MpccSolverOptions::Relaxation relaxation = MpccSolverOptions::Relaxation::Scholtes;
-  double sigma_0 = 1.0;
-  double tol = 1e-8;
-  const char* mu_strategy = "adaptive";
-  double hole_level = 1.0;
 };
 
 std::vector<Variant> variants() {
   using R = MpccSolverOptions::Relaxation;
   return {
-      {"paper", "Scholtes sigma_0 = 1, kappa = 0.1, Ipopt tol 1e-8, N = 20 (Ocp::solver)"},
-      {"paper-tol-1e-10", "the same with Ipopt tol 1e-10", 20, R::Scholtes, 1.0, 1e-10},
-      {"penalty", "elastic: rho_k sum G H in the objective, rho_0 = 1", 20, R::Penalty},
-      {"monotone-mu", "Ipopt mu_strategy = monotone", 20, R::Scholtes, 1.0, 1e-8, "monotone"},
-      {"no-holes", "hole_level 0 (the holes' rows always hold): the start of a continuation on the holes", 20,
-       R::Scholtes, 1.0, 1e-8, "adaptive", 0.0},
-      {"no-holes-N10", "no holes, N = 10", 10, R::Scholtes, 1.0, 1e-8, "adaptive", 0.0},
-      {"no-holes-N10-sigma-0.1", "no holes, N = 10, sigma_0 = 0.1", 10, R::Scholtes, 0.1, 1e-8, "adaptive", 0.0},
-      {"no-holes-N10-sigma-0.01", "no holes, N = 10, sigma_0 = 0.01", 10, R::Scholtes, 0.01, 1e-8, "adaptive", 0.0},
+      {"default", "hopper --json: smoothing, cross-complementarity on the gap, continuation on the holes"},
+      {"paper", "the paper's formulation (NOSNOC): Scholtes, cross-complementarity on all, no continuation",
+       R::Scholtes, true, false},
+      {"no-continuation", "the default without the continuation on the holes", R::Smoothing, false, false},
+      {"scholtes", "the default with the Scholtes inequalities instead of the smoothing", R::Scholtes, false, true},
+      {"velocity-cross", "the default with cross-complementarity on the velocities too", R::Smoothing, true, true},
+      {"penalty", "the default with the penalty (elastic) homotopy", R::Penalty, false, true},
   };
 }
 
@@ -80,22 +77,24 @@ int main(int argc, char** argv) {
   for (const Variant& v : variants()) {
     if (!only.empty() && only != v.name) continue;
     std::fprintf(stderr, "== %s: %s\n", v.name, v.what);
-    Ocp ocp;
-    ocp.hole_level = v.hole_level;
+    const Ocp ocp;
     MpccSolverOptions s = Ocp::solver();
     s.relaxation = v.relaxation;
-    s.sigma_0 = v.sigma_0;
-    s.tol = v.tol;
-    s.mu_strategy = v.mu_strategy;
     s.progress = &std::cerr;
-    const auto r = solve_time_freezing_ocp(Ocp::system(), ocp, Ocp::q0(), Ocp::v0(), Ocp::grid(v.control_intervals), s);
+    FesdOptions grid = Ocp::grid(v.control_intervals);
+    grid.velocity_switch_detection = v.velocity_switch_detection;
+    const auto r = v.hole_continuation ? solve_time_freezing_ocp_by_continuation(Ocp::system(), Ocp::hole_continuation(),
+                                                                                 ocp, Ocp::q0(), Ocp::v0(), grid, s)
+                                       : solve_time_freezing_ocp(Ocp::system(), ocp, Ocp::q0(), Ocp::v0(), grid, s);
     const Ocp::Feasibility f = Ocp::feasibility(r.points);
     const std::string status = r.solution.steps.empty() ? "" : r.solution.steps.back().ipopt_status;
     std::vector<int> per_step;
+    for (const MpccHomotopyStep& st : r.continuation_steps) per_step.push_back(st.ipopt_iterations);
     for (const MpccHomotopyStep& st : r.solution.steps) per_step.push_back(st.ipopt_iterations);
+    const std::size_t solves = per_step.size();
     if (json)
       rows.push_back({{"variant", v.name}, {"what", v.what}, {"control_intervals", v.control_intervals},
-                      {"converged", r.converged()}, {"solves", r.solution.steps.size()},
+                      {"converged", r.converged()}, {"solves", solves},
                       {"ipopt_iterations", r.solution.ipopt_iterations}, {"iterations_per_solve", per_step},
                       {"complementarity", r.solution.complementarity}, {"max_path_violation", f.path_violation},
                       {"worst_path_constraint", f.worst_row >= 0 ? Ocp::path_names[f.worst_row] : ""},
@@ -103,7 +102,7 @@ int main(int argc, char** argv) {
                       {"message", r.solution.message}, {"seconds", r.solution.seconds}});
     else
       std::printf("%-24s %4s %5zu %6d %9.2e %9.2e %9.2e %11.4e %-28s %8.1f\n", v.name, r.converged() ? "yes" : "no",
-                  r.solution.steps.size(), r.solution.ipopt_iterations, r.solution.complementarity, f.path_violation,
+                  solves, r.solution.ipopt_iterations, r.solution.complementarity, f.path_violation,
                   f.target_error, r.solution.objective, status.c_str(), r.solution.seconds);
     std::fflush(stdout);
   }
