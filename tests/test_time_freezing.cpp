@@ -16,6 +16,7 @@
 
 #include <cmath>
 #include <iostream>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -456,6 +457,47 @@ TEST(TimeFreezingOcp, PointMassReachesTheTargetOnTheTable) {
   EXPECT_EQ(r.frozen_phases.size(), 1u);
   EXPECT_EQ(r.reference.event_times.size(), 1u);
   for (const MpccHomotopyStep& s : r.solution.steps) EXPECT_GT(s.seconds, 0.0);
+}
+
+/// The point-mass OCP with its target x as data (a continuation moves it).
+struct PointMassToAMovableTarget : scenes::PointMassToTheTarget {
+  double target_x = 3.0;
+  Vec<4> terminal_lower() const { return Vec<4>(target_x, 0, 0, 0); }
+  Vec<4> terminal_upper() const { return terminal_lower(); }
+};
+
+// A continuation on the OCP's data before the homotopy: the target moves 1 -> 2 -> 3 at the first
+// relaxation parameter, each NLP from the previous one's primal-dual solution; the homotopy on the
+// real target then converges there, and the result accounts for every Ipopt solve.
+TEST(TimeFreezingOcp, ContinuationOnTheTargetReachesIt) {
+  using Case = scenes::PointMassToTheTarget;
+  std::vector<PointMassToAMovableTarget> continuation(2);
+  continuation[0].target_x = 1.0;
+  continuation[1].target_x = 2.0;
+  const PointMassToAMovableTarget ocp;
+  std::ostringstream progress;
+  MpccSolverOptions solver = Case::solver();
+  solver.progress = &progress;
+  const auto r = solve_time_freezing_ocp_by_continuation(Case::system(), continuation, ocp, Case::q0(), Case::v0(),
+                                                         Case::grid(), solver);
+  ASSERT_TRUE(r.converged()) << r.solution.message;
+  EXPECT_LE(r.solution.complementarity, 1e-9);
+  EXPECT_NEAR(r.points.back().y[0], 3.0, 1e-6);
+  EXPECT_NEAR(r.points.back().y[2], 0.0, 1e-6);
+  ASSERT_EQ(r.continuation_steps.size(), 2u);
+  int iterations = 0;
+  for (const MpccHomotopyStep& s : r.continuation_steps) {
+    EXPECT_TRUE(s.ipopt_succeeded) << s.ipopt_status;
+    EXPECT_FALSE(s.polish);
+    EXPECT_DOUBLE_EQ(s.sigma, solver.sigma_0);
+    iterations += s.ipopt_iterations;
+  }
+  for (const MpccHomotopyStep& s : r.solution.steps) iterations += s.ipopt_iterations;
+  EXPECT_EQ(r.solution.ipopt_iterations, iterations);
+  EXPECT_NE(progress.str().find("continuation stage 2 of 2 done"), std::string::npos) << progress.str();
+  EXPECT_THROW(solve_time_freezing_ocp_by_continuation(Case::system(), std::vector<PointMassToAMovableTarget>{}, ocp,
+                                                       Case::q0(), Case::v0(), Case::grid(), solver),
+               InvalidArgument);
 }
 
 }  // namespace

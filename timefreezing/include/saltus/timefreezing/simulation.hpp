@@ -312,8 +312,9 @@ TimeFreezingOcpResult<S> solve_time_freezing_ocp(const TimeFreezingSystem<S>& sy
 /// A continuation on the OCP's data before the homotopy: the relaxed NLP at the first relaxation
 /// parameter solver.sigma_0 is solved for each OCP of `continuation` in turn (one homotopy step
 /// each, no polish), the first from FesdMpcc's initial point and each later one from the previous
-/// one's primal-dual solution (the OCPs must give problems of the same size: the same grid, only
-/// bounds or data changed); then the whole homotopy runs on `ocp` from the last of them. E.g. the
+/// one's primal-dual solution (the same Ocp type on the same grid: the problems have the same
+/// variables, only bounds or data differ); then the whole homotopy runs on `ocp` from the last of
+/// them. E.g. the
 /// hopper over three holes (scenes/hopper_holes.hpp): the holes grow from nothing (hole level
 /// 1e-4) to their size while the relaxation is loose, so the iterates never face a full hole
 /// across the straight path from the start to the target (without it: Ipopt's
@@ -343,9 +344,6 @@ TimeFreezingOcpResult<S> solve_time_freezing_ocp_by_continuation(const TimeFreez
       start.x.resize(stage.variable_count());
       stage.initial_point(start.x);
     }
-    SALTUS_REQUIRE(start.x.size() == stage.variable_count(),
-                   "solve_time_freezing_ocp_by_continuation: continuation stage ", c, " has ", stage.variable_count(),
-                   " variables, the first has ", start.x.size());
     const MpccSolution r = solve_mpcc(stage, start, one_step);
     for (MpccHomotopyStep st : r.steps) steps.push_back(st);
     iterations += r.ipopt_iterations;
