@@ -12,8 +12,8 @@
 //       inequality a relaxed FESD time-freezing NLP leaves every step function free in a band
 //       (alpha in [0, 1] wherever |c| < sigma / lambda), a continuum of equally good solutions that
 //       Ipopt wanders along (reduced Hessian singular, steps of norm 1-8 that change the objective
-//       by 1e-6): the hopper standing still took 1465 iterations at sigma = 1 and never converged
-//       from sigma = 0.1 on; with the equality each stage's alpha is a smooth sigmoid of its
+//       by 1e-6): the hopper standing still took 1465 iterations at sigma = 1 (to Ipopt's
+//       acceptable level only); with the equality each stage's alpha is a smooth sigmoid of its
 //       switching function, and the same problem took 140, 23, 56, 56, 13, 17 iterations for
 //       sigma = 1 .. 1e-5 (bench/README.md, "Hopper over three holes").
 //   Penalty (elastic): step k solves

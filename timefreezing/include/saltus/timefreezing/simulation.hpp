@@ -13,8 +13,8 @@
 #include <cmath>
 #include <limits>
 #include <string>
-#include <vector>
 #include <utility>
+#include <vector>
 
 namespace saltus::timefreezing {
 
@@ -314,10 +314,9 @@ TimeFreezingOcpResult<S> solve_time_freezing_ocp(const TimeFreezingSystem<S>& sy
 /// each, no polish), the first from FesdMpcc's initial point and each later one from the previous
 /// one's primal-dual solution (the same Ocp type on the same grid: the problems have the same
 /// variables, only bounds or data differ); then the whole homotopy runs on `ocp` from the last of
-/// them. E.g. the
-/// hopper over three holes (scenes/hopper_holes.hpp): the holes grow from nothing (hole level
-/// 1e-4) to their size while the relaxation is loose, so the iterates never face a full hole
-/// across the straight path from the start to the target (without it: Ipopt's
+/// them. E.g. the hopper over three holes (scenes/hopper_holes.hpp): the holes grow from nothing
+/// (hole level 1e-4) to their size while the relaxation is loose, so the iterates never face a
+/// full hole across the straight path from the start to the target (without it: Ipopt's
 /// Infeasible_Problem_Detected in the first step, the foot stopped at a hole's edge).
 /// A continuation stage that Ipopt does not solve (its status in continuation_steps) ends the
 /// continuation: the homotopy then starts from that stage's iterate (or from the last successful
