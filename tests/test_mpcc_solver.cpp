@@ -422,6 +422,12 @@ TEST(MpccSolver, SmoothingHoldsASmoothablePairOnItsCurve) {
   options.max_homotopy_steps = 30;
   const MpccSolution smoothed = solve_mpcc(marked, options);
   ASSERT_TRUE(smoothed.converged) << smoothed.message;
+  EXPECT_EQ(smoothed.smoothed_pairs, 1);
+  EXPECT_EQ(solve_mpcc(unmarked, options).smoothed_pairs, 0);
+  // sigma_k = 1, 0.1, ..., 1e-9 exactly (decades snapped): the residual IS sigma_k, so the 10th
+  // step meets the tolerance 1e-9 (a drifting product 1.0000000000000005e-9 would take an 11th).
+  EXPECT_EQ(smoothed.steps.size(), 10u);
+  EXPECT_EQ(smoothed.steps.back().sigma, 1e-9);
   EXPECT_NEAR(smoothed.x[0], 2.0, 1e-8);
   EXPECT_GT(smoothed.x[1], 0.0);
   EXPECT_LE(smoothed.complementarity, 1e-9);

@@ -79,7 +79,9 @@ struct FesdOptions {
   /// element, so every such change must sit on an element boundary: spurious switches that the
   /// grid cannot all host (the hopper OCP: after the homotopy the worst pair was J_n v's in a
   /// flight element, 0.67). Cost: the end of a frozen phase and slip-stick are not located by
-  /// the grid (an O(h) error there); touchdown and lift-off are (the gap's switches).
+  /// the grid (an O(h) error there); touchdown and lift-off are (the gap's switches). The
+  /// stage-wise pairs are the ones MpccSolverOptions::Relaxation::Smoothing smooths: with this
+  /// option true (and switch_detection true) Smoothing has nothing to smooth.
   bool velocity_switch_detection = true;
   double element_length_freedom = 1.0;  ///< gamma_h in [0, 1]: h in [(1-gamma_h) h0, (1+gamma_h) h0]
   double step_equilibration_weight = 1.0;  ///< rho_h of the heuristic penalty

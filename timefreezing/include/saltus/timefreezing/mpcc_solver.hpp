@@ -18,7 +18,9 @@
 //       sigma = 1 .. 1e-5 (bench/README.md, "Hopper over three holes").
 //   Penalty (elastic): step k solves
 //       min f(x) + rho_k sum_j G_j(x) H_j(x)   s.t. the same, without the rows G_j H_j <= sigma_k,
-//   with sigma_{k+1} = kappa sigma_k, sigma_0 given, rho_k = 1 / sigma_k.
+//   with sigma_{k+1} = kappa sigma_k, sigma_0 given, rho_k = 1 / sigma_k (a sigma_k within 1e-12
+//   relative of a power of ten is rounded to it, so that decades are exact: under the smoothing
+//   the residual is sigma_k itself).
 //
 // A side that is a single variable with a lower bound >= 0 needs no row for its sign (the bound
 // already says it); every other side gets the linear row side(x) >= 0 (identical sides share one
@@ -112,7 +114,12 @@ struct IpoptOption {
 struct MpccSolverOptions {
   enum class Relaxation {
     Scholtes,   ///< G_j H_j <= sigma_k as constraint rows (the most robust in NOSBENCH-S)
-    Smoothing,  ///< G_j H_j = sigma_k for the smoothable pairs, <= sigma_k for the others (top of file)
+    /// G_j H_j = sigma_k for the smoothable pairs, <= sigma_k for the others (top of file). Only
+    /// pairs the problem marks smoothable are smoothed: FesdMpcc marks its stage-wise pairs, which
+    /// exist for the velocities with velocity_switch_detection = false and for every switching
+    /// function with switch_detection = false; with FESD's defaults there are none and Smoothing
+    /// is Scholtes (MpccSolution::smoothed_pairs says how many were smoothed).
+    Smoothing,
     Penalty     ///< rho_k sum_j G_j H_j in the objective, rho_k = 1 / sigma_k
   };
   Relaxation relaxation = Relaxation::Scholtes;
@@ -134,8 +141,8 @@ struct MpccSolverOptions {
 
   // ---- Ipopt, per step
   /// Ipopt `tol` (> 0). For OCPs 1e-8 with the Penalty relaxation is much faster (point-mass
-  /// time-freezing OCP, N = 10: 1e-10 cycles at mu = 1e-11 for hundreds of iterations, 6368
-  /// iterations in all against 1976 with 1e-8 and 422 with 1e-8 + Penalty); the FESD simulations
+  /// time-freezing OCP, N = 10, Scholtes: 1e-10 cycles at mu = 1e-11 for hundreds of iterations,
+  /// 6368 iterations in all against 1976 with 1e-8; Penalty with 1e-8: 422); the FESD simulations
   /// need 1e-10 (with 1e-8 the guiding example's homotopy fails in one control interval), so the
   /// default stays 1e-10 (solve_time_freezing_ocp's docstring).
   double tol = 1e-10;
@@ -289,7 +296,9 @@ struct MpccSolution {
   int ipopt_iterations = 0;  ///< total over all steps and retries
   double seconds = 0.0;      ///< wall time of the whole solve
   std::vector<MpccHomotopyStep> steps;  ///< every Ipopt solve, in order
-  std::string worst_pair;  ///< name of the pair with the largest |G_j H_j| at x ("" without pairs)
+  std::string worst_pair;  ///< name of the pair with the largest |G_j H_j| at x ("" without pairs or when every product is 0)
+  /// Pairs held on G_j H_j = sigma (Relaxation::Smoothing and marked smoothable; 0 otherwise).
+  int smoothed_pairs = 0;
   bool polished = false;   ///< x is a polish's (branch NLP) solution
   /// Size of the relaxed NLP: rows m + sign_rows (+ one relaxation row per pair, Scholtes).
   int relaxed_rows = 0;

@@ -318,6 +318,10 @@ TimeFreezingOcpResult<S> solve_time_freezing_ocp(const TimeFreezingSystem<S>& sy
 /// (hole level 1e-4) to their size while the relaxation is loose, so the iterates never face a
 /// full hole across the straight path from the start to the target (without it: Ipopt's
 /// Infeasible_Problem_Detected in the first step, the foot stopped at a hole's edge).
+/// What can vary: the Ocp's own data (bounds of its path and terminal rows, targets, costs); the
+/// grid and the control bounds are FesdOptions, one for all stages. Each stage is solved at
+/// sigma_0 only (Penalty: rho_0). Its Ipopt solves are in continuation_steps, not in
+/// solution.steps, and counted in solution.ipopt_iterations and seconds.
 /// A continuation stage that Ipopt does not solve (its status in continuation_steps) ends the
 /// continuation: the homotopy then starts from that stage's iterate (or from the last successful
 /// one), and the result says so in solution.message. Throws InvalidArgument as
