@@ -7,6 +7,8 @@
 #include <saltus/timefreezing/fesd.hpp>
 #include <saltus/timefreezing/mpcc_solver.hpp>
 
+#include "mpcc_support.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -67,21 +69,7 @@ TEST(HopperOverThreeHoles, HoleLevelScalesTheExcludedEllipse) {
   }
 }
 
-/// A point of the problem inside its variable bounds, away from the initial guess.
-Eigen::VectorXd interior_point(const timefreezing::Mpcc& problem, unsigned seed) {
-  const int n = problem.variable_count(), m = problem.constraint_count();
-  Eigen::VectorXd x(n), xl(n), xu(n), gl(m), gu(m);
-  problem.initial_point(x);
-  problem.bounds(xl, xu, gl, gu);
-  std::srand(seed);
-  const Eigen::VectorXd r = Eigen::VectorXd::Random(n);
-  for (int i = 0; i < n; ++i) {
-    x[i] += 0.2 * r[i];
-    if (std::isfinite(xl[i]) && std::isfinite(xu[i])) x[i] = xl[i] + 0.5 * (1.0 + r[i]) * (xu[i] - xl[i]);
-    else if (std::isfinite(xl[i])) x[i] = std::max(x[i], xl[i] + 0.05);
-  }
-  return x;
-}
+using saltus::testing::interior_point;
 
 // Every term of the OCP (running cost gated by the clock, 11 path rows at every stage point with
 // the ellipses, the terminal rows, the clock, speed of time and step equilibration) on one control

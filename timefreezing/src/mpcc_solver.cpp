@@ -182,6 +182,15 @@ double snap_to_decade(double sigma) {
   return std::abs(sigma - decade) <= 1e-12 * decade ? decade : sigma;
 }
 
+detail::RelaxationKind relaxation_kind(MpccSolverOptions::Relaxation r) {
+  switch (r) {
+    case MpccSolverOptions::Relaxation::Smoothing: return detail::RelaxationKind::Smoothing;
+    case MpccSolverOptions::Relaxation::Penalty: return detail::RelaxationKind::Penalty;
+    case MpccSolverOptions::Relaxation::Scholtes: break;
+  }
+  return detail::RelaxationKind::Scholtes;
+}
+
 std::string format_step(const MpccHomotopyStep& s, bool penalty) {
   char line[320];
   std::snprintf(line, sizeof line,
@@ -218,10 +227,7 @@ MpccSolution solve_from(const Mpcc& problem, const MpccStart& start, bool with_m
   const Clock::time_point solve_start = Clock::now();
   const bool penalty = options.relaxation == MpccSolverOptions::Relaxation::Penalty;
   Ipopt::SmartPtr<detail::RelaxedNlp> nlp =
-      new detail::RelaxedNlp(problem, penalty ? detail::RelaxationKind::Penalty
-                                      : (options.relaxation == MpccSolverOptions::Relaxation::Smoothing
-                                             ? detail::RelaxationKind::Smoothing
-                                             : detail::RelaxationKind::Scholtes));
+      new detail::RelaxedNlp(problem, relaxation_kind(options.relaxation));
   const Ipopt::SmartPtr<Ipopt::TNLP> tnlp = Ipopt::GetRawPtr(nlp);
   const int n = nlp->variable_count(), m = nlp->original_constraint_count(), m_total = nlp->total_constraint_count();
 
