@@ -1,7 +1,7 @@
 // Accuracy of the FESD discretisation of the time-freezing system (timefreezing/) against closed
 // forms, and the same Radau IIA scheme on a fixed grid, as the grid is refined.
 //
-//   fesd_accuracy [--json] [--budget SECONDS] [--scheme fesd|fixed] [--stages N]
+//   fesd_accuracy [--json] [--budget SECONDS] [--scheme fesd|fesd-exact|fixed] [--stages N]
 //
 // --scheme and --stages restrict the guiding example to one scheme or one n_s (e.g. to rerun a
 // dropped configuration with a larger --budget); the frictional landing runs only without them.
@@ -11,8 +11,10 @@
 // after, a_n = g, frictionless table, numerical horizon tau in [0, 3.5] split into 14 control
 // intervals of 0.25 (tau = 2, where the input has its kink, is a control node), simulated with
 // simulate_time_freezing (one MPCC per control interval) for n_s = 1, 2, 3 Radau IIA stages,
-// N_fe = 1, 2, 4, 8 finite elements per control interval (h = 0.25 / N_fe) and two schemes:
-//   fesd   switch_detection = true: free element lengths and cross-complementarity;
+// N_fe = 1, 2, 4, 8 finite elements per control interval (h = 0.25 / N_fe) and three schemes:
+//   fesd   switch_detection = true: free element lengths and cross-complementarity, the
+//          heuristic step equilibration (rho_h sum (h - h0)^2, NOSNOC's default);
+//   fesd-exact  the same with the exact step equilibration (eta (h_j+1 - h_j) = 0, fesd.hpp);
 //   fixed  switch_detection = false: the same Radau IIA collocation on the uniform grid.
 //
 // Closed form (derivation). Free fall: q2 = 1 - g t^2 / 2, touchdown at t = sqrt(2/g) (= tau,
@@ -132,9 +134,9 @@ struct Order {
   double order = kNaN;
 };
 
-Row run_guiding(bool switch_detection, int stages, int finite_elements) {
+Row run_guiding(const std::string& scheme, int stages, int finite_elements) {
   Row r;
-  r.scheme = switch_detection ? "fesd" : "fixed";
+  r.scheme = scheme;
   r.stages = stages;
   r.finite_elements = finite_elements;
   const TimeFreezingSystem<PointMass> system(PointMass(), g);
@@ -143,7 +145,8 @@ Row run_guiding(bool switch_detection, int stages, int finite_elements) {
   o.control_intervals = control_intervals;
   o.finite_elements = finite_elements;
   o.horizon = horizon;
-  o.switch_detection = switch_detection;
+  o.switch_detection = scheme != "fixed";
+  if (scheme == "fesd-exact") o.step_equilibration = StepEquilibration::Exact;
   const auto start = std::chrono::steady_clock::now();
   const auto sim = simulate_time_freezing(system, Vec<2>(0, 1), Vec<2>(0, 0), o, Example3Input{});
   r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -239,13 +242,14 @@ int main(int argc, char** argv) {
     } else if (std::strcmp(argv[i], "--budget") == 0 && i + 1 < argc) {
       budget = std::atof(argv[++i]);
     } else if (std::strcmp(argv[i], "--scheme") == 0 && i + 1 < argc &&
-               (std::strcmp(argv[i + 1], "fesd") == 0 || std::strcmp(argv[i + 1], "fixed") == 0)) {
+               (std::strcmp(argv[i + 1], "fesd") == 0 || std::strcmp(argv[i + 1], "fesd-exact") == 0 ||
+                std::strcmp(argv[i + 1], "fixed") == 0)) {
       only_scheme = argv[++i];
     } else if (std::strcmp(argv[i], "--stages") == 0 && i + 1 < argc && std::atoi(argv[i + 1]) >= 1 &&
                std::atoi(argv[i + 1]) <= 3) {
       only_stages = std::atoi(argv[++i]);
     } else {
-      std::fprintf(stderr, "usage: %s [--json] [--budget SECONDS] [--scheme fesd|fixed] [--stages 1|2|3]\n", argv[0]);
+      std::fprintf(stderr, "usage: %s [--json] [--budget SECONDS] [--scheme fesd|fesd-exact|fixed] [--stages 1|2|3]\n", argv[0]);
       return 2;
     }
   }
@@ -255,8 +259,8 @@ int main(int argc, char** argv) {
   std::vector<Dropped> dropped;
   std::vector<Order> orders;
   bool failed = false;
-  for (bool fesd : {true, false}) {
-    if (!only_scheme.empty() && only_scheme != (fesd ? "fesd" : "fixed")) continue;
+  for (const std::string scheme : {"fesd", "fesd-exact", "fixed"}) {
+    if (!only_scheme.empty() && only_scheme != scheme) continue;
     for (int ns = 1; ns <= 3; ++ns) {
       if (only_stages != 0 && ns != only_stages) continue;
       const std::size_t first = rows.size();
@@ -264,16 +268,15 @@ int main(int argc, char** argv) {
       for (std::size_t k = 0; k < element_counts.size(); ++k) {
         const int nfe = element_counts[k];
         if (k + 1 == element_counts.size() && !over_budget.empty()) {
-          dropped.push_back({fesd ? "fesd" : "fixed", ns, nfe, over_budget});
-          std::fprintf(stderr, "[%-5s n_s=%d N_fe=%d] dropped: %s\n", fesd ? "fesd" : "fixed", ns, nfe,
-                       over_budget.c_str());
+          dropped.push_back({scheme, ns, nfe, over_budget});
+          std::fprintf(stderr, "[%-5s n_s=%d N_fe=%d] dropped: %s\n", scheme.c_str(), ns, nfe, over_budget.c_str());
           break;
         }
         Row r;
         try {
-          r = run_guiding(fesd, ns, nfe);
+          r = run_guiding(scheme, ns, nfe);
         } catch (const std::exception& e) {
-          r.scheme = fesd ? "fesd" : "fixed";
+          r.scheme = scheme;
           r.stages = ns;
           r.finite_elements = nfe;
           r.error = e.what();

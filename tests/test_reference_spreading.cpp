@@ -227,6 +227,16 @@ TEST(ReferenceImport, PolishReproducesAnImportedReference) {
   missing.event_times.pop_back();
   missing.segment.clear();
   EXPECT_TRUE(std::isinf(polish(mass, missing, tight()).event_time_distance));
+  // With an event missing, the remaining one still pairs with the first simulated event: the
+  // impact's samples, stamped 1e-9 s after the simulated impact, are compared with the segments
+  // spread over that difference, not with the post-impact state (a 4.4 m/s "distance").
+  const double t_impact = missing.event_times.front();
+  for (std::size_t k = 0; k < missing.size(); ++k)
+    if (missing.t[k] == t_impact) missing.t[k] += 1e-9;
+  missing.event_times.front() += 1e-9;
+  const auto late = polish(mass, missing, tight());
+  EXPECT_TRUE(std::isinf(late.event_time_distance));
+  EXPECT_LT(late.state_distance, 1e-6);
 }
 
 }  // namespace

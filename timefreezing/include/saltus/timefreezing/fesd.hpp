@@ -33,7 +33,25 @@
 //
 // OBJECTIVE: L(T~) (the running cost over physical time, eq. 29), plus the terminal cost, plus
 // the heuristic step equilibration rho_h sum (h_kj - h0)^2 (NOSNOC's heuristic_mean, unscaled
-// like NOSNOC's so that weights compare), plus rho_s sum (s_k - 1)^2.
+// like NOSNOC's so that weights compare; StepEquilibration::Heuristic), plus rho_s sum (s_k - 1)^2.
+//
+// EXACT STEP EQUILIBRATION (StepEquilibration::Exact; FESD paper's eta-constraints, NOSNOC's
+// "direct" mode, written here for the step DCS). Where no switch happens at the boundary between
+// elements j and j+1 of one control interval, nothing in the equations fixes the two lengths (the
+// collocation is exact for any split), so the row
+//     eta_kj (h_k,j+1 - h_kj) = 0
+// makes them equal there and leaves them free where a switch is. For each switching function m
+// with cross-complementarity and each side (p, n):
+//     sigma_B = sum of lambda over the backward element's points (its start point and stages),
+//     sigma_F = sum of lambda over the forward element's points (its start point, i.e. the
+//               backward element's last stage, and its stages),
+//     nu_m = sigma_B,p sigma_F,p + sigma_B,n sigma_F,n,      eta_kj = prod_m nu_m.
+// No switch of c_m at the boundary: c_m keeps its sign on both elements, so one of lambda_p,
+// lambda_n is positive on both sides and nu_m > 0. A switch of c_m: lambda_p vanishes on one
+// side and lambda_n on the other, so nu_m = 0, eta = 0 and the lengths are free. The
+// derivatives are written out (products of sums): d nu_m / d lambda_P = [P in B] sigma_F +
+// [P in F] sigma_B, and d2 nu_m / d lambda_P d lambda_Q = [P in B][Q in F] + [P in F][Q in B] for
+// P, Q on the same side of the same function (2 for the shared point with itself).
 //
 // DERIVATIVES: every nonlinear block is a templated function of a small local vector (the stage
 // dynamics: (s, Y, K, u, alpha); the switching functions: (q, v); path and terminal functions);
@@ -64,6 +82,12 @@ enum class ClockConstraint {
   Stagewise,  ///< t(tau_k) = k physical_horizon / N at every control node (eq. 35f)
 };
 
+/// How FESD fixes the element lengths that no switch determines (file comment).
+enum class StepEquilibration {
+  Heuristic,  ///< rho_h sum (h_kj - h0)^2 in the objective (NOSNOC's heuristic_mean, its default)
+  Exact,      ///< eta_kj (h_k,j+1 - h_kj) = 0 at each inner element boundary (NOSNOC's direct)
+};
+
 /// Options of the FESD discretisation (defaults: NOSNOC's, nosnoc_facts.md section 1).
 struct FesdOptions {
   int stages = 2;               ///< n_s of Radau IIA (1, 2, 3)
@@ -84,6 +108,10 @@ struct FesdOptions {
   /// option true (and switch_detection true) Smoothing has nothing to smooth.
   bool velocity_switch_detection = true;
   double element_length_freedom = 1.0;  ///< gamma_h in [0, 1]: h in [(1-gamma_h) h0, (1+gamma_h) h0]
+  /// How the lengths are fixed where no switch does (file comment): the heuristic penalty
+  /// rho_h sum (h - h0)^2 in the objective, or the exact rows eta (h_j+1 - h_j) = 0 (no penalty).
+  /// Only with switch_detection.
+  StepEquilibration step_equilibration = StepEquilibration::Heuristic;
   double step_equilibration_weight = 1.0;  ///< rho_h of the heuristic penalty
   double speed_of_time_max = 1.0;          ///< s_max >= 1 (1: s fixed at 1)
   double speed_of_time_weight = 0.0;       ///< rho_s
@@ -130,6 +158,10 @@ template <class O, class T, int nx, int nu>
 concept HasRunningCost = requires(const O& o, const VecT<T, nx>& x, const VecT<T, nu>& u) {
   { o.template running_cost<T>(x, u) } -> std::convertible_to<T>;
 };
+template <class O, class T, int nx, int nu>
+concept HasTimedRunningCost = requires(const O& o, const VecT<T, nx>& x, const VecT<T, nu>& u, const T& t) {
+  { o.template running_cost<T>(x, u, t) } -> std::convertible_to<T>;
+};
 template <class O, class T, int nx>
 concept HasTerminalCost = requires(const O& o, const VecT<T, nx>& x, const T& t) {
   { o.template terminal_cost<T>(x, t) } -> std::convertible_to<T>;
@@ -167,6 +199,8 @@ struct FesdPoint {
 
 /// The FESD-discretised time-freezing OCP as an MPCC (file comment). Ocp provides, optionally:
 ///   template <class T> T running_cost(const VecT<T, nx>& x, const VecT<T, nu>& u) const;   [per s]
+///       or running_cost(x, u, t) with the physical time t [s] (the clock: e.g. a tracking term
+///       of a time-dependent reference); the three-argument form is used when both exist;
 ///   template <class T> T terminal_cost(const VecT<T, nx>& x, const T& t) const;
 ///   template <class T> VecT<T, nu> input(const T& t, const VecT<T, nu>& decision) const;
 ///       (the input applied at physical time t; default: the decision itself)
@@ -366,7 +400,7 @@ class FesdMpcc final : public Mpcc {
       if (options_.switch_detection)
         for (int j = 0; j < options_.finite_elements; ++j) {
           const double dh = x[length_index(k, j)] - h0_;
-          f += options_.step_equilibration_weight * dh * dh;
+          f += heuristic_weight() * dh * dh;
         }
     }
     return f;
@@ -389,7 +423,7 @@ class FesdMpcc final : public Mpcc {
       g[speed_index(k)] += 2.0 * options_.speed_of_time_weight * (x[speed_index(k)] - 1.0);
       if (options_.switch_detection)
         for (int j = 0; j < options_.finite_elements; ++j)
-          g[length_index(k, j)] += 2.0 * options_.step_equilibration_weight * (x[length_index(k, j)] - h0_);
+          g[length_index(k, j)] += 2.0 * heuristic_weight() * (x[length_index(k, j)] - h0_);
     }
   }
 
@@ -433,6 +467,9 @@ class FesdMpcc final : public Mpcc {
     for (int k = 0; k < options_.control_intervals; ++k) {
       if (row == interval_row_[k]) return "sum of element lengths [" + std::to_string(k) + "]";
       if (row == interval_row_[k] + 1 && has_clock_row(k)) return "clock [" + std::to_string(k) + "]";
+      const int er = row - equilibration_row(k);
+      if (er >= 0 && er < equilibration_count())
+        return "step equilibration [" + std::to_string(k) + "," + std::to_string(er) + "|" + std::to_string(er + 1) + "]";
     }
     const auto it = std::upper_bound(stage_row_.begin(), stage_row_.end(), row);
     const int i = static_cast<int>(it - stage_row_.begin()) - 1;
@@ -477,7 +514,10 @@ class FesdMpcc final : public Mpcc {
     gz.template segment<nq>(nq) = system_.template generalised_force<T>(q, v, u, alpha);
     gz[System::clock_index] = theta;
     T running(0.0);
-    if constexpr (detail::HasRunningCost<Ocp, T, nx, nu>) running = ocp_.template running_cost<T>(VecT<T, nx>(z.template head<nx>()), u);
+    if constexpr (detail::HasTimedRunningCost<Ocp, T, nx, nu>)
+      running = ocp_.template running_cost<T>(VecT<T, nx>(z.template head<nx>()), u, t);
+    else if constexpr (detail::HasRunningCost<Ocp, T, nx, nu>)
+      running = ocp_.template running_cost<T>(VecT<T, nx>(z.template head<nx>()), u);
     gz[System::cost_index] = T(theta * running);
     return gz;
   }
@@ -546,7 +586,7 @@ class FesdMpcc final : public Mpcc {
           row += 2 * ny + nsw + np;
         }
       interval_row_.push_back(row);
-      row += 1 + (has_clock_row(k) ? 1 : 0);
+      row += 1 + (has_clock_row(k) ? 1 : 0) + equilibration_count();
     }
     terminal_row_ = row;
     row += nt;
@@ -578,6 +618,93 @@ class FesdMpcc final : public Mpcc {
   bool has_clock_row(int k) const {
     return options_.clock == ClockConstraint::Stagewise ||
            (options_.clock == ClockConstraint::Terminal && k == options_.control_intervals - 1);
+  }
+  bool exact_equilibration() const {
+    return options_.switch_detection && options_.step_equilibration == StepEquilibration::Exact;
+  }
+  double heuristic_weight() const { return exact_equilibration() ? 0.0 : options_.step_equilibration_weight; }
+  /// Rows eta (h_j+1 - h_j) = 0 per control interval: one per inner element boundary.
+  int equilibration_count() const { return exact_equilibration() ? options_.finite_elements - 1 : 0; }
+  int equilibration_row(int k) const { return interval_row_[k] + 1 + (has_clock_row(k) ? 1 : 0); }
+  /// Does switching function m have cross-complementarity (so its switches sit on boundaries)?
+  bool cross_complementary(int m) const {
+    const bool active = system_.has_friction(m / 3) || m % 3 != 2;
+    return active && options_.switch_detection && (options_.velocity_switch_detection || m % 3 == 0);
+  }
+
+  // ---- exact step equilibration (file comment) ------------------------------------------------
+  // One multiplier taking part in eta at a boundary: its global index, its channel 2 slot + side
+  // (slot: the index among the cross-complementary functions; side 0: lambda_p, 1: lambda_n) and
+  // whether it belongs to the backward sum, the forward sum, or both (the shared point).
+  struct EquilibrationTerm {
+    int index, channel;
+    bool backward, forward;
+  };
+  std::vector<EquilibrationTerm> equilibration_terms(int k, int j) const {
+    std::vector<EquilibrationTerm> terms;
+    int slot = 0;
+    const int ns = options_.stages;
+    for (int m = 0; m < nsw; ++m) {
+      if (!cross_complementary(m)) continue;
+      for (int side = 0; side < 2; ++side) {
+        const int offset = 2 * ny + (side == 0 ? nsw : 2 * nsw) + m;
+        const int channel = 2 * slot + side;
+        const int start = start_state_index(k, j);
+        if (start >= 0) terms.push_back({start + offset, channel, true, false});
+        for (int r = 0; r < ns; ++r) terms.push_back({stage_index(k, j, r) + offset, channel, true, r == ns - 1});
+        for (int r = 0; r < ns; ++r) terms.push_back({stage_index(k, j + 1, r) + offset, channel, false, true});
+      }
+      ++slot;
+    }
+    return terms;
+  }
+  // eta and its first and second derivatives with respect to the terms' multipliers.
+  struct EquilibrationValue {
+    double eta = 1.0;
+    std::vector<double> gradient;  // per term
+    std::vector<double> dpi;       // d pi_channel / d lambda_P, per term
+    std::vector<double> others;    // prod_{l != i} nu_l, per slot
+    std::vector<double> others2;   // prod_{l != i, l'} nu, slot-major (slots x slots)
+    int slots = 0;
+  };
+  EquilibrationValue equilibration_value(const Eigen::Ref<const Eigen::VectorXd>& x,
+                                         const std::vector<EquilibrationTerm>& terms) const {
+    EquilibrationValue v;
+    int channels = 0;
+    for (const auto& t : terms) channels = std::max(channels, t.channel + 1);
+    v.slots = channels / 2;
+    std::vector<double> sb(channels, 0.0), sf(channels, 0.0), nu(v.slots, 0.0);
+    for (const auto& t : terms) {
+      if (t.backward) sb[t.channel] += x[t.index];
+      if (t.forward) sf[t.channel] += x[t.index];
+    }
+    for (int c = 0; c < channels; ++c) nu[c / 2] += sb[c] * sf[c];
+    v.others.assign(v.slots, 1.0);
+    v.others2.assign(v.slots * v.slots, 1.0);
+    for (int i = 0; i < v.slots; ++i) {
+      v.eta *= nu[i];
+      for (int l = 0; l < v.slots; ++l) {
+        if (l != i) v.others[i] *= nu[l];
+        for (int l2 = 0; l2 < v.slots; ++l2)
+          if (l2 != i && l2 != l) v.others2[i * v.slots + l] *= nu[l2];
+      }
+    }
+    v.dpi.resize(terms.size());
+    v.gradient.resize(terms.size());
+    for (std::size_t p = 0; p < terms.size(); ++p) {
+      const auto& t = terms[p];
+      v.dpi[p] = (t.backward ? sf[t.channel] : 0.0) + (t.forward ? sb[t.channel] : 0.0);
+      v.gradient[p] = v.others[t.channel / 2] * v.dpi[p];
+    }
+    return v;
+  }
+  static double equilibration_second(const EquilibrationValue& v, const EquilibrationTerm& a, const EquilibrationTerm& b,
+                                     double dpi_a, double dpi_b) {
+    const int i = a.channel / 2, l = b.channel / 2;
+    if (i != l) return v.others2[i * v.slots + l] * dpi_a * dpi_b;
+    if (a.channel != b.channel) return 0.0;  // nu = pi_p + pi_n: no cross term between sides
+    const double d2 = (a.backward && b.forward ? 1.0 : 0.0) + (a.forward && b.backward ? 1.0 : 0.0);
+    return v.others[i] * d2;
   }
 
   // One pass over the constraint rows: values into g, Jacobian values into jac (in structure
@@ -690,6 +817,16 @@ class FesdMpcc final : public Mpcc {
         if (g) (*g)[ir + 1] = x[yk];
         put(ir + 1, yk, 1.0);
       }
+      for (int j = 0; j < equilibration_count(); ++j) {
+        const int erow = equilibration_row(k) + j;
+        const auto terms = equilibration_terms(k, j);
+        const EquilibrationValue v = equilibration_value(x, terms);
+        const double dh = x[length_index(k, j + 1)] - x[length_index(k, j)];
+        if (g) (*g)[erow] = v.eta * dh;
+        put(erow, length_index(k, j + 1), v.eta);
+        put(erow, length_index(k, j), -v.eta);
+        for (std::size_t p = 0; p < terms.size(); ++p) put(erow, terms[p].index, dh * v.gradient[p]);
+      }
     }
     if constexpr (nt > 0) {
       Eigen::Matrix<double, ntw, 1> tw;
@@ -794,7 +931,27 @@ class FesdMpcc final : public Mpcc {
       put(speed_index(k), speed_index(k), sigma * 2.0 * options_.speed_of_time_weight);
       if (options_.switch_detection)
         for (int j = 0; j < options_.finite_elements; ++j)
-          put(length_index(k, j), length_index(k, j), sigma * 2.0 * options_.step_equilibration_weight);
+          put(length_index(k, j), length_index(k, j), sigma * 2.0 * heuristic_weight());
+      if (exact_equilibration())
+        for (int j = 0; j + 1 < options_.finite_elements; ++j) {
+          const int erow = equilibration_row(k) + j;
+          const auto terms = equilibration_terms(k, j);
+          const double w = values ? mu[erow] : 0.0;
+          EquilibrationValue v;
+          double dh = 0.0;
+          if (values) {
+            v = equilibration_value(x, terms);
+            dh = x[length_index(k, j + 1)] - x[length_index(k, j)];
+          }
+          for (std::size_t p = 0; p < terms.size(); ++p) {
+            const double gp = values ? v.gradient[p] : 0.0;
+            put(length_index(k, j + 1), terms[p].index, w * gp);
+            put(length_index(k, j), terms[p].index, -w * gp);
+            for (std::size_t q = 0; q <= p; ++q)
+              put(terms[p].index, terms[q].index,
+                  values ? w * dh * equilibration_second(v, terms[p], terms[q], v.dpi[p], v.dpi[q]) : 0.0);
+          }
+        }
     }
     // terminal constraints and terminal cost on (x, t) of the final state
     {

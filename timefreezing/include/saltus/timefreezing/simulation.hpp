@@ -24,7 +24,14 @@ template <int nx>
 struct FrozenPhase {
   double tau_begin = 0.0, tau_end = 0.0;
   double time = 0.0;                       ///< physical time of the jump [s]
+  /// x_minus: the state at `time`; x_plus: the state at the end of the run of frozen elements,
+  /// reached at physical time time + clock_advance.
   Eigen::Matrix<double, nx, 1> x_minus, x_plus;
+  /// The clock's advance over the run [s]: 0 when the whole run is frozen; positive when its
+  /// last element's last stage ran the clock (detail::element_frozen: the element goes on past
+  /// the end of the impact, e.g. sliding), and x_plus is then that much later than the jump,
+  /// not the post-impact state at `time`.
+  double clock_advance = 0.0;
 };
 
 /// An element boundary where switching function m changes its active set (alpha rounded to
@@ -99,6 +106,7 @@ void read_events(const std::vector<FesdPoint<ny, nsw, nu>>& pts, int stages, std
     p.time = start_of(e).y[clock];
     p.x_minus = start_of(e).y.template head<nx>();
     p.x_plus = end_of(f).y.template head<nx>();
+    p.clock_advance = end_of(f).y[clock] - p.time;
     frozen.push_back(p);
     e = f + 1;
   }
@@ -121,7 +129,13 @@ void read_events(const std::vector<FesdPoint<ny, nsw, nu>>& pts, int stages, std
 /// state; interior Radau stages are left out: with a_12 < 0 their clocks need not increase); a
 /// run of frozen elements (detail::element_frozen) is removed and becomes an
 /// event: the sample at its start (x-) and at its end (x+) share the event's time, x- first, and
-/// the time is listed in event_times. Inputs are the applied inputs at the samples; at every
+/// the time is listed in event_times. When the run's clock advanced (its last element went on
+/// past the end of the impact: FrozenPhase::clock_advance > frozen_tolerance * h), the end
+/// sample is NOT the post-impact state at the event time: it keeps its own clock time, after
+/// the event, and the event has no x+ sample (ImportedReference allows that). Stamping it with
+/// the event time instead put a position jump into the reference (the point-mass OCP of
+/// scenes/time_freezing_examples.hpp: the end sample 0.053 s of sliding, 0.087 m, after the
+/// impact) and its re-simulation 0.09 away. Inputs are the applied inputs at the samples; at every
 /// control-interval boundary the sample is repeated with the next interval's input, so the
 /// right-continuous interpolation of ImportedReference::input reproduces the piecewise-constant
 /// control exactly. Polish the result (hybrid/reference/resimulation.hpp: polish) to re-simulate
@@ -149,10 +163,12 @@ ImportedReference<S> recover_reference(const std::vector<FesdPoint<ny, nsw, nu>>
     if (frozen(e)) {
       int f = e;
       while (f + 1 < elements && frozen(f + 1)) ++f;
-      // x- is the last sample (the start of the run); x+ at the same time.
+      // x- is the last sample (the start of the run); x+ at the same time, unless the clock ran
+      // inside the run (then the end sample stays at its own, later, time).
       ref.event_times.push_back(ref.t.back());
       FesdPoint<ny, nsw, nu> plus = end_of(f);
-      plus.y[nx] = ref.t.back();
+      const double h_last = end_of(f).tau - points[static_cast<std::size_t>(f == 0 ? 0 : f * stages)].tau;
+      if (plus.y[nx] - ref.t.back() <= frozen_tolerance * h_last) plus.y[nx] = ref.t.back();
       add(plus);
       e = f + 1;
     } else {

@@ -17,7 +17,8 @@ struct PolishResult {
   HybridTrajectory<S> trajectory;  ///< the re-simulation under the imported input
   /// max over the samples of ||x_imported - x_simulated||_inf. Each sample is compared with the
   /// simulated segment that has seen the same number of events, extended past its ends by
-  /// reference spreading (reference_spreading.hpp) over the largest event-time difference, so a
+  /// reference spreading (reference_spreading.hpp) over the largest event-time difference of the
+  /// events paired in order (the first min(imported, simulated) when the counts differ), so a
   /// sample just before an imported event is not compared with a post-event state because the
   /// simulated event came 1e-11 s earlier; samples outside every such segment are compared with
   /// the simulated state at their time.

@@ -29,16 +29,19 @@ PolishResult<S> polish(const S& scene, const ImportedReference<S>& reference, Si
   const auto& traj = result.trajectory;
   result.imported_events = reference.event_times.size();
   result.simulated_events = traj.events.size();
-  if (result.imported_events != result.simulated_events) {
-    result.event_time_distance = std::numeric_limits<double>::infinity();
-  } else {
-    for (std::size_t e = 0; e < traj.events.size(); ++e)
-      result.event_time_distance =
-          std::max(result.event_time_distance, std::abs(reference.event_times[e] - traj.events[e].t));
-  }
+  // The events paired in order; with different counts only the first min(counts) pair up.
+  double paired_distance = 0.0;
+  for (std::size_t e = 0; e < std::min(result.imported_events, result.simulated_events); ++e)
+    paired_distance = std::max(paired_distance, std::abs(reference.event_times[e] - traj.events[e].t));
+  result.event_time_distance = result.imported_events == result.simulated_events
+                                   ? paired_distance
+                                   : std::numeric_limits<double>::infinity();
+  // The segments are spread over the paired events' time differences also when the counts
+  // differ (an extra simulated event, e.g. a stick onset at the very end): without it a pre-event
+  // sample 1e-12 s after a simulated event was compared with the post-event state (a distance of
+  // the size of the jump itself).
   ExtensionOptions spread;
-  spread.before = spread.after =
-      std::isfinite(result.event_time_distance) ? 2 * result.event_time_distance + 1e-12 * (1 + std::abs(t1)) : 0.0;
+  spread.before = spread.after = 2 * paired_distance + 1e-12 * (1 + std::abs(t1));
   spread.integrator = options.integrator;
   const ExtendedReference<S> extended(scene, traj, spread);
   for (std::size_t k = 0; k < reference.size(); ++k) {
