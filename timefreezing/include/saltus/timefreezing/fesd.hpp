@@ -68,6 +68,7 @@
 #include <Eigen/Core>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <string>
@@ -258,6 +259,7 @@ class FesdMpcc final : public Mpcc {
     n_ = options.control_intervals * interval_size();
     h0_ = options.horizon / (options.control_intervals * options.finite_elements);
     build_rows();
+    build_equilibration();
     build_structures();
     build_pairs();
   }
@@ -640,31 +642,44 @@ class FesdMpcc final : public Mpcc {
     int index, channel;
     bool backward, forward;
   };
-  std::vector<EquilibrationTerm> equilibration_terms(int k, int j) const {
-    std::vector<EquilibrationTerm> terms;
-    int slot = 0;
+  // At most 2 nsw channels, nsw slots and, per channel, n_s + 1 backward points and n_s forward
+  // ones (n_s <= 3): fixed sizes, so evaluating eta allocates nothing.
+  static constexpr int max_channels = 2 * nsw;
+  static constexpr int max_terms = max_channels * 7;
+  // The terms of boundary (k, j | j + 1), built once (build_equilibration).
+  const std::vector<EquilibrationTerm>& equilibration_terms(int k, int j) const {
+    return equilibration_terms_[static_cast<std::size_t>(k * (options_.finite_elements - 1) + j)];
+  }
+  void build_equilibration() {
+    equilibration_terms_.clear();
+    if (!exact_equilibration()) return;
     const int ns = options_.stages;
-    for (int m = 0; m < nsw; ++m) {
-      if (!cross_complementary(m)) continue;
-      for (int side = 0; side < 2; ++side) {
-        const int offset = 2 * ny + (side == 0 ? nsw : 2 * nsw) + m;
-        const int channel = 2 * slot + side;
-        const int start = start_state_index(k, j);
-        if (start >= 0) terms.push_back({start + offset, channel, true, false});
-        for (int r = 0; r < ns; ++r) terms.push_back({stage_index(k, j, r) + offset, channel, true, r == ns - 1});
-        for (int r = 0; r < ns; ++r) terms.push_back({stage_index(k, j + 1, r) + offset, channel, false, true});
+    for (int k = 0; k < options_.control_intervals; ++k)
+      for (int j = 0; j + 1 < options_.finite_elements; ++j) {
+        std::vector<EquilibrationTerm> terms;
+        int slot = 0;
+        for (int m = 0; m < nsw; ++m) {
+          if (!cross_complementary(m)) continue;
+          for (int side = 0; side < 2; ++side) {
+            const int offset = 2 * ny + (side == 0 ? nsw : 2 * nsw) + m;
+            const int channel = 2 * slot + side;
+            const int start = start_state_index(k, j);
+            if (start >= 0) terms.push_back({start + offset, channel, true, false});
+            for (int r = 0; r < ns; ++r) terms.push_back({stage_index(k, j, r) + offset, channel, true, r == ns - 1});
+            for (int r = 0; r < ns; ++r) terms.push_back({stage_index(k, j + 1, r) + offset, channel, false, true});
+          }
+          ++slot;
+        }
+        equilibration_terms_.push_back(std::move(terms));
       }
-      ++slot;
-    }
-    return terms;
   }
   // eta and its first and second derivatives with respect to the terms' multipliers.
   struct EquilibrationValue {
     double eta = 1.0;
-    std::vector<double> gradient;  // per term
-    std::vector<double> dpi;       // d pi_channel / d lambda_P, per term
-    std::vector<double> others;    // prod_{l != i} nu_l, per slot
-    std::vector<double> others2;   // prod_{l != i, l'} nu, slot-major (slots x slots)
+    std::array<double, max_terms> gradient{};  // per term
+    std::array<double, max_terms> dpi{};       // d pi_channel / d lambda_P, per term
+    std::array<double, nsw> others{};          // prod_{l != i} nu_l, per slot
+    std::array<double, nsw * nsw> others2{};   // prod_{l != i, l'} nu, slot-major (slots x slots)
     int slots = 0;
   };
   EquilibrationValue equilibration_value(const Eigen::Ref<const Eigen::VectorXd>& x,
@@ -673,24 +688,24 @@ class FesdMpcc final : public Mpcc {
     int channels = 0;
     for (const auto& t : terms) channels = std::max(channels, t.channel + 1);
     v.slots = channels / 2;
-    std::vector<double> sb(channels, 0.0), sf(channels, 0.0), nu(v.slots, 0.0);
+    std::array<double, max_channels> sb{}, sf{};
+    std::array<double, nsw> nu{};
     for (const auto& t : terms) {
       if (t.backward) sb[t.channel] += x[t.index];
       if (t.forward) sf[t.channel] += x[t.index];
     }
     for (int c = 0; c < channels; ++c) nu[c / 2] += sb[c] * sf[c];
-    v.others.assign(v.slots, 1.0);
-    v.others2.assign(v.slots * v.slots, 1.0);
     for (int i = 0; i < v.slots; ++i) {
       v.eta *= nu[i];
+      v.others[i] = 1.0;
       for (int l = 0; l < v.slots; ++l) {
         if (l != i) v.others[i] *= nu[l];
+        double& o2 = v.others2[i * v.slots + l];
+        o2 = 1.0;
         for (int l2 = 0; l2 < v.slots; ++l2)
-          if (l2 != i && l2 != l) v.others2[i * v.slots + l] *= nu[l2];
+          if (l2 != i && l2 != l) o2 *= nu[l2];
       }
     }
-    v.dpi.resize(terms.size());
-    v.gradient.resize(terms.size());
     for (std::size_t p = 0; p < terms.size(); ++p) {
       const auto& t = terms[p];
       v.dpi[p] = (t.backward ? sf[t.channel] : 0.0) + (t.forward ? sb[t.channel] : 0.0);
@@ -819,7 +834,7 @@ class FesdMpcc final : public Mpcc {
       }
       for (int j = 0; j < equilibration_count(); ++j) {
         const int erow = equilibration_row(k) + j;
-        const auto terms = equilibration_terms(k, j);
+        const auto& terms = equilibration_terms(k, j);
         const EquilibrationValue v = equilibration_value(x, terms);
         const double dh = x[length_index(k, j + 1)] - x[length_index(k, j)];
         if (g) (*g)[erow] = v.eta * dh;
@@ -935,7 +950,7 @@ class FesdMpcc final : public Mpcc {
       if (exact_equilibration())
         for (int j = 0; j + 1 < options_.finite_elements; ++j) {
           const int erow = equilibration_row(k) + j;
-          const auto terms = equilibration_terms(k, j);
+          const auto& terms = equilibration_terms(k, j);
           const double w = values ? mu[erow] : 0.0;
           EquilibrationValue v;
           double dh = 0.0;
@@ -1047,6 +1062,7 @@ class FesdMpcc final : public Mpcc {
   std::vector<BoundRow> inequality_rows_;
   std::vector<SparseEntry> jacobian_structure_, hessian_structure_;
   std::vector<ComplementarityPair> pairs_;
+  std::vector<std::vector<EquilibrationTerm>> equilibration_terms_;  ///< per inner boundary (Exact)
 };
 
 }  // namespace saltus::timefreezing
