@@ -171,13 +171,15 @@ TEST(Fesd, DerivativesMatchFiniteDifferences) {
   p.mu = 0.3;
   const TimeFreezingSystem<PointMass> system(PointMass(p), 10.0);
   // FESD with the heuristic penalty, the fixed grid, FESD with the exact step equilibration (its
-  // eta rows couple the multipliers of neighbouring elements, across control intervals too).
+  // eta rows couple the multipliers of neighbouring elements, across control intervals too) and
+  // scaled switching functions.
   for (int variant : {0, 1, 2}) {
     const bool fesd = variant != 1;
     FesdOptions grid = small_grid(fesd);
     if (variant == 2) {
       grid.step_equilibration = StepEquilibration::Exact;
       grid.finite_elements = 3;
+      grid.switching_scale = {3.0, 0.5, 2.0};
     }
     const FesdMpcc<PointMass, EveryTermOcp> problem(system, EveryTermOcp{}, Vec<2>(0.1, 0.5), Vec<2>(1.0, -0.5), grid);
     int equilibration_rows = 0;
@@ -286,6 +288,9 @@ TEST(Fesd, RefusesBadOptionsAndStates) {
   EXPECT_THROW(FesdMpcc<PointMass>(system, {}, Vec<2>(0, 1), Vec<2>(0, 0), o), InvalidArgument);
   o = FesdOptions{};
   o.stages = 4;
+  EXPECT_THROW(FesdMpcc<PointMass>(system, {}, Vec<2>(0, 1), Vec<2>(0, 0), o), InvalidArgument);
+  o = FesdOptions{};
+  o.switching_scale[1] = 0.0;
   EXPECT_THROW(FesdMpcc<PointMass>(system, {}, Vec<2>(0, 1), Vec<2>(0, 0), o), InvalidArgument);
   o = FesdOptions{};
   o.control_lower = Eigen::VectorXd::Zero(3);

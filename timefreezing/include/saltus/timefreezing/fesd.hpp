@@ -109,6 +109,14 @@ struct FesdOptions {
   /// option true (and switch_detection true) Smoothing has nothing to smooth.
   bool velocity_switch_detection = true;
   double element_length_freedom = 1.0;  ///< gamma_h in [0, 1]: h in [(1-gamma_h) h0, (1+gamma_h) h0]
+  /// Scales K of the switching functions (gap [1/m], J_n v and J_t v [s/m]; > 0): the rows
+  /// read K c(q, v) - lambda_p + lambda_n = 0. The step functions and the switches do not change,
+  /// the multipliers and so the complementarity products do: a relaxation that holds
+  /// lambda (1 - alpha) = sigma leaves 1 - alpha = sigma / (K c), so K is the unit in which a
+  /// relaxation parameter is read. In flight the auxiliary weight (1 - alpha_gap)(...) with
+  /// a_n behind it is a phantom support of size a_n sigma / (K gap): a larger gap scale makes the
+  /// loosely relaxed problems more physical (bench/README.md, "Switching-function scale").
+  std::array<double, 3> switching_scale{1.0, 1.0, 1.0};
   /// How the lengths are fixed where no switch does (file comment): the heuristic penalty
   /// rho_h sum (h - h0)^2 in the objective, or the exact rows eta (h_j+1 - h_j) = 0 (no penalty).
   /// Only with switch_detection.
@@ -239,6 +247,8 @@ class FesdMpcc final : public Mpcc {
                    "FESD: speed_of_time_max must be >= 1, got ", options.speed_of_time_max);
     SALTUS_REQUIRE(options.step_equilibration_weight >= 0.0 && options.speed_of_time_weight >= 0.0,
                    "FESD: penalty weights must be >= 0");
+    for (double k : options.switching_scale)
+      SALTUS_REQUIRE(std::isfinite(k) && k > 0.0, "FESD: switching_scale entries must be finite and > 0, got ", k);
     SALTUS_REQUIRE(options.clock == ClockConstraint::None ||
                        (std::isfinite(options.physical_horizon) && options.physical_horizon > 0.0),
                    "FESD: a clock constraint needs physical_horizon > 0, got ", options.physical_horizon);
@@ -368,7 +378,8 @@ class FesdMpcc final : public Mpcc {
 
   void initial_point(Eigen::Ref<Eigen::VectorXd> x) const override {
     x.setZero();
-    const Vec<nsw> c0 = system_.template switching_functions<double>(y0_.template head<nq>(), y0_.template segment<nq>(nq));
+    Vec<nsw> c0 = system_.template switching_functions<double>(y0_.template head<nq>(), y0_.template segment<nq>(nq));
+    for (int m = 0; m < nsw; ++m) c0[m] *= switching_scale(m);
     Vec<nsw> a0;
     for (int m = 0; m < nsw; ++m) a0[m] = c0[m] > 0.0 ? 1.0 : (c0[m] < 0.0 ? 0.0 : 0.5);
     for (int k = 0; k < options_.control_intervals; ++k) {
@@ -621,6 +632,8 @@ class FesdMpcc final : public Mpcc {
     return options_.clock == ClockConstraint::Stagewise ||
            (options_.clock == ClockConstraint::Terminal && k == options_.control_intervals - 1);
   }
+  /// The scale of switching function m (FesdOptions::switching_scale).
+  double switching_scale(int m) const { return options_.switching_scale[static_cast<std::size_t>(m % 3)]; }
   bool exact_equilibration() const {
     return options_.switch_detection && options_.step_equilibration == StepEquilibration::Exact;
   }
@@ -794,14 +807,15 @@ class FesdMpcc final : public Mpcc {
               const VecT<detail::Ad1<nx>, nsw> c = system_.template switching_functions<detail::Ad1<nx>>(
                   a.template head<nq>(), a.template segment<nq>(nq));
               for (int m = 0; m < nsw; ++m) {
-                if (g) (*g)[srow + m] = c[m].value() - x[lp + m] + x[ln + m];
-                for (int b = 0; b < nx; ++b) put(srow + m, state_index(k, j, r) + b, c[m].derivatives()[b]);
+                const double k_m = switching_scale(m);
+                if (g) (*g)[srow + m] = k_m * c[m].value() - x[lp + m] + x[ln + m];
+                for (int b = 0; b < nx; ++b) put(srow + m, state_index(k, j, r) + b, k_m * c[m].derivatives()[b]);
                 put(srow + m, lp + m, -1.0);
                 put(srow + m, ln + m, 1.0);
               }
             } else {
               const Vec<nsw> c = system_.template switching_functions<double>(wx.template head<nq>(), wx.template segment<nq>(nq));
-              for (int m = 0; m < nsw; ++m) (*g)[srow + m] = c[m] - x[lp + m] + x[ln + m];
+              for (int m = 0; m < nsw; ++m) (*g)[srow + m] = switching_scale(m) * c[m] - x[lp + m] + x[ln + m];
             }
           }
           // path constraints
@@ -917,7 +931,7 @@ class FesdMpcc final : public Mpcc {
               const VecT<detail::Ad2<nx>, nsw> c = system_.template switching_functions<detail::Ad2<nx>>(
                   a.template head<nq>(), a.template segment<nq>(nq));
               for (int m = 0; m < nsw; ++m) {
-                const double w = mu[row + 2 * ny + m];
+                const double w = switching_scale(m) * mu[row + 2 * ny + m];
                 if (w == 0.0) continue;
                 for (int p = 0; p < nx; ++p) hl.row(p) += w * c[m].derivatives()[p].derivatives().transpose();
               }
