@@ -28,22 +28,33 @@ done
 echo
 echo "== guiding_example --json (time-freezing OCP) =="
 OPENBLAS_NUM_THREADS=1 "$build/examples/guiding_example" --json | tee "$SALTUS_REPORT_DIR/guiding_example_ocp.json"
-# The flagship OCP: the hopper over three holes (time-freezing paper Section 6) from the paper's
-# initialisation: continuation on the holes, then the smoothing homotopy (about 15 minutes on 2
-# cores; one progress line per Ipopt solve on stderr). It does not converge yet (issue "Optimal
-# references for the flagship scenes"): the JSON says how far it got.
-echo
-echo "== hopper --json (time-freezing OCP over three holes) =="
-OPENBLAS_NUM_THREADS=1 "$build/examples/hopper" --json > "$SALTUS_REPORT_DIR/hopper_ocp.json" ||
-  echo "hopper --json: not converged (see $SALTUS_REPORT_DIR/hopper_ocp.json)"
-python3 - "$SALTUS_REPORT_DIR/hopper_ocp.json" <<'PY'
+# The flagship OCPs, one thread each and side by side on the 2 cores (one progress line per Ipopt
+# solve on stderr, prefixed): the hopper over three holes (time-freezing paper Section 6) from the
+# paper's initialisation, continuation on the holes, then the smoothing homotopy (about 15
+# minutes), and the plank-box flat landing (about 10 minutes). Neither converges yet (issue
+# "Optimal references for the flagship scenes"): the JSON says how far each got.
+ocp_summary() {
+  python3 - "$1" <<'PY'
 import json, sys
 d = json.load(open(sys.argv[1]))
 print(f'converged {d["converged"]}  complementarity {d["complementarity"]:.2e}  path violation {d["max_path_violation"]:.2e}'
       f'  target error {d["target_error"]:.2e}  objective {d["objective"]:.4g}  Ipopt iterations {d["ipopt_iterations"]}'
       f'  {d["solve_seconds"]:.0f} s  ({d["message"]})')
 PY
-echo "wrote $SALTUS_REPORT_DIR/hopper_ocp.json"
+}
+echo
+echo "== hopper --json (time-freezing OCP over three holes) and plank_box --json (flat landing), in parallel =="
+( OPENBLAS_NUM_THREADS=1 "$build/examples/plank_box" --json > "$SALTUS_REPORT_DIR/plank_box_ocp.json" \
+    2> >(sed 's/^/[plank_box] /' >&2) ) &
+plank_box_job=$!
+OPENBLAS_NUM_THREADS=1 "$build/examples/hopper" --json > "$SALTUS_REPORT_DIR/hopper_ocp.json" 2> >(sed 's/^/[hopper] /' >&2) ||
+  echo "hopper --json: not converged (see $SALTUS_REPORT_DIR/hopper_ocp.json)"
+wait "$plank_box_job" || echo "plank_box --json: not converged (see $SALTUS_REPORT_DIR/plank_box_ocp.json)"
+echo "hopper over three holes:"
+ocp_summary "$SALTUS_REPORT_DIR/hopper_ocp.json"
+echo "plank-box flat landing:"
+ocp_summary "$SALTUS_REPORT_DIR/plank_box_ocp.json"
+echo "wrote $SALTUS_REPORT_DIR/hopper_ocp.json and $SALTUS_REPORT_DIR/plank_box_ocp.json"
 # Tracking designs along references with impacts: the stability check against 200 nonlinear
 # closed-loop runs per design on all cores (a minute; progress lines on stderr).
 echo

@@ -13,15 +13,16 @@
 // paper Section 6; scenes/hopper_holes.hpp), from the paper's initialisation (the start state at
 // every node, zero torques): the paper's grid with cross-complementarity on the gap only, a
 // continuation on the holes at sigma = 1, then the smoothing homotopy; and prints
-// {"converged", "complementarity", "max_path_violation", "worst_path_constraint", "target_error",
-// "objective", "homotopy_steps", "ipopt_iterations", "solve_seconds", "steps": [...], "events":
-// [...], "resim_max_error"}; progress lines (one per homotopy step) on stderr. Exit status 0 only
-// when it converged. The re-simulation needs a converged solution (resim_max_error null otherwise).
+// the report of ocp_report.hpp ({"converged", "complementarity", "max_path_violation",
+// "target_error", "objective", "homotopy_steps", "ipopt_iterations", "solve_seconds", "steps",
+// "events", "resim_max_error", ...}); progress lines (one per homotopy step) on stderr. Exit status
+// 0 only when it converged. The re-simulation needs a converged solution (null otherwise).
 #include <saltus/hybrid/reference/resimulation.hpp>
 #include <saltus/hybrid/vocabulary/trajectory_report.hpp>
 #include <saltus/timefreezing/simulation.hpp>
 #include "scenes/all_scenes.hpp"
 #include "scenes/hopper_holes.hpp"
+#include "ocp_report.hpp"
 
 #include <saltus/sensitivity/sensitivity.hpp>
 
@@ -46,45 +47,8 @@ int optimal_hop_over_three_holes() {
   const auto r = solve_time_freezing_ocp_by_continuation(Ocp::system(), Ocp::hole_continuation(), ocp, Ocp::q0(),
                                                          Ocp::v0(), Ocp::grid(), solver);
   const Ocp::Feasibility f = Ocp::feasibility(r.points);
-  nlohmann::ordered_json j;
-  j["converged"] = r.converged();
-  j["message"] = r.solution.message;
-  j["complementarity"] = r.solution.complementarity;
-  j["max_path_violation"] = f.path_violation;
-  j["worst_path_constraint"] = f.worst_row >= 0 ? nlohmann::ordered_json(Ocp::path_names[f.worst_row]) : nullptr;
-  j["target_error"] = f.target_error;
-  j["constraint_violation"] = r.solution.constraint_violation;
-  j["objective"] = r.solution.objective;
-  j["homotopy_steps"] = r.solution.steps.size();
-  j["continuation_stages"] = r.continuation_steps.size();
-  j["ipopt_iterations"] = r.solution.ipopt_iterations;
-  j["solve_seconds"] = r.solution.seconds;
-  auto steps = nlohmann::ordered_json::array();
-  for (const MpccHomotopyStep& s : r.solution.steps)
-    steps.push_back({{"sigma", s.sigma}, {"polish", s.polish}, {"complementarity", s.complementarity},
-                     {"objective", s.objective}, {"constraint_violation", s.constraint_violation},
-                     {"ipopt_iterations", s.ipopt_iterations}, {"ipopt_status", s.ipopt_status}, {"seconds", s.seconds}});
-  j["steps"] = steps;
-  auto continuation = nlohmann::ordered_json::array();
-  for (const MpccHomotopyStep& s : r.continuation_steps)
-    continuation.push_back({{"ipopt_iterations", s.ipopt_iterations}, {"ipopt_status", s.ipopt_status}, {"seconds", s.seconds}});
-  j["continuation"] = continuation;
-  auto events = nlohmann::ordered_json::array();
-  for (const auto& p : r.frozen_phases) events.push_back({{"kind", "impact"}, {"t", p.time}});
-  for (const SwitchPoint& s : r.switch_points)
-    events.push_back({{"kind", s.switching_function % 3 == 0 ? "gap" : (s.switching_function % 3 == 1 ? "normal velocity" : "tangential velocity")},
-                      {"t", s.time}, {"alpha_before", s.alpha_before}, {"alpha_after", s.alpha_after}});
-  j["events"] = events;
-  if (r.converged()) {
-    try {
-      j["resim_max_error"] = polish(scenes::Hopper{}, r.reference).state_distance;
-    } catch (const Error& e) {
-      j["resim_max_error"] = nullptr;
-      j["resim_failure"] = e.what();
-    }
-  } else {
-    j["resim_max_error"] = nullptr;  // an unconverged solution is not a motion to re-simulate
-  }
+  const nlohmann::ordered_json j = examples::ocp_report(
+      scenes::Hopper{}, r, {f.path_violation, f.worst_row >= 0 ? Ocp::path_names[f.worst_row] : "", f.target_error});
   std::cout << j.dump(2) << "\n";
   return r.converged() ? 0 : 1;
 }

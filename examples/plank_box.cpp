@@ -2,13 +2,42 @@
 // bottom corners touch at the same instant (a planned simultaneous impact with a singular
 // Delassus matrix: two contacts, redundant tangentially), the box sticks and the plank rocks on
 // its spring. The box is held by a force slightly below its weight, so it descends at 2 m/s^2.
+//
+// `plank_box --json` instead solves the plank-box's flagship OCP (scenes/plank_box_landing.hpp):
+// land flat, slide, lift off and stop above the plank's far end, minimising the integral of u'u;
+// prints the report of ocp_report.hpp, progress lines (one per homotopy step) on stderr; exit
+// status 0 only when it converged.
 #include <saltus/hybrid/vocabulary/trajectory_report.hpp>
+#include <saltus/timefreezing/simulation.hpp>
 #include "scenes/all_scenes.hpp"
+#include "scenes/plank_box_landing.hpp"
+#include "ocp_report.hpp"
 
 #include <cstdio>
+#include <cstring>
+#include <iostream>
 
-int main() {
+namespace {
+
+int optimal_flat_landing() {
   using namespace saltus;
+  using namespace saltus::timefreezing;
+  using Ocp = scenes::PlankBoxFlatLanding;
+  MpccSolverOptions solver = Ocp::solver();
+  solver.progress = &std::cerr;
+  const auto r = solve_time_freezing_ocp(Ocp::system(), Ocp{}, Ocp::q0(), Ocp::v0(), Ocp::grid(), solver);
+  const Ocp::Feasibility f = Ocp::feasibility(r.points);
+  const auto j = examples::ocp_report(scenes::PlankBox{}, r,
+                                      {f.path_violation, f.path_violation > 1e-6 ? "theta - phi = 0" : "", f.target_error});
+  std::cout << j.dump(2) << "\n";
+  return r.converged() ? 0 : 1;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  using namespace saltus;
+  if (argc > 1 && std::strcmp(argv[1], "--json") == 0) return optimal_flat_landing();
   using PB = scenes::PlankBox;
   PB plank_box;  // parameters and their sources: scenes/plank_box.hpp
   const Vec<8> x0 = plank_box.flat_state(0.6, 0.05);  // box centre 0.6 m along, bottom 5 cm above the plank

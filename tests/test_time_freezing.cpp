@@ -149,6 +149,25 @@ struct EveryTermOcp {
   Vec<2> terminal_upper() const { return Vec<2>(0.0, 1.0); }
 };
 
+// Running costs that AD cannot differentiate are refused at compile time by FesdMpcc's
+// static_asserts (found by a user's trial: such a cost was silently dropped, or used in the
+// values but not in the derivatives). The detection itself:
+struct NonTemplateRunningCost {
+  double running_cost(const Vec<4>&, const Vec<2>& u) const { return u.squaredNorm(); }
+};
+struct ClockAsDoubleRunningCost {
+  template <class T>
+  T running_cost(const VecT<T, 4>&, const VecT<T, 2>& u, double t) const {
+    return T(u.squaredNorm() * t);
+  }
+};
+static_assert(detail::HasNonTemplateRunningCost<NonTemplateRunningCost>);
+static_assert(!detail::HasNonTemplateRunningCost<EveryTermOcp>);
+static_assert(!detail::HasNonTemplateRunningCost<scenes::PointMassToTheTarget>);
+static_assert(detail::HasTimedRunningCost<ClockAsDoubleRunningCost, double, 4, 2> &&
+              !detail::HasTimedRunningCost<ClockAsDoubleRunningCost, detail::Ad2<9>, 4, 2>);
+static_assert(detail::HasTimedRunningCost<EveryTermOcp, detail::Ad2<9>, 4, 2>);
+
 FesdOptions small_grid(bool switch_detection) {
   FesdOptions o;
   o.control_intervals = 2;
@@ -273,6 +292,30 @@ TEST(Fesd, IpoptDerivativeCheckerFindsNoError) {
   const FesdMpcc<PlankBox> two(plank, NoObjective{}, Vec<4>(0.5, 0.08, 0.01, 0.0), Vec<4>(0.2, -1.0, 0.3, 0.0), o);
   const DerivativeCheckReport report2 = check_derivatives(two, interior_point(two, 7));
   EXPECT_EQ(report2.errors, 0) << report2.output;
+}
+
+// Which pairs the smoothing relaxation may smooth: the stage-wise ones (velocity switching
+// functions when only the gaps have cross-complementarity), the tangential ones only when
+// smooth_tangential_pairs.
+TEST(Fesd, MarksTheStageWisePairsSmoothable) {
+  scenes::PointMassParameters p;
+  p.friction = Friction::Planar;
+  p.mu = 0.3;
+  const TimeFreezingSystem<PointMass> system(PointMass(p), 10.0);
+  FesdOptions o = small_grid(true);
+  o.velocity_switch_detection = false;
+  auto smoothable = [&](const FesdOptions& options) {
+    const FesdMpcc<PointMass> problem(system, NoObjective{}, Vec<2>(0.1, 0.5), Vec<2>(1.0, -0.5), options);
+    int n = 0;
+    for (const ComplementarityPair& pair : problem.complementarity_pairs()) n += pair.smoothable ? 1 : 0;
+    return n;
+  };
+  const int stage_points = o.control_intervals * o.finite_elements * o.stages;  // 8
+  EXPECT_EQ(smoothable(o), 2 * 2 * stage_points);  // J_n v and J_t v, two pairs each
+  o.smooth_tangential_pairs = false;
+  EXPECT_EQ(smoothable(o), 2 * stage_points);  // J_n v only
+  o.velocity_switch_detection = true;
+  EXPECT_EQ(smoothable(o), 0);  // every function has cross-complementarity
 }
 
 TEST(Fesd, RefusesBadOptionsAndStates) {
@@ -465,6 +508,39 @@ TEST(TimeFreezingSimulation, PlankBoxFlatLandingAgreesWithTheEventDrivenSimulato
 }
 
 // The small OCP (scenes::PointMassToTheTarget): land the point mass and slide it to x = 3.
+// A frozen run that starts on a control-interval boundary: the recovered reference has x- and
+// its repeat with the next interval's input at the event time, both before the event (found by a
+// user's trial: without the written-out segments the repeat was read as x+ and compared with the
+// post-impact state, a re-simulation "distance" of the impact's velocity jump).
+TEST(TimeFreezingRecovery, FrozenRunOnAControlIntervalBoundary) {
+  using Point = FesdPoint<6, 3, 2>;
+  auto point = [](int interval, int element, double tau, double t, double v, double weight, double u) {
+    Point p;
+    p.interval = interval;
+    p.element = element;
+    p.stage = 0;
+    p.tau = tau;
+    p.y.setZero();
+    p.y[3] = v;
+    p.y[4] = t;
+    p.alpha.setConstant(weight);
+    p.ode_weight = weight;
+    p.u = Vec<2>(u, 0.0);
+    return p;
+  };
+  const std::vector<Point> points{point(0, -1, 0.0, 0.0, 0.0, 1.0, 1.0), point(0, 0, 0.1, 0.1, -1.0, 1.0, 1.0),
+                                  point(1, 0, 0.2, 0.1, 0.0, 0.0, 2.0),  // frozen: the clock stands
+                                  point(1, 1, 0.3, 0.2, 0.0, 1.0, 2.0)};
+  const ImportedReference<PointMass> ref = recover_reference<PointMass>(points, 1);
+  ASSERT_EQ(ref.size(), 5u);
+  EXPECT_EQ(ref.event_times, std::vector<double>{0.1});
+  EXPECT_EQ(ref.segment, (std::vector<int>{0, 0, 0, 1, 1}));
+  EXPECT_EQ(ref.t[2], 0.1);
+  EXPECT_EQ(ref.u[2][0], 2.0);  // the repeat carries the next interval's input
+  EXPECT_EQ(ref.segment_of(2), 0);
+  EXPECT_EQ(ref.x[3][3], 0.0);  // x+: the impact ended
+}
+
 TEST(TimeFreezingOcp, PointMassReachesTheTargetOnTheTable) {
   using Case = scenes::PointMassToTheTarget;
   const auto r = solve_time_freezing_ocp(Case::system(), Case{}, Case::q0(), Case::v0(), Case::grid(), Case::solver());

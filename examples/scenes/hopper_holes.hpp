@@ -1,6 +1,6 @@
 // The flagship OCP of the time-freezing paper (Section 6): the one-legged hopper (scenes/hopper.hpp)
 // travels from rest at x = 0 to x = 3 in T = 2.5 s over three holes, minimising the integral of
-// u'u over physical time. Shared by examples/hopper.cpp (--json), tests/test_hopper_ocp.cpp and
+// u'u over physical time. Shared by examples/hopper.cpp (--json), tests/test_flagship_ocps.cpp and
 // bench/hopper_ocp.cpp.
 //
 // q = (x, z, phi_hip, phi_knee), u = (tau_hip, tau_knee) with |u_i| <= 60 N m; foot contact with
@@ -29,6 +29,7 @@
 #pragma once
 
 #include "scenes/hopper.hpp"
+#include "scenes/ocp_grid.hpp"
 
 #include <saltus/timefreezing/fesd.hpp>
 #include <saltus/timefreezing/mpcc_solver.hpp>
@@ -115,20 +116,8 @@ struct HopperOverThreeHoles {
   /// cross-complementarity for the gap only (FesdOptions::velocity_switch_detection = false: the
   /// foot's velocities change sign in flight, bench/README.md).
   static timefreezing::FesdOptions grid(int control_intervals = 20, int finite_elements = 3, int stages = 2) {
-    timefreezing::FesdOptions o;
-    o.stages = stages;
-    o.control_intervals = control_intervals;
-    o.finite_elements = finite_elements;
-    o.horizon = horizon;
-    o.clock = timefreezing::ClockConstraint::Terminal;
-    o.physical_horizon = horizon;
-    o.speed_of_time_max = 5.0;
-    o.speed_of_time_weight = 0.01;
-    o.step_equilibration_weight = 1.0;
-    o.control_lower = Eigen::VectorXd::Constant(2, -torque_limit);
-    o.control_upper = Eigen::VectorXd::Constant(2, torque_limit);
-    o.velocity_switch_detection = false;
-    return o;
+    return terminal_clock_grid(horizon, control_intervals, finite_elements, stages,
+                               Eigen::VectorXd::Constant(2, -torque_limit), Eigen::VectorXd::Constant(2, torque_limit));
   }
   /// The continuation on the holes that precedes the homotopy
   /// (solve_time_freezing_ocp_by_continuation): hole levels 1e-4, 1e-3, 1e-2, 0.05, 0.2, 0.5, 1 at

@@ -86,7 +86,10 @@ enum class ClockConstraint {
 /// How FESD fixes the element lengths that no switch determines (file comment).
 enum class StepEquilibration {
   Heuristic,  ///< rho_h sum (h_kj - h0)^2 in the objective (NOSNOC's heuristic_mean, its default)
-  Exact,      ///< eta_kj (h_k,j+1 - h_kj) = 0 at each inner element boundary (NOSNOC's direct)
+  /// eta_kj (h_k,j+1 - h_kj) = 0 at each inner element boundary (NOSNOC's direct). Measured: the
+  /// homotopy converges less often and needs several times the iterations (the point-mass OCP:
+  /// 4072 against 422; bench/README.md, "FESD accuracy").
+  Exact,
 };
 
 /// Options of the FESD discretisation (defaults: NOSNOC's, nosnoc_facts.md section 1).
@@ -108,8 +111,19 @@ struct FesdOptions {
   /// stage-wise pairs are the ones MpccSolverOptions::Relaxation::Smoothing smooths: with this
   /// option true (and switch_detection true) Smoothing has nothing to smooth.
   bool velocity_switch_detection = true;
+  /// Mark the tangential velocity's stage-wise pairs smoothable (Relaxation::Smoothing holds them
+  /// on lambda alpha = sigma). false: they keep the inequality relaxation. Why: in stick the
+  /// friction force is a_n mu (1 - 2 alpha_3) times the closing weight; smoothed, alpha_3 != 1/2
+  /// needs J_t v != 0, so a sticking contact creeps at a speed of order sigma and alpha_3 is a
+  /// sigmoid of width sigma in J_t v: the relaxed NLPs stiffen as sigma falls. No effect unless
+  /// MpccSolverOptions::relaxation is Smoothing and the tangential pairs are stage-wise
+  /// (velocity_switch_detection = false, or switch_detection = false). Measured
+  /// (bench/README.md): false did not help the hopper (the same wall) and made the plank-box's
+  /// first NLP fail (Restoration_Failed).
+  bool smooth_tangential_pairs = true;
   double element_length_freedom = 1.0;  ///< gamma_h in [0, 1]: h in [(1-gamma_h) h0, (1+gamma_h) h0]
-  /// Scales K of the switching functions (gap [1/m], J_n v and J_t v [s/m]; > 0): the rows
+  /// Scales K = {gap [1/m], J_n v [s/m], J_t v [s/m]} of the switching functions, the same for
+  /// every contact (function m uses entry m % 3); > 0. The rows
   /// read K c(q, v) - lambda_p + lambda_n = 0. The step functions and the switches do not change,
   /// the multipliers and so the complementarity products do: a relaxation that holds
   /// lambda (1 - alpha) = sigma leaves 1 - alpha = sigma / (K c), so K is the unit in which a
@@ -171,6 +185,9 @@ template <class O, class T, int nx, int nu>
 concept HasTimedRunningCost = requires(const O& o, const VecT<T, nx>& x, const VecT<T, nu>& u, const T& t) {
   { o.template running_cost<T>(x, u, t) } -> std::convertible_to<T>;
 };
+/// A running_cost that is not a member template (its address can be taken): AD cannot see it.
+template <class O>
+concept HasNonTemplateRunningCost = requires { &O::running_cost; };
 template <class O, class T, int nx>
 concept HasTerminalCost = requires(const O& o, const VecT<T, nx>& x, const T& t) {
   { o.template terminal_cost<T>(x, t) } -> std::convertible_to<T>;
@@ -232,6 +249,15 @@ class FesdMpcc final : public Mpcc {
   static constexpr int nz = 2 * nq + 1 + nu + nsw;
   static constexpr int stage_size = 2 * ny + 3 * nsw;
   using Point = FesdPoint<ny, nsw, nu>;
+  // The OCP's functions are differentiated by AD: each must be a member template in T taking T
+  // everywhere, or the values and the derivatives would silently use different functions.
+  static_assert(!detail::HasNonTemplateRunningCost<Ocp>,
+                "FesdMpcc: Ocp::running_cost must be a member template: template <class T> T running_cost(const "
+                "VecT<T, nx>& x, const VecT<T, nu>& u[, const T& t]) const");
+  static_assert(detail::HasRunningCost<Ocp, double, nx, nu> == detail::HasRunningCost<Ocp, detail::Ad2<nz>, nx, nu> &&
+                    detail::HasTimedRunningCost<Ocp, double, nx, nu> ==
+                        detail::HasTimedRunningCost<Ocp, detail::Ad2<nz>, nx, nu>,
+                "FesdMpcc: Ocp::running_cost must take the clock as const T& t (it is differentiated)");
 
   FesdMpcc(const System& system, const Ocp& ocp, const Vec<nq>& q0, const Vec<nq>& v0, const FesdOptions& options)
       : system_(system), ocp_(ocp), options_(options), tableau_(radau_iia(options.stages)) {
@@ -1031,11 +1057,12 @@ class FesdMpcc final : public Mpcc {
           if (!options_.switch_detection || (!options_.velocity_switch_detection && m % 3 != 0)) {
             // Stage-wise pairs: with c = lambda_p - lambda_n given, their equalities
             // lambda_n alpha = sigma, lambda_p (1 - alpha) = sigma determine alpha (smoothable).
+            const bool smoothable = m % 3 != 2 || options_.smooth_tangential_pairs;
             for (int r = 0; r < ns; ++r) {
               const int a = alpha_index(k, j, r) + m;
               const std::string at = el + "[stage " + std::to_string(r) + "]" + sw;
-              pairs_.push_back({{{{lambda_n_index(k, j, r) + m, 1.0}}, 0.0}, {{{a, 1.0}}, 0.0}, "lambda_n" + at + " _|_ alpha", true});
-              pairs_.push_back({{{{lambda_p_index(k, j, r) + m, 1.0}}, 0.0}, {{{a, -1.0}}, 1.0}, "lambda_p" + at + " _|_ 1 - alpha", true});
+              pairs_.push_back({{{{lambda_n_index(k, j, r) + m, 1.0}}, 0.0}, {{{a, 1.0}}, 0.0}, "lambda_n" + at + " _|_ alpha", smoothable});
+              pairs_.push_back({{{{lambda_p_index(k, j, r) + m, 1.0}}, 0.0}, {{{a, -1.0}}, 1.0}, "lambda_p" + at + " _|_ 1 - alpha", smoothable});
             }
             continue;
           }

@@ -184,7 +184,8 @@ struct MpccSolverOptions {
 
   // ---- Polishing by a branch NLP (top of this file)
   /// Try the branch NLP after the successful steps with residual <= polish_below and after the
-  /// last successful step; stop at the first polish that succeeds.
+  /// last successful step; stop at the first polish that succeeds. (Not saltus::polish() of
+  /// hybrid/reference/resimulation.hpp, which re-simulates an imported reference.)
   bool polish = true;
   /// >= 0. Default 0: polish only after the homotopy's last successful step. Early polishing
   /// (1e-6) saves steps on small problems (tests: SmallMpcc 22 instead of 24 iterations) but on
@@ -287,7 +288,11 @@ struct MpccSolution {
   Eigen::VectorXd constraint_multipliers;   ///< size m: the ORIGINAL constraints only
   Eigen::VectorXd bound_multipliers_lower;  ///< size n
   Eigen::VectorXd bound_multipliers_upper;  ///< size n
-  double objective = 0.0;                   ///< original f(x), without the penalty
+  /// The problem's own f(x), without the relaxation's penalty. For FesdMpcc that is the OCP's cost
+  /// PLUS its regularisation terms (heuristic step equilibration rho_h sum (h - h0)^2, speed of
+  /// time rho_s sum (s - 1)^2): the running cost alone is the cost state L at the final point,
+  /// points.back().y[cost_index], plus any terminal cost.
+  double objective = 0.0;
   double complementarity = 0.0;             ///< max_j |G_j(x) H_j(x)|, 0 without pairs
   /// Largest violation of the original MPCC's constraints at x: of x_lower <= x <= x_upper,
   /// g_lower <= g(x) <= g_upper and of the sides' signs G_j, H_j >= 0 (the relaxation

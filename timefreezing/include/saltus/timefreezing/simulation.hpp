@@ -150,10 +150,15 @@ ImportedReference<S> recover_reference(const std::vector<FesdPoint<ny, nsw, nu>>
                  "recover_reference: expected the initial point and n_s points per element, got ", points.size(),
                  " points for n_s = ", stages);
   ImportedReference<S> ref;
+  // Every sample's segment is written out: a frozen run that starts on a control-interval
+  // boundary has two pre-event samples at the event time (x- and its repeat with the next
+  // interval's input), which ImportedReference::segment_of would otherwise count as x- and x+.
+  int segment = 0;
   auto add = [&](const FesdPoint<ny, nsw, nu>& p) {
     ref.t.push_back(p.y[nx]);
     ref.x.push_back(p.y.template head<nx>());
     ref.u.push_back(p.u);
+    ref.segment.push_back(segment);
   };
   const int elements = static_cast<int>((points.size() - 1) / stages);
   auto end_of = [&](int e) -> const FesdPoint<ny, nsw, nu>& { return points[static_cast<std::size_t>((e + 1) * stages)]; };
@@ -169,6 +174,7 @@ ImportedReference<S> recover_reference(const std::vector<FesdPoint<ny, nsw, nu>>
       FesdPoint<ny, nsw, nu> plus = end_of(f);
       const double h_last = end_of(f).tau - points[static_cast<std::size_t>(f == 0 ? 0 : f * stages)].tau;
       if (plus.y[nx] - ref.t.back() <= frozen_tolerance * h_last) plus.y[nx] = ref.t.back();
+      ++segment;
       add(plus);
       e = f + 1;
     } else {

@@ -28,6 +28,7 @@ struct PolishResult {
   std::size_t imported_events = 0, simulated_events = 0;
 };
 
+/// (Not MpccSolverOptions::polish of the time-freezing solver, a branch NLP.)
 /// Re-simulates an imported reference with the event-driven simulator from its first sample
 /// under its own input, u(t) interpolated linearly between the samples
 /// (ImportedReference::input), and measures how far the two are apart (the validation protocol's

@@ -1,8 +1,11 @@
-// The flagship OCP statement, the hopper over three holes (scenes/hopper_holes.hpp): its path
+// The flagship OCP statements. The hopper over three holes (scenes/hopper_holes.hpp): its path
 // constraints at postures whose values are known in closed form, the hole continuation level, the
 // exact derivatives of its FESD MPCC under Ipopt's own second-order derivative checker, and the
-// feasibility report the example and the benchmark print.
+// feasibility report the example and the benchmark print. The plank-box flat landing
+// (scenes/plank_box_landing.hpp): its start, target and rows, and the derivative checker on its
+// two-contact FESD MPCC with the scaled gap.
 #include "scenes/hopper_holes.hpp"
+#include "scenes/plank_box_landing.hpp"
 
 #include <saltus/timefreezing/fesd.hpp>
 #include <saltus/timefreezing/mpcc_solver.hpp>
@@ -99,6 +102,51 @@ TEST(HopperOverThreeHoles, FeasibilityReportNamesTheWorstRow) {
   EXPECT_NEAR(f.target_error, 1e-3, 1e-15);
   const std::vector<P> clean{start, end};
   EXPECT_EQ(Ocp::feasibility(clean).worst_row, -1);
+}
+
+// The start: both corners 5 cm above the level plank, the box parallel to it (path row 0); the
+// target: 5 cm above the plank at x = 0.75, so its terminal rows are the bounds; the feasibility
+// report reads both.
+TEST(PlankBoxFlatLanding, StartTargetAndRowsAreTheStatement) {
+  using Landing = PlankBoxFlatLanding;
+  const Landing ocp;
+  const PlankBox box;
+  const Vec<4> q0 = Landing::q0();
+  EXPECT_NEAR(box.gap<double>(PlankBox::left, q0), 0.05, 1e-15);
+  EXPECT_NEAR(box.gap<double>(PlankBox::right, q0), 0.05, 1e-15);
+  EXPECT_EQ(ocp.path_constraints<double>(state(q0), Vec<3>::Zero())[0], 0.0);
+  Vec<8> target = Vec<8>::Zero();
+  target.head<3>() = Landing::box_target();
+  EXPECT_NEAR(box.gap<double>(PlankBox::left, Vec<4>(target.head<4>())), 0.05, 1e-15);
+  EXPECT_NEAR(target[0], 0.75, 1e-15);
+  const Vec<6> rows = ocp.terminal_constraints<double>(target, 1.5);
+  EXPECT_EQ((rows - ocp.terminal_lower()).cwiseAbs().maxCoeff(), 0.0);
+  EXPECT_EQ((ocp.terminal_upper() - ocp.terminal_lower()).cwiseAbs().maxCoeff(), 0.0);
+  // A tilted box (theta - phi = 0.01) and a target missed by 2 mm are reported.
+  struct P {
+    Vec<10> y;
+  };
+  P start{Vec<10>::Zero()}, tilted = start, end = start;
+  start.y.head<4>() = q0;
+  tilted.y.head<4>() = q0 + Vec<4>(0.0, 0.0, 0.01, 0.0);
+  end.y.head<8>() = target;
+  end.y[1] += 2e-3;
+  const std::vector<P> path{start, tilted, end};
+  const Landing::Feasibility f = Landing::feasibility(path);
+  EXPECT_NEAR(f.path_violation, 0.01, 1e-15);
+  EXPECT_NEAR(f.target_error, 2e-3, 1e-15);
+}
+
+// Two contacts with friction, the gap scaled by 100, the parallel-box row, the six terminal rows,
+// the clock and the speed of time: Ipopt's second-order checker finds no wrong entry.
+TEST(PlankBoxFlatLanding, IpoptDerivativeCheckerFindsNoError) {
+  using Landing = PlankBoxFlatLanding;
+  const timefreezing::FesdMpcc<PlankBox, Landing> problem(Landing::system(), Landing{}, Landing::q0(), Landing::v0(),
+                                                          Landing::grid(1, 2, 2));
+  EXPECT_EQ(problem.np, 1);
+  EXPECT_EQ(problem.nt, 6);
+  const timefreezing::DerivativeCheckReport report = timefreezing::check_derivatives(problem, interior_point(problem, 13));
+  EXPECT_EQ(report.errors, 0) << report.output;
 }
 
 }  // namespace

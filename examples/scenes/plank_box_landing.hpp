@@ -1,0 +1,134 @@
+// The plank-box's flagship OCP: the fully actuated box (scenes/plank_box.hpp) starts at rest above
+// the plank, lands FLAT on it (both bottom corners at once: a planned simultaneous impact), slides
+// along it and lifts off again to stop above the plank's far end, minimising the integral of u'u
+// over physical time with bounded inputs. Shared by examples/plank_box.cpp (--json),
+// tests/test_flagship_ocps.cpp and bench/README.md.
+//
+// q = (x, y, theta, phi): box centre [m], box angle, plank angle [rad]; u = (F_x, F_y, tau) on the
+// box, |F| <= 20 N, |tau| <= 5 N m; both corners C_L, C_R with mu = 0.4, e_n = 0; the plank is
+// compliant (k_P = 200 N m/rad, b_P = 2 N m s/rad): both contacts' auxiliary dynamics act on box
+// and plank (time_freezing_system.hpp, several contacts).
+//
+// Why it lands at all: holding the box in the air costs (m g)^2 = 96 N^2 per second; on the
+// plank its weight is carried and sliding costs about (mu m g)^2 = 15 N^2 per second. From the start
+// 5 cm above the plank the optimum drops onto it, slides, and lifts off near the end.
+//
+// The planned simultaneous impact: one path row, theta - phi = 0 at every stage point (the box
+// stays parallel to the plank, so its two corners have the same gap at every instant and land,
+// slide and lift off together). It is the simplest constraint that makes the landing flat; the
+// contact-implicit OCP still decides when and where the box lands and how long it slides.
+//
+// Start: flat_state(0.25, 0.05) at rest (centre 0.25 m from the hinge, corners 5 cm above the
+// plank). Target at T = 1.5 s: centre at x = 0.75, 5 cm above the level plank's top face
+// (y = flat_state(0.75, 0.05)[1]), theta = 0, the box at rest; the plank's state is free.
+#pragma once
+
+#include "scenes/ocp_grid.hpp"
+#include "scenes/plank_box.hpp"
+
+#include <saltus/timefreezing/fesd.hpp>
+#include <saltus/timefreezing/mpcc_solver.hpp>
+#include <saltus/timefreezing/time_freezing_system.hpp>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <vector>
+
+namespace saltus::scenes {
+
+struct PlankBoxFlatLanding {
+  static constexpr double horizon = 1.5;                  ///< T [s]
+  static constexpr double force_limit = 20.0;             ///< |F_x|, |F_y| [N]
+  static constexpr double torque_limit = 5.0;             ///< |tau| [N m]
+  static constexpr double auxiliary_acceleration = 50.0;  ///< a_n of the time-freezing system
+  static constexpr double start_along = 0.25, target_along = 0.75, clearance = 0.05;  ///< [m]
+  static constexpr int path_constraint_count = 1;
+  static constexpr int terminal_constraint_count = 6;
+
+  PlankBox plank_box{};
+
+  static Vec<4> q0() { return PlankBox{}.flat_state(start_along, clearance).head<4>(); }
+  static Vec<4> v0() { return Vec<4>::Zero(); }
+  /// (x, y, theta) of the box at T.
+  static Vec<3> box_target() {
+    const Vec<8> x = PlankBox{}.flat_state(target_along, clearance);
+    return Vec<3>(x[0], x[1], x[2]);
+  }
+
+  static timefreezing::TimeFreezingSystem<PlankBox> system() { return {PlankBox{}, auxiliary_acceleration}; }
+
+  template <class T>
+  T running_cost(const VecT<T, 8>&, const VecT<T, 3>& u) const {
+    return u.squaredNorm();
+  }
+
+  /// theta - phi: the box parallel to the plank (file comment).
+  template <class T>
+  VecT<T, 1> path_constraints(const VecT<T, 8>& x, const VecT<T, 3>&) const {
+    return VecT<T, 1>(T(x[2] - x[3]));
+  }
+  Vec<1> path_lower() const { return Vec<1>::Zero(); }
+  Vec<1> path_upper() const { return Vec<1>::Zero(); }
+
+  /// (x, y, theta) of the box and its velocity (v_x, v_y, omega) at T.
+  template <class T>
+  VecT<T, 6> terminal_constraints(const VecT<T, 8>& x, const T&) const {
+    VecT<T, 6> c;
+    c << x[0], x[1], x[2], x[4], x[5], x[6];
+    return c;
+  }
+  Vec<6> terminal_lower() const {
+    Vec<6> b;
+    b << box_target(), Vec<3>::Zero();
+    return b;
+  }
+  Vec<6> terminal_upper() const { return terminal_lower(); }
+
+  /// terminal_clock_grid (scenes/ocp_grid.hpp: speed of time s in [1, 5], needed because the clock
+  /// runs slower than tau while the box slides, a_n / (a_n + g) for a resting box; terminal clock;
+  /// gap-only cross-complementarity), the bounds of u, and the gap scale.
+  static timefreezing::FesdOptions grid(int control_intervals = 15, int finite_elements = 2, int stages = 2) {
+    timefreezing::FesdOptions o =
+        terminal_clock_grid(horizon, control_intervals, finite_elements, stages,
+                            Vec<3>(-force_limit, -force_limit, -torque_limit), Vec<3>(force_limit, force_limit, torque_limit));
+    // The gaps in units of 1 cm (K_gap = 100 /m): a relaxation
+    // parameter sigma then leaves a phantom support of a_n sigma / (100 gap) in flight
+    // (bench/README.md, "Plank-box flat landing": with K_gap = 1 the first relaxed NLPs float the
+    // box for free and the homotopy fails at sigma = 0.1).
+    o.switching_scale = {100.0, 1.0, 1.0};
+    return o;
+  }
+  /// The largest |theta - phi| over the given stage points and the target error (box pose and
+  /// velocity at the last point against the terminal rows).
+  struct Feasibility {
+    double path_violation = 0.0;
+    double target_error = 0.0;
+  };
+  template <class Points>
+  static Feasibility feasibility(const Points& points) {
+    Feasibility f;
+    for (const auto& p : points) f.path_violation = std::max(f.path_violation, std::abs(p.y[2] - p.y[3]));
+    const auto& y = points.back().y;
+    Vec<6> end;
+    end << y[0], y[1], y[2], y[4], y[5], y[6];
+    f.target_error = (end - PlankBoxFlatLanding{}.terminal_lower()).cwiseAbs().maxCoeff();
+    return f;
+  }
+
+  /// The smoothing homotopy from sigma_0 = 1e-2 (measured: from 1 the relaxed problems float the
+  /// box and the homotopy fails at 0.1), kappa = 0.1, 10 steps of at most 1500 Ipopt iterations,
+  /// Ipopt tol 1e-8.
+  static timefreezing::MpccSolverOptions solver() {
+    timefreezing::MpccSolverOptions s;
+    s.relaxation = timefreezing::MpccSolverOptions::Relaxation::Smoothing;
+    s.sigma_0 = 1e-2;
+    s.kappa = 0.1;
+    s.max_homotopy_steps = 10;
+    s.tol = 1e-8;
+    s.max_iter = 1500;
+    return s;
+  }
+};
+
+}  // namespace saltus::scenes
