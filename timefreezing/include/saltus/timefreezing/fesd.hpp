@@ -667,10 +667,12 @@ class FesdMpcc final : public Mpcc {
   /// Rows eta (h_j+1 - h_j) = 0 per control interval: one per inner element boundary.
   int equilibration_count() const { return exact_equilibration() ? options_.finite_elements - 1 : 0; }
   int equilibration_row(int k) const { return interval_row_[k] + 1 + (has_clock_row(k) ? 1 : 0); }
+  /// Does switching function m switch at all (a frictionless contact's tangential one does not)?
+  bool switching_active(int m) const { return system_.has_friction(m / 3) || m % 3 != 2; }
   /// Does switching function m have cross-complementarity (so its switches sit on boundaries)?
+  /// The other active ones get the stage-wise pairs (build_pairs).
   bool cross_complementary(int m) const {
-    const bool active = system_.has_friction(m / 3) || m % 3 != 2;
-    return active && options_.switch_detection && (options_.velocity_switch_detection || m % 3 == 0);
+    return switching_active(m) && options_.switch_detection && (options_.velocity_switch_detection || m % 3 == 0);
   }
 
   // ---- exact step equilibration (file comment) ------------------------------------------------
@@ -1047,14 +1049,13 @@ class FesdMpcc final : public Mpcc {
   void build_pairs() {
     pairs_.clear();
     const int ns = options_.stages;
-    auto active = [&](int m) { return system_.has_friction(m / 3) || m % 3 != 2; };
     for (int k = 0; k < options_.control_intervals; ++k)
       for (int j = 0; j < options_.finite_elements; ++j) {
         const std::string el = "[" + std::to_string(k) + "," + std::to_string(j) + "]";
         for (int m = 0; m < nsw; ++m) {
-          if (!active(m)) continue;
+          if (!switching_active(m)) continue;
           const std::string sw = "[" + std::to_string(m) + "]";
-          if (!options_.switch_detection || (!options_.velocity_switch_detection && m % 3 != 0)) {
+          if (!cross_complementary(m)) {
             // Stage-wise pairs: with c = lambda_p - lambda_n given, their equalities
             // lambda_n alpha = sigma, lambda_p (1 - alpha) = sigma determine alpha (smoothable).
             const bool smoothable = m % 3 != 2 || options_.smooth_tangential_pairs;
