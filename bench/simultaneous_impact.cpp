@@ -10,8 +10,9 @@
 //                          zeroth order: the impact map is discontinuous at the simultaneous event)
 //   min_slope              smallest fitted log-log slope of the first-order prediction's remainder
 //                          over eps = 1e-2..1e-6 with each sampled cone's own piece, against the
-//                          piece's own outcome at T = t* + 0.02 s (plank-box; 2 ms for the spatial box,
-//                          whose sequential landings leave it rocking and re-landing within ~10 ms)
+//                          piece's own outcome at T = t* + 0.02 s (plank-box; for the spatial box
+//                          eps = 3e-5..3e-7 at T = t* + 0.1 ms: its cascades of re-touchdowns last
+//                          ~1.6 eps s and leave corners that land again ~0.2 ms later)
 //                          (piece_remainder), fitted above the integration floor (points at least
 //                          30x the smallest remainder, remainder_slope.hpp); `cones_sampled` cones
 //   wrong_piece_slope      largest slope over eps = 1e-4..1e-6 when another piece is applied, the one with
@@ -22,6 +23,11 @@
 //                          directions; `faces` points checked, 0 when no two pieces share one)
 //   build_us_per_piece     wall time of build_all() over the realisable pieces, microseconds
 //   evaluate_us            wall time of one evaluate(z, v) once the pieces are built
+//   max_micro_events       the longest order (re-touchdowns count: a corner landing twice is two)
+//   twin_max_error         largest relative difference max|G_z,twin - G_z| / max|G_z| over the
+//                          pieces whose twin (numerical_conewise_piece: one-sided differences inside
+//                          the cone) ran; `twin_failed` pieces whose perturbed runs ended elsewhere
+//   twin_ms                wall time of one twin, milliseconds
 // Plain main; `--json` prints one JSON object, otherwise a table.
 #include "remainder_slope.hpp"
 #include "scenes/references.hpp"
@@ -48,6 +54,8 @@ using Clock = std::chrono::steady_clock;
 struct Row {
   std::string name;
   int guards = 0, orders = 0, pieces = 0, realisable = 0, cones_sampled = 0, failed_runs = 0, faces = 0;
+  int max_micro_events = 0, twin_failed = 0;
+  double twin_error = NAN, twin_ms = NAN;
   std::map<std::string, int> unrealisable;
   std::vector<std::string> piece_lines;  ///< order: post-event mode, post-state difference
   std::string nominal_mode;
@@ -65,9 +73,19 @@ const char* reason_name(UnrealisableOrder::Reason r) {
   return "?";
 }
 
+/// Where the cases differ: the time after t* at which a prediction is compared, the eps of the
+/// remainder fits, and the twin's window and step (conewise pieces with re-touchdowns end with
+/// corners moving away slowly, which land again ~0.2 ms later: everything must happen before).
+struct Scales {
+  double after = 0.02;
+  std::vector<double> eps = default_prediction_eps();
+  double twin_window = 1e-3, twin_step = 1e-4;
+};
+
 template <Scene S>
 Row measure(const std::string& name, const S& scene, const Vec<2 * S::nq>& x0, const InputLaw<S>& input,
-            double t_final, int samples, double after) {
+            double t_final, int samples, const Scales& scales) {
+  const double after = scales.after;
   constexpr int nx = 2 * S::nq, nu = S::nu;
   const SimulationOptions options = references::tight();
   Simulator<S> sim(scene, options);
@@ -101,6 +119,27 @@ Row measure(const std::string& name, const S& scene, const Vec<2 * S::nq>& x0, c
                                 std::to_string(p->post_state_difference));
     }
     for (const auto& u : fresh.unrealisable_orders()) ++row.unrealisable[reason_name(u.reason)];
+    NumericalJumpGainOptions twin;
+    twin.simulation = options;
+    twin.window = scales.twin_window;
+    twin.cone_step = scales.twin_step;
+    double twin_seconds = 0.0;
+    int twins = 0;
+    for (const auto* p : fresh.pieces()) {
+      row.max_micro_events = std::max(row.max_micro_events, static_cast<int>(p->order.size()));
+      const auto start = Clock::now();
+      try {
+        const auto numeric = numerical_conewise_piece(scene, traj, 0, *p, twin);
+        const double e = (numeric.G_z - p->G_z).cwiseAbs().maxCoeff() / p->G_z.cwiseAbs().maxCoeff();
+        row.twin_error = std::isnan(row.twin_error) ? e : std::max(row.twin_error, e);
+        twin_seconds += seconds_since(start);
+        ++twins;
+      } catch (const NumericalFailure& err) {
+        ++row.twin_failed;
+        if (std::getenv("SALTUS_BENCH_VERBOSE")) std::cerr << name << ": twin failed: " << err.what() << "\n";
+      }
+    }
+    if (twins > 0) row.twin_ms = 1e3 * twin_seconds / twins;
     row.face = fresh.face_discontinuity(200, &row.faces);
     std::mt19937 rng(3);
     std::normal_distribution<double> normal;
@@ -141,10 +180,10 @@ Row measure(const std::string& name, const S& scene, const Vec<2 * S::nq>& x0, c
     for (const auto* q : gain.pieces())
       if (q != &own && (!other || (q->x_plus - own.x_plus).norm() < (other->x_plus - own.x_plus).norm())) other = q;
     try {
-      const RemainderFit right = piece_remainder(lin, options, 0, z0, own, T);
+      const RemainderFit right = piece_remainder(lin, options, 0, z0, own, T, scales.eps);
       if (!right.structure_matched) {
         if (std::getenv("SALTUS_BENCH_VERBOSE")) {
-          const auto run = sim.run(Vec<nx>(x0 + 1e-4 * z0), 0.0, T, input);
+          const auto run = sim.run(Vec<nx>(x0 + scales.eps[scales.eps.size() / 2] * z0), 0.0, T, input);
           std::cerr << name << ": structure differs: " << run.events.size() << " events before T (piece: "
                     << own.order.size() << " micro-events), final mode " << describe(scene, run.segments.back().mode)
                     << "\n";
@@ -155,7 +194,7 @@ Row measure(const std::string& name, const S& scene, const Vec<2 * S::nq>& x0, c
       ++row.cones_sampled;
       min_slope = std::min(min_slope, bench::slope_above_floor(right.eps, right.remainder).slope);
       if (other) {
-        const RemainderFit wrong = piece_remainder(lin, options, 0, z0, *other, T);
+        const RemainderFit wrong = piece_remainder(lin, options, 0, z0, *other, T, scales.eps);
         // Its first-order error shows at the small eps (at the large ones the common eps^2 term
         // can still dominate when the pieces differ little along this perturbation).
         const std::vector<double> e3(wrong.eps.end() - 3, wrong.eps.end()), r3(wrong.remainder.end() - 3, wrong.remainder.end());
@@ -183,18 +222,25 @@ int main(int argc, char** argv) {
       Vec<8> x0 = plank_box.flat_state();
       x0[4] = vx;
       rows.push_back(measure(vx == 0 ? "plank_box flat landing, stick" : "plank_box flat landing, slip", plank_box, x0,
-                             InputLaw<scenes::PlankBox>(input), 0.3, 200, 0.02));
+                             InputLaw<scenes::PlankBox>(input), 0.3, 200, Scales{}));
       std::cerr << "done: " << rows.back().name << "\n";
     }
   }
   {
     scenes::SpatialBox box;
+    // The cascade lasts ~1.6 eps s per unit of gap deviation; its slowest corners land again
+    // ~0.2 ms after it: compare at t* + 0.1 ms with eps <= 3e-5.
+    Scales spatial;
+    spatial.after = 1e-4;
+    spatial.eps = {3e-5, 1e-5, 3e-6, 1e-6, 3e-7};
+    spatial.twin_window = 1e-4;
+    spatial.twin_step = 1e-5;
     for (const double vx : {0.0, 0.5}) {
       Vec<12> x0 = Vec<12>::Zero();
       x0[2] = 0.5 * box.parameters().size[2] + 0.02;
       x0[6] = vx;
       rows.push_back(measure(vx == 0 ? "spatial_box flat on four corners, stick" : "spatial_box flat on four corners, slip",
-                             box, x0, zero_input<scenes::SpatialBox>(), 0.1, 400, 0.002));
+                             box, x0, zero_input<scenes::SpatialBox>(), 0.1, 400, spatial));
       std::cerr << "done: " << rows.back().name << "\n";
     }
   }
@@ -219,7 +265,11 @@ int main(int argc, char** argv) {
                      {"max_face_discontinuity", number(r.face)},
                      {"faces", r.faces},
                      {"build_us_per_piece", number(r.build_us)},
-                     {"evaluate_us", number(r.evaluate_us)}};
+                     {"evaluate_us", number(r.evaluate_us)},
+                     {"max_micro_events", r.max_micro_events},
+                     {"twin_max_error", number(r.twin_error)},
+                     {"twin_failed", r.twin_failed},
+                     {"twin_ms", number(r.twin_ms)}};
     }
     std::cout << out.dump(2) << "\n";
     return 0;
@@ -227,13 +277,16 @@ int main(int argc, char** argv) {
   std::cout << std::left << std::setw(42) << "case" << std::right << std::setw(7) << "guards" << std::setw(7)
             << "orders" << std::setw(11) << "realisable" << std::setw(9) << "nominal" << std::setw(7) << "cones"
             << std::setw(10) << "min_slope" << std::setw(12) << "wrong_slope" << std::setw(12) << "face_jump"
-            << std::setw(14) << "build_us/pc" << std::setw(12) << "evaluate_us" << "\n";
+            << std::setw(14) << "build_us/pc" << std::setw(12) << "evaluate_us" << std::setw(8) << "depth"
+            << std::setw(11) << "twin_err" << std::setw(12) << "twin_failed" << std::setw(9) << "twin_ms" << "\n";
   for (const Row& r : rows) {
     std::cout << std::left << std::setw(42) << r.name << std::right << std::setw(7) << r.guards << std::setw(7)
               << r.orders << std::setw(11) << r.pieces << std::setw(9) << r.realisable << std::setw(7)
               << r.cones_sampled << std::setw(10) << std::setprecision(3) << r.min_slope << std::setw(12)
               << r.wrong_slope << std::setw(12) << std::setprecision(2) << r.face << std::setw(14)
-              << std::setprecision(4) << r.build_us << std::setw(12) << r.evaluate_us << "\n";
+              << std::setprecision(4) << r.build_us << std::setw(12) << r.evaluate_us << std::setw(8)
+              << r.max_micro_events << std::setw(11) << std::setprecision(2) << r.twin_error << std::setw(12)
+              << r.twin_failed << std::setw(9) << std::setprecision(3) << r.twin_ms << "\n";
     for (const auto& [k, n] : r.unrealisable) std::cout << "    unrealisable (" << k << "): " << n << "\n";
     std::cout << "    nominal post-event mode: " << r.nominal_mode << "\n";
     for (const auto& line : r.piece_lines) std::cout << "    piece " << line << "\n";

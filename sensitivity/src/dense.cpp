@@ -3,6 +3,8 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
+#include <numeric>
+#include <vector>
 
 namespace saltus::detail {
 
@@ -66,6 +68,80 @@ int rank_revealing_solve(const MatrixRef& D, const Eigen::Ref<const Eigen::Vecto
 
 Eigen::MatrixXd minimum_norm_solve(const MatrixRef& B, const MatrixRef& R) {
   return Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd>(B).solve(R);
+}
+
+double nearest_hull_point(const MatrixRef& P, Eigen::VectorXd& point) {
+  const int k = static_cast<int>(P.rows()), n = static_cast<int>(P.cols());
+  point = Eigen::VectorXd::Zero(n);
+  if (k == 0) return 0.0;
+  double scale2 = 0.0;
+  int first = 0;
+  for (int i = 0; i < k; ++i) {
+    scale2 = std::max(scale2, P.row(i).squaredNorm());
+    if (P.row(i).squaredNorm() < P.row(first).squaredNorm()) first = i;
+  }
+  if (!(scale2 > 0)) return 0.0;
+  // The corral S (affinely independent rows) and the convex weights of `point` on it.
+  std::vector<int> S{first};
+  std::vector<double> weight{1.0};
+  point = P.row(first).transpose();
+  constexpr double tiny = 1e-15;
+  for (int major = 0; major < 50 * (k + n) + 100; ++major) {
+    if (point.squaredNorm() <= tiny * tiny * scale2) break;  // the origin is (numerically) in the hull
+    // The row most opposed to `point`: if no row is below the supporting plane through it, it is optimal.
+    const Eigen::VectorXd along = P * point;
+    int j = 0;
+    along.minCoeff(&j);
+    if (point.squaredNorm() - along[j] <= tiny * scale2) break;
+    if (std::find(S.begin(), S.end(), j) != S.end()) break;  // round-off: no progress is possible
+    S.push_back(j);
+    weight.push_back(0.0);
+    for (int minor = 0; minor <= n + 1; ++minor) {
+      // The point of the affine hull of S nearest to the origin: p0 + D mu, D = [p_i - p0].
+      const int s = static_cast<int>(S.size());
+      const Eigen::VectorXd p0 = P.row(S[0]).transpose();
+      Eigen::VectorXd alpha(s);
+      if (s == 1) {
+        alpha[0] = 1.0;
+      } else {
+        Eigen::MatrixXd D(n, s - 1);
+        for (int i = 1; i < s; ++i) D.col(i - 1) = P.row(S[i]).transpose() - p0;
+        const Eigen::VectorXd mu = Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd>(D).solve(Eigen::VectorXd(-p0));
+        alpha[0] = 1.0 - mu.sum();
+        alpha.tail(s - 1) = mu;
+      }
+      if (alpha.minCoeff() > tiny) {  // inside the simplex of S: the new point
+        for (int i = 0; i < s; ++i) weight[i] = alpha[i];
+        break;
+      }
+      // Otherwise move from the current weights towards alpha until a weight reaches zero, and
+      // drop the rows whose weight did (the minor cycle of Wolfe's algorithm).
+      double theta = 1.0;
+      for (int i = 0; i < s; ++i)
+        if (alpha[i] <= tiny && weight[i] - alpha[i] > 0) theta = std::min(theta, weight[i] / (weight[i] - alpha[i]));
+      std::vector<int> kept;
+      std::vector<double> kept_weight;
+      for (int i = 0; i < s; ++i) {
+        const double w = weight[i] + theta * (alpha[i] - weight[i]);
+        if (w > tiny) {
+          kept.push_back(S[i]);
+          kept_weight.push_back(w);
+        }
+      }
+      if (kept.empty()) {  // round-off: keep the newest row alone
+        kept = {S.back()};
+        kept_weight = {1.0};
+      }
+      S = std::move(kept);
+      weight = std::move(kept_weight);
+      const double total = std::accumulate(weight.begin(), weight.end(), 0.0);
+      for (double& w : weight) w /= total;
+      if (S.size() == 1) break;
+    }
+    point.setZero();
+    for (std::size_t i = 0; i < S.size(); ++i) point += weight[i] * P.row(S[i]).transpose();
+  }
+  return point.norm();
 }
 
 }  // namespace saltus::detail

@@ -68,10 +68,23 @@
 //    exceptions, with the order added to the message);
 //  - continuity across shared faces is measured, not assumed: face_discontinuity().
 //
-// Not followed yet: a guard that fires a second time within the macro-event (a corner released by
-// a later impulse that lands again at once). The spatial box on four corners does this (its first
-// four touchdowns leave it on one corner, and the perturbed motion lands again within
-// milliseconds): its pieces describe the first firing of each guard only.
+// Re-touchdowns. A guard may fire more than once within the macro-event: a corner that landed
+// (its contact closed) is released by a later impulse (the impact problem at that intermediate
+// state gives it a positive normal velocity: its mode is open again, its touchdown guard exists
+// again with rate > 0: `away`, held back like a contact sent away), and a still later impulse
+// can turn its normal velocity negative: it lands again. Nothing new is needed for the first
+// order: at every node each of the event's guards whose contact is open is classified afresh as
+// above. The released contact's gap is zero to zeroth order (it was closed at t*) and its
+// first-order deviation Dgamma_i z_N already carries the time it spent moving away (z_N is
+// composed through every micro-event's saltation, its dt included), so dt_i computed from z_N
+// is its re-crossing time and exceeds the previous micro-event's on the cone (the gap was
+// positive in between). A contact released with zero normal velocity (opened by the mode
+// selection at the acceleration level) leaves at second order and is held back, not reported
+// as grazing. The spatial box landing flat on four corners does this: each corner lands twice,
+// 7-8 micro-events per piece, ending on one corner with the others moving away at 0.5-12 mm/s
+// (they land again about 0.2 ms later and more: zeroth-order times, events of their own). A
+// cascade that would not end (Zeno-like at first order, or a cycle of releases) is stopped at
+// options.max_micro_events with NumericalFailure naming the order so far.
 //
 // Cost: up to m! leaves. The tree is built lazily: evaluate() builds only the nodes on the path
 // of its (z-, v) and keeps them (memoised); build_all() builds every leaf. A node costs one
@@ -83,6 +96,7 @@
 #include <saltus/hybrid/simulation/simulation_options.hpp>
 #include <saltus/sensitivity/jump_gain.hpp>
 
+#include <limits>
 #include <memory>
 #include <vector>
 
@@ -100,9 +114,12 @@ struct ConewiseGainOptions {
   /// A piece's post-event state is the nominal one when max |x_plus - x+| <= this * max(1, |x+|).
   double outcome_tolerance = 1e-9;
   /// A cone whose normalised rows have a convex combination shorter than this has no interior
-  /// (its order is unrealisable, UnrealisableOrder::Reason::EmptyCone). Checked exactly for cones
-  /// of up to 20 rows (every path of up to 6 guards); deeper cones are not checked and built.
+  /// (its order is unrealisable, UnrealisableOrder::Reason::EmptyCone). Checked for every cone
+  /// (the nearest point of the rows' convex hull to the origin, Wolfe's algorithm).
   double empty_cone_tolerance = 1e-9;
+  /// The most micro-events on one path of the tree, re-touchdowns included; a path still
+  /// crossing guards beyond it throws NumericalFailure (a Zeno-like cascade at first order).
+  int max_micro_events = 64;
 };
 
 /// One linear piece of a conewise jump gain: z+ = G_z z- + G_v v on the cone
@@ -121,6 +138,14 @@ struct ConewisePiece {
   /// rows when every guard fires.
   Eigen::Matrix<double, Eigen::Dynamic, nx> cone_z;
   Eigen::Matrix<double, Eigen::Dynamic, nu> cone_v;
+  /// The direction (z-, v) deepest inside the cone (unit Euclidean norm, z- first), and its
+  /// margin: every normalised row is >= interior_margin there, so the ball of that radius around
+  /// it lies in the cone (the nearest point of the normalised rows' convex hull to the origin,
+  /// detail/dense.hpp). A piece without rows (one piece: every guard coincident) has the first
+  /// unit vector and an infinite margin. Where a one-sided perturbation of this piece is drawn
+  /// (numerical_conewise_piece).
+  Eigen::Matrix<double, nx + nu, 1> interior_direction = Eigen::Matrix<double, nx + nu, 1>::Unit(0);
+  double interior_margin = std::numeric_limits<double>::infinity();
   Vec<nx> x_plus = Vec<nx>::Zero();  ///< post-event state of this order at t* (zeroth order)
   Mode<nc> mode_after{};
   /// x_plus and mode_after are the nominal event's (within outcome_tolerance): z+ is then the

@@ -37,7 +37,14 @@ struct ConewiseJumpGain<S>::Node {
   Mat<nx, nx> Zz = Mat<nx, nx>::Identity();  ///< z_N = Zz z- + Zv v
   Mat<nx, nu> Zv = Mat<nx, nu>::Zero();
   std::vector<Guard> fired, never_crossed;
+  /// The event's guards whose contacts are open here and moving away (rate > 0): fired ones that
+  /// a later impulse released, and ones not fired yet that an impulse sent away. Held back
+  /// (`deferred`) in the next micro-event: their gaps are of order eps and positive.
+  std::vector<Guard> away;
   std::vector<std::vector<Guard>> order;  ///< the micro-events so far, each a group of guards
+  /// The deepest direction of the path's cone (nx + nu, unit) and its margin (conewise_gain.hpp).
+  Eigen::Matrix<double, nx + nu, 1> interior = Eigen::Matrix<double, nx + nu, 1>::Unit(0);
+  double margin = std::numeric_limits<double>::infinity();
   /// The crossing guards, grouped where they coincide (the same first-order shift: they fire
   /// together in every nearby motion, "Coincident guards" in jump_gain.hpp).
   std::vector<std::vector<Guard>> crossing;
@@ -61,41 +68,6 @@ inline std::string describe_guard(const char* contact_name, const Guard& g) {
 }
 }  // namespace detail
 
-namespace detail {
-/// Distance from the origin to the convex hull of the rows of R: positive if and only if the cone
-/// {p : R p >= 0} has an interior point (Gordan's alternative: R p > 0 has no solution exactly when
-/// a convex combination of the rows vanishes). Exact for up to 20 rows, by the affinely
-/// independent subsets of rows (the nearest point lies in the relative interior of one of them,
-/// Caratheodory); +infinity (unchecked) beyond.
-inline double hull_distance_from_origin(const Eigen::MatrixXd& R) {
-  const int k = static_cast<int>(R.rows()), n = static_cast<int>(R.cols());
-  if (k == 0) return std::numeric_limits<double>::infinity();
-  if (k > 20) return std::numeric_limits<double>::infinity();
-  double best = std::numeric_limits<double>::infinity();
-  std::vector<int> idx;
-  for (unsigned mask = 1; mask < (1u << k); ++mask) {
-    idx.clear();
-    for (int i = 0; i < k; ++i)
-      if (mask & (1u << i)) idx.push_back(i);
-    const int s = static_cast<int>(idx.size());
-    if (s > n + 1) continue;
-    const Eigen::VectorXd p0 = R.row(idx[0]).transpose();
-    if (s == 1) {
-      best = std::min(best, p0.norm());
-      continue;
-    }
-    Eigen::MatrixXd D(n, s - 1);
-    for (int j = 1; j < s; ++j) D.col(j - 1) = R.row(idx[j]).transpose() - p0;
-    Eigen::VectorXd mu;
-    // Affinely dependent: a smaller subset attains the same point.
-    if (rank_revealing_solve(D, Eigen::VectorXd(-p0), mu) < s - 1) continue;
-    if (mu.minCoeff() < -1e-12 || mu.sum() > 1 + 1e-12) continue;  // the nearest point of the affine hull is outside
-    best = std::min(best, (p0 + D * mu).norm());
-  }
-  return best;
-}
-}  // namespace detail
-
 template <Scene S>
 std::string ConewiseJumpGain<S>::describe_order(const std::vector<Guard>& fired) const {
   std::string s = "[";
@@ -115,6 +87,7 @@ ConewiseJumpGain<S>::ConewiseJumpGain(const S& scene, const Event<S>& event, con
                  "conewise gain: the event at t = ", event.t, " has no guarded first transition (an initial impact "
                  "has a fixed time and a linear gain: JumpGainSolver)");
   SALTUS_REQUIRE(options.outcome_tolerance >= 0, "ConewiseGainOptions: outcome_tolerance must be >= 0");
+  SALTUS_REQUIRE(options.max_micro_events >= 1, "ConewiseGainOptions: max_micro_events must be >= 1");
   guards_ = event.transitions.front().guards;
   resolver_ = std::make_unique<TransitionResolver<S>>(scene, options.simulation);
   gains_ = std::make_unique<JumpGainSolver<S>>(scene, options.gains);
@@ -143,16 +116,20 @@ ConewiseJumpGain<S>::ConewiseJumpGain(ConewiseJumpGain&&) noexcept = default;
 
 template <Scene S>
 void ConewiseJumpGain<S>::classify(Node& node) {
-  // Every guard of the event not fired yet is classified afresh at each node: one that the
-  // previous impulse sent away may be approached again after a later one.
+  // Every guard of the event is classified afresh at each node: one that an impulse sent away
+  // may be approached again after a later one, and one that fired, closed its contact and was
+  // released by a later impulse is a guard again (a re-touchdown: conewise_gain.hpp).
   const double t = event_.t;
   const GuardList<nc> active = active_guards(scene_, node.mode);
   std::vector<Eigen::Matrix<double, 1, nx>> rows_z;
   std::vector<Eigen::Matrix<double, 1, nu>> rows_v;
   node.never_crossed.clear();
+  node.away.clear();
   for (const Guard& g : guards_) {
-    if (std::find(node.fired.begin(), node.fired.end(), g) != node.fired.end()) continue;
-    if (std::find(active.begin(), active.end(), g) == active.end()) {
+    const bool fired_before = std::find(node.fired.begin(), node.fired.end(), g) != node.fired.end();
+    const bool is_active = std::find(active.begin(), active.end(), g) != active.end();
+    if (fired_before && !is_active) continue;  // its contact closed when it fired, and is still closed
+    if (!is_active) {
       // The contact's mode changed in a micro-event so that this guard no longer exists.
       node.never_crossed.push_back(g);
       unrealisable_.push_back({node.fired, {g}, UnrealisableOrder::Reason::NoLongerAGuard,
@@ -161,6 +138,13 @@ void ConewiseJumpGain<S>::classify(Node& node) {
     }
     const GuardCrossing<S>& c = gains_->crossing(law_, t, node.x, node.mode, g);
     const double threshold = options_.gains.grazing_threshold * c.rate_scale;
+    if (fired_before && std::isfinite(c.gamma_dot) && std::abs(c.gamma_dot) <= threshold) {
+      // Fired, then opened by the mode selection with zero normal velocity (a lift-off at the
+      // acceleration level after a later impulse): it leaves the surface at second order, so it
+      // is held back like a contact moving away and cannot come back within the cascade.
+      node.away.push_back(g);
+      continue;
+    }
     if (!std::isfinite(c.gamma_dot) || std::abs(c.gamma_dot) <= threshold) {
       throw GrazingEvent(
           detail::concat("conewise gain: after the micro-events ", describe_order(node.fired), " of the event at t = ", t,
@@ -170,9 +154,12 @@ void ConewiseJumpGain<S>::classify(Node& node) {
                          "; the order of its crossing is not differentiable there"),
           t, g, c.gamma_dot, c.rate_scale);
     }
-    if (c.gamma_dot > 0) {  // sent away: it cannot be the next micro-event
-      node.never_crossed.push_back(g);
-      unrealisable_.push_back({node.fired, {g}, UnrealisableOrder::Reason::SentAway, c.gamma_dot});
+    if (c.gamma_dot > 0) {  // sent away (or released): it cannot be the next micro-event
+      node.away.push_back(g);
+      if (!fired_before) {
+        node.never_crossed.push_back(g);
+        unrealisable_.push_back({node.fired, {g}, UnrealisableOrder::Reason::SentAway, c.gamma_dot});
+      }
       continue;
     }
     const Eigen::Matrix<double, 1, nx> rz = -(c.dgamma_x * node.Zz) / c.gamma_dot;
@@ -226,7 +213,9 @@ auto ConewiseJumpGain<S>::child(Node& node, int k) -> Node* {
   // A cone without interior holds no open set of perturbations: the order happens on a set of
   // measure zero only (three corners of a flat face down force the fourth down with them, so
   // the diagonal corner of the first one is never the second to land). Reported, not built.
-  if (cone_z.rows() > 0) {
+  Eigen::Matrix<double, nx + nu, 1> interior = node.interior;
+  double margin = node.margin;
+  if (cone_z.rows() > r0) {
     Eigen::MatrixXd rows(cone_z.rows(), nx + nu);
     rows.leftCols(nx) = cone_z;
     if constexpr (nu > 0) rows.rightCols(nu) = cone_v;
@@ -234,13 +223,25 @@ auto ConewiseJumpGain<S>::child(Node& node, int k) -> Node* {
       const double norm = rows.row(r).norm();
       if (norm > 0) rows.row(r) /= norm;
     }
-    if (detail::hull_distance_from_origin(rows) <= options_.empty_cone_tolerance) {
+    Eigen::VectorXd nearest;
+    margin = detail::nearest_hull_point(rows, nearest);
+    if (margin <= options_.empty_cone_tolerance) {
       node.empty_cone[k] = 1;
       unrealisable_.push_back({node.fired, group, UnrealisableOrder::Reason::EmptyCone, 0.0});
       return nullptr;
     }
+    interior = nearest / margin;
   }
+  // A cascade of re-touchdowns that does not end within the bound: Zeno-like at first order (or
+  // a cycle of releases), no finite composition of micro-events describes it.
+  if (static_cast<int>(node.order.size()) >= options_.max_micro_events)
+    throw NumericalFailure(detail::concat(
+        "conewise gain: after ", node.order.size(), " micro-events ", describe_order(node.fired), " of the event at t = ",
+        t, " guards still cross (", describe_order(group), " next): more than max_micro_events = ",
+        options_.max_micro_events, " (a Zeno-like cascade of re-touchdowns at first order)"));
   auto c = std::make_unique<Node>();
+  c->interior = interior;
+  c->margin = margin;
   c->fired = node.fired;
   c->fired.insert(c->fired.end(), group.begin(), group.end());
   c->order = node.order;
@@ -249,7 +250,7 @@ auto ConewiseJumpGain<S>::child(Node& node, int k) -> Node* {
   c->cone_v = std::move(cone_v);
   // The guards still to come are held back, and so are those sent away: in the perturbed motion
   // their contacts are at a positive gap of order eps when this micro-event happens.
-  std::vector<Guard> deferred = node.never_crossed;
+  std::vector<Guard> deferred = node.away;
   for (int i = 0; i <= others; ++i)
     if (i != k) deferred.insert(deferred.end(), node.crossing[i].begin(), node.crossing[i].end());
   const std::string order = describe_order(c->fired);
@@ -288,6 +289,8 @@ auto ConewiseJumpGain<S>::child(Node& node, int k) -> Node* {
     p->G_v = c->Zv;
     p->cone_z = c->cone_z;
     p->cone_v = c->cone_v;
+    p->interior_direction = c->interior;
+    p->interior_margin = c->margin;
     p->x_plus = c->x;
     p->mode_after = c->mode;
     p->post_state_difference = (c->x - event_.x_plus).cwiseAbs().maxCoeff();

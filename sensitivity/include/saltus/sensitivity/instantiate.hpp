@@ -11,8 +11,8 @@
 //   SALTUS_INSTANTIATE_SCENE_SENSITIVITY(MyScene)
 //
 // Compiled per scene: feedback_gain, JumpGainSolver, jump_gains, ConewiseJumpGain, LinearisedSystem,
-// numerical_jump_gain, prediction_remainder, piece_remainder, and the tracking design and stability
-// check (GainSchedule, lqr_design, ReferenceSpreadingController, ClosedLoopLinearisation,
+// numerical_jump_gain, numerical_conewise_piece, prediction_remainder, piece_remainder, and the
+// tracking design and stability check (GainSchedule, lqr_design, ReferenceSpreadingController, ClosedLoopLinearisation,
 // check_stability, check_periodic_stability, monte_carlo). The hybrid machinery they call must be
 // instantiated too (SALTUS_INSTANTIATE_SCENE). <saltus/sensitivity/header_only.hpp> is the header-only path.
 #pragma once
@@ -36,6 +36,10 @@
   prefix template class saltus::LinearisedSystem<S>;                                                             \
   prefix template saltus::NumericalJumpGain<S> saltus::numerical_jump_gain<S>(                                   \
       const S&, const saltus::HybridTrajectory<S>&, int, const saltus::NumericalJumpGainOptions&);             \
+  prefix template struct saltus::NumericalConewisePiece<S>;                                                      \
+  prefix template saltus::NumericalConewisePiece<S> saltus::numerical_conewise_piece<S>(                         \
+      const S&, const saltus::HybridTrajectory<S>&, int, const saltus::ConewisePiece<S>&,                        \
+      const saltus::NumericalJumpGainOptions&);                                                                  \
   prefix template saltus::RemainderFit saltus::prediction_remainder<S>(                                          \
       const saltus::LinearisedSystem<S>&, const saltus::SimulationOptions&, const saltus::Vec<2 * S::nq>&,       \
       const std::function<saltus::Vec<S::nu>(double)>&, const std::vector<double>&, const std::vector<double>&); \

@@ -36,6 +36,7 @@
 #pragma once
 
 #include <saltus/hybrid/simulation/simulation_options.hpp>
+#include <saltus/sensitivity/conewise_gain.hpp>
 #include <saltus/sensitivity/jump_gain.hpp>
 
 #include <limits>
@@ -58,6 +59,10 @@ struct NumericalJumpGainOptions {
   /// When the Simulator's run through the event fails (NumericalFailure), replay the reference's
   /// transitions with event detection instead (see numerical_jump_gain).
   bool replay_on_failure = true;
+  /// numerical_conewise_piece: the size of the one-sided perturbations (their (z-, v) norm),
+  /// relative to max(1, |x-|). Its micro-events are then this far apart in time, times the
+  /// inverse approach speeds: keep it well above the simulation's event-time tolerance.
+  double cone_step = 1e-4;
 };
 
 /// The twin's result. `basis` (nx x r) spans the admissible ante-event deviations at t* (r = nx
@@ -79,9 +84,58 @@ struct NumericalJumpGain {
   int replays = 0;      ///< perturbed runs that needed the replay (Simulator failures)
 };
 
-/// G_z, G_v of event `e` of `traj` by re-simulation. @throws NumericalFailure, InvalidArgument
+/// G_z, G_v of event `e` of `traj` by re-simulation. @throws NumericalFailure, InvalidArgument,
+/// SimultaneousActivation (an event fired by several guards: numerical_conewise_piece)
 template <Scene S>
 NumericalJumpGain<S> numerical_jump_gain(const S& scene, const HybridTrajectory<S>& traj, int e,
                                 const NumericalJumpGainOptions& options = {});
+
+/// The numerical twin of one piece of a conewise jump gain (conewise_gain.hpp): its G_z (nx x nx)
+/// and G_v (nx x nu) by one-sided differences with every perturbation inside the piece's cone,
+/// through re-simulation of the whole macro-event (every micro-event located by the simulator;
+/// no derivative of a guard, a flow or a jump map).
+///
+/// Method. Work in the cone's own coordinates p = (z-, v) at t*: a perturbation p of size s
+/// starts the simulation at x_a + s Phi-^{-1} (z- - Psi- v) at t* - w with the input shifted by
+/// s v over the window (Phi-, Psi- of the ante-event mode's smooth flow, as numerical_jump_gain),
+/// so that the deviation reaching t* is s z- and the input's s v. To first order the state at
+/// t* + w is then X(s p) = X_piece + s (Phi+ (G_z z- + G_v v) + Psi+ v) + O(s^2), with X_piece,
+/// Phi+ and Psi+ from the piece's OWN post-event state x_plus and mode (its outcome, nominal or
+/// not). The map is linear on the cone only, so both points of each difference lie inside it:
+/// around the cone's deepest direction c (ConewisePiece::interior_direction, margin m),
+///     D_j(s) = (X(s (c + r e_j)) - X(s (c - r e_j))) / (2 r s),   r = min(m, 1) / 2,
+/// for each unit vector e_j of (z-, v); D_j(s) = M e_j + O(s), and the Richardson combination
+/// 2 D_j(s/2) - D_j(s) removes the O(s) term (options.richardson). Then
+///     G_z = Phi+^{-1} M_z,   G_v = Phi+^{-1} (M_v - Psi+).
+/// Every run must end in the piece's post-event mode (the contact modes compared, not a slip's
+/// direction): otherwise NumericalFailure naming the mode reached (the step crosses into another
+/// cone or past a neighbouring event: make cone_step or the window smaller).
+///
+/// Accuracy: O(s^2) truncation after Richardson and O(tol / (r s)) integration noise; with the
+/// defaults (s = 1e-4, tolerances 1e-13) ~1e-7 relative. Cost: 4 (nx + nu) hybrid simulations
+/// through the macro-event (2 (nx + nu) without Richardson) plus the smooth flows' differences.
+///
+/// Preconditions: `piece` belongs to the conewise gain of event `e` of `traj` (ConewiseJumpGain
+/// built from that event, that law and these simulation options); the ante-event mode has no
+/// closed contact (every flat landing: the perturbations are then unconstrained; an event with
+/// closed contacts before it and several guards is not supported: InvalidArgument).
+/// @throws InvalidArgument (index, options, closed contacts before the event, a piece of another
+/// event: its x_plus not reached), NumericalFailure (a run that fails or ends in another mode)
+template <Scene S>
+struct NumericalConewisePiece {
+  static constexpr int nx = 2 * S::nq, nu = S::nu;
+  Mat<nx, nx> G_z = Mat<nx, nx>::Zero();
+  Mat<nx, nu> G_v = Mat<nx, nu>::Zero();
+  Eigen::Matrix<double, nx + nu, 1> centre = Eigen::Matrix<double, nx + nu, 1>::Zero();  ///< c
+  double radius = 0.0;  ///< r
+  double step = 0.0;    ///< s (absolute, in (z-, v) norm)
+  double window = 0.0;  ///< the half-width w used
+  int runs = 0;         ///< hybrid simulations through the macro-event
+};
+
+template <Scene S>
+NumericalConewisePiece<S> numerical_conewise_piece(const S& scene, const HybridTrajectory<S>& traj, int e,
+                                                   const ConewisePiece<S>& piece,
+                                                   const NumericalJumpGainOptions& options = {});
 
 }  // namespace saltus

@@ -33,7 +33,7 @@ NumericalJumpGain<S> numerical_jump_gain(const S& scene, const HybridTrajectory<
           "numerical jump gain: transition ", k, " of the event at t = ", ts, " is fired by ",
           ev.transitions[k].guards.size(), " guards at once; perturbations split it into separate events in an "
           "order that depends on the perturbation, so the first-order map is conewise and no single gain exists "
-          "to difference"));
+          "to difference (numerical_conewise_piece differences one piece inside its cone)"));
   double w = options.window;
   if (e > 0 && ev.t > traj.events[e - 1].t) w = std::min(w, 0.25 * (ev.t - traj.events[e - 1].t));
   if (e + 1 < static_cast<int>(traj.events.size())) w = std::min(w, 0.25 * (traj.events[e + 1].t - ev.t));
@@ -235,6 +235,128 @@ NumericalJumpGain<S> numerical_jump_gain(const S& scene, const HybridTrajectory<
     g.dt_dv = dt_v - g.dt_basis * c;
   }
   g.replays = replays;
+  return g;
+}
+
+template <Scene S>
+NumericalConewisePiece<S> numerical_conewise_piece(const S& scene, const HybridTrajectory<S>& traj, int e,
+                                                   const ConewisePiece<S>& piece,
+                                                   const NumericalJumpGainOptions& options) {
+  constexpr int nx = 2 * S::nq, nu = S::nu, np = nx + nu;
+  using State = Vec<nx>;
+  using Point = Eigen::Matrix<double, np, 1>;
+  SALTUS_REQUIRE(e >= 0 && e < static_cast<int>(traj.events.size()), "event index ", e, " out of range [0, ",
+                 traj.events.size(), ")");
+  SALTUS_REQUIRE(options.window > 0 && options.state_step > 0 && options.input_step > 0 && options.cone_step > 0,
+                 "NumericalJumpGainOptions: window and steps must be > 0");
+  const Event<S>& ev = traj.events[e];
+  const double ts = ev.t;
+  for (int i = 0; i < S::nc; ++i)
+    SALTUS_REQUIRE(!ev.mode_before[i].closed(), "numerical conewise piece: contact '", scene.contact(i).name,
+                   "' is closed before the event at t = ", ts,
+                   "; perturbations constrained by closed contacts are not supported here (numerical_jump_gain "
+                   "handles them for single-guard events)");
+  SALTUS_REQUIRE(piece.interior_direction.allFinite() && std::abs(piece.interior_direction.norm() - 1.0) < 1e-9 &&
+                     piece.interior_margin > 0,
+                 "numerical conewise piece: the piece has no interior direction (not built by ConewiseJumpGain)");
+  double w = options.window;
+  if (e > 0 && ev.t > traj.events[e - 1].t) w = std::min(w, 0.25 * (ev.t - traj.events[e - 1].t));
+  if (e + 1 < static_cast<int>(traj.events.size())) w = std::min(w, 0.25 * (traj.events[e + 1].t - ev.t));
+  if (traj.t_end() > ev.t) w = std::min(w, 0.25 * (traj.t_end() - ev.t));
+  SALTUS_REQUIRE(w > 1e-12, "numerical conewise piece: no room around the event at t = ", ts,
+                 " (neighbouring events or the end of the trajectory coincide with it)");
+  const double ta = ts - w, tb = ts + w;
+
+  DormandPrinceIntegrator<S> integrator(options.simulation.integrator);
+  auto smooth = [&](const Mode<S::nc>& mode, const InputLaw<S>& law, double t0, State x, double t1) {
+    ModeSystem<S> sys(scene, law);
+    sys.set_mode(mode);
+    integrator.integrate(sys, t0, x, t1, 0.0, nullptr, false);
+    return x;
+  };
+  // The reference's input shifted by a constant dv over the window.
+  auto shifted = [&](const Vec<nu>& dv) -> InputLaw<S> {
+    if constexpr (nu == 0) {
+      return traj.input;
+    } else {
+      const InputLaw<S> base = traj.input;
+      return [base, dv](double t, const State& x, const Mode<S::nc>& mode) { return Vec<S::nu>(base(t, x, mode) + dv); };
+    }
+  };
+  auto difference = [&](auto&& f, double h) {
+    const auto d = [&](double k) { return ((f(k) - f(-k)) / (2 * k)).eval(); };
+    if (!options.richardson) return d(h);
+    return ((4 * d(0.5 * h) - d(h)) / 3).eval();
+  };
+  const State x_a = smooth(ev.mode_before, traj.input, ts, ev.x_minus, ta);
+  // Smooth flows on both sides: Phi-, Psi- from (ta, x_a); Phi+, Psi+ from the piece's outcome.
+  Mat<nx, nx> Phi_minus, Phi_plus;
+  Mat<nx, nu> Psi_minus = Mat<nx, nu>::Zero(), Psi_plus = Mat<nx, nu>::Zero();
+  for (int j = 0; j < nx; ++j) {
+    const double ha = options.state_step * std::max(1.0, std::abs(x_a[j]));
+    Phi_minus.col(j) = difference(
+        [&](double k) { return smooth(ev.mode_before, traj.input, ta, State(x_a + k * State::Unit(j)), ts); }, ha);
+    const double hb = options.state_step * std::max(1.0, std::abs(piece.x_plus[j]));
+    Phi_plus.col(j) = difference(
+        [&](double k) { return smooth(piece.mode_after, traj.input, ts, State(piece.x_plus + k * State::Unit(j)), tb); },
+        hb);
+  }
+  if constexpr (nu > 0) {
+    const Vec<nu> u_star = traj.input(ts, ev.x_minus, ev.mode_before);
+    for (int j = 0; j < nu; ++j) {
+      const double h = options.input_step * std::max(1.0, std::abs(u_star[j]));
+      Psi_minus.col(j) = difference(
+          [&](double k) { return smooth(ev.mode_before, shifted(Vec<nu>(k * Vec<nu>::Unit(j))), ta, x_a, ts); }, h);
+      Psi_plus.col(j) = difference(
+          [&](double k) {
+            return smooth(piece.mode_after, shifted(Vec<nu>(k * Vec<nu>::Unit(j))), ts, piece.x_plus, tb);
+          },
+          h);
+    }
+  }
+  const Eigen::MatrixXd Phi_minus_inverse = detail::lu_solve(Phi_minus, Mat<nx, nx>::Identity());
+  SALTUS_CHECK_NUMERICS(Phi_minus_inverse.allFinite(), "numerical conewise piece: the ante-event flow's Jacobian over ",
+                        "the window is singular");
+
+  Simulator<S> simulator(scene, options.simulation);
+  NumericalConewisePiece<S> g;
+  // The state at tb of the run whose deviation reaching t* is p = (z-, v) (file comment).
+  auto through = [&](const Point& p) -> State {
+    const State z = p.template head<nx>();
+    Vec<nu> v = Vec<nu>::Zero();
+    if constexpr (nu > 0) v = p.template tail<nu>();
+    const State x0 = x_a + Phi_minus_inverse * (z - Psi_minus * v);
+    ++g.runs;
+    HybridTrajectory<S> run;
+    try {
+      run = simulator.run(x0, ev.mode_before, ta, tb, shifted(v));
+    } catch (const NumericalFailure& err) {
+      throw NumericalFailure(detail::concat("numerical conewise piece: a perturbed run through the event at t = ", ts,
+                                            " failed: ", err.what()));
+    }
+    const Mode<S::nc>& end = run.segments.back().mode;
+    bool same = true;
+    for (int i = 0; i < S::nc; ++i) same = same && end[i].mode == piece.mode_after[i].mode;
+    SALTUS_CHECK_NUMERICS(same, "numerical conewise piece: a perturbed run through the event at t = ", ts, " ended in '",
+                          describe(scene, end), "' after ", run.events.size(), " events, not in the piece's '",
+                          describe(scene, piece.mode_after), "' (reduce cone_step or the window)");
+    return run.final_state();
+  };
+  const double scale = options.cone_step * std::max(1.0, ev.x_minus.cwiseAbs().maxCoeff());
+  const double r = 0.5 * std::min(1.0, piece.interior_margin);
+  const Point c = piece.interior_direction;
+  Eigen::Matrix<double, nx, np> M;
+  for (int j = 0; j < np; ++j) {
+    const Point ej = Point::Unit(j);
+    const auto D = [&](double s) { return ((through(s * (c + r * ej)) - through(s * (c - r * ej))) / (2 * r * s)).eval(); };
+    M.col(j) = options.richardson ? (2 * D(0.5 * scale) - D(scale)).eval() : D(scale);
+  }
+  g.G_z = detail::lu_solve(Phi_plus, M.template leftCols<nx>());
+  if constexpr (nu > 0) g.G_v = detail::lu_solve(Phi_plus, M.template rightCols<nu>() - Psi_plus);
+  g.centre = c;
+  g.radius = r;
+  g.step = scale;
+  g.window = w;
   return g;
 }
 

@@ -52,4 +52,15 @@ int rank_revealing_solve(const MatrixRef& D, const Eigen::Ref<const Eigen::Vecto
 /// The minimum-norm least-squares X of B X = R (complete orthogonal decomposition; B: m x n).
 Eigen::MatrixXd minimum_norm_solve(const MatrixRef& B, const MatrixRef& R);
 
+/// The point of the convex hull of the rows of P (k x n, k >= 1) nearest to the origin, by
+/// Wolfe's algorithm (P. Wolfe, "Finding the nearest point in a polytope", Math. Programming 11,
+/// 1976): `point` (n) and its norm returned. Why it serves the cones of the conewise gains: with
+/// unit rows, the distance is max over unit d of min_r P_r d when positive (minimax duality), and
+/// point / |point| is that d: the direction deepest inside the cone {d : P d >= 0}, every row at
+/// least the distance, so the ball of that radius around it lies in the cone. A distance of 0
+/// (to round-off) means the cone has no interior (Gordan's alternative). Finite in exact
+/// arithmetic; stopped after 50 (k + n) + 100 corrections, where `point` is a hull point (its
+/// norm an upper bound on the distance). Exact up to round-off otherwise, for any number of rows.
+double nearest_hull_point(const MatrixRef& P, Eigen::VectorXd& point);
+
 }  // namespace saltus::detail
