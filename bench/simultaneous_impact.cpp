@@ -28,6 +28,7 @@
 //                          pieces whose twin (numerical_conewise_piece: one-sided differences inside
 //                          the cone) ran; `twin_failed` pieces whose perturbed runs ended elsewhere
 //   twin_ms                wall time of one twin, milliseconds
+//   error                  (only when present) the gain refused the event: the exception's message
 // Plain main; `--json` prints one JSON object, otherwise a table.
 #include "remainder_slope.hpp"
 #include "scenes/references.hpp"
@@ -59,6 +60,7 @@ struct Row {
   std::map<std::string, int> unrealisable;
   std::vector<std::string> piece_lines;  ///< order: post-event mode, post-state difference
   std::string nominal_mode;
+  std::string error;  ///< the gain refused the event (the exception's message), nothing measured
   double min_slope = NAN, wrong_slope = NAN, face = NAN, build_us = NAN, evaluate_us = NAN;
 };
 
@@ -83,8 +85,8 @@ struct Scales {
 };
 
 template <Scene S>
-Row measure(const std::string& name, const S& scene, const Vec<2 * S::nq>& x0, const InputLaw<S>& input,
-            double t_final, int samples, const Scales& scales) {
+Row measure_body(const std::string& name, const S& scene, const Vec<2 * S::nq>& x0, const InputLaw<S>& input,
+                 double t_final, int samples, const Scales& scales) {
   const double after = scales.after;
   constexpr int nx = 2 * S::nq, nu = S::nu;
   const SimulationOptions options = references::tight();
@@ -210,6 +212,21 @@ Row measure(const std::string& name, const S& scene, const Vec<2 * S::nq>& x0, c
   return row;
 }
 
+/// measure_body, or a row carrying the error when the gain refuses the event.
+template <Scene S>
+Row measure(const std::string& name, const S& scene, const Vec<2 * S::nq>& x0, const InputLaw<S>& input,
+            double t_final, int samples, const Scales& scales) {
+  try {
+    return measure_body(name, scene, x0, input, t_final, samples, scales);
+  } catch (const ContactProblemFailure& e) {
+    Row row;
+    row.name = name;
+    row.error = e.what();
+    std::cerr << name << ": " << e.what() << "\n";
+    return row;
+  }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -253,6 +270,10 @@ int main(int argc, char** argv) {
     for (const Row& r : rows) {
       nlohmann::ordered_json unrealisable = nlohmann::ordered_json::object();
       for (const auto& [k, n] : r.unrealisable) unrealisable[k] = n;
+      if (!r.error.empty()) {  // refused: nothing was measured
+        out[r.name] = {{"error", r.error}};
+        continue;
+      }
       out[r.name] = {{"guards", r.guards},
                      {"pieces", r.orders},
                      {"realisable_pieces", r.pieces},
@@ -280,6 +301,10 @@ int main(int argc, char** argv) {
             << std::setw(14) << "build_us/pc" << std::setw(12) << "evaluate_us" << std::setw(8) << "depth"
             << std::setw(11) << "twin_err" << std::setw(12) << "twin_failed" << std::setw(9) << "twin_ms" << "\n";
   for (const Row& r : rows) {
+    if (!r.error.empty()) {
+      std::cout << std::left << std::setw(42) << r.name << " refused: " << r.error << "\n";
+      continue;
+    }
     std::cout << std::left << std::setw(42) << r.name << std::right << std::setw(7) << r.guards << std::setw(7)
               << r.orders << std::setw(11) << r.pieces << std::setw(9) << r.realisable << std::setw(7)
               << r.cones_sampled << std::setw(10) << std::setprecision(3) << r.min_slope << std::setw(12)

@@ -3,6 +3,7 @@
 // first-order prediction through a simultaneous impact against nonlinear simulation in each cone
 // (and the wrong cone's piece failing it), orders that cannot happen, and a simultaneous
 // slip -> stick.
+#include "allocation_counter.hpp"
 #include "scenes/references.hpp"
 #include "support.hpp"
 
@@ -181,6 +182,21 @@ TEST(ConewiseGains, PlankBoxLandingIsPositivelyHomogeneousAndContinuous) {
       const Vec<8> h = gain.evaluate(z, v);
       for (const double a : {1e-3, 0.37, 42.0})
         EXPECT_LE((gain.evaluate(a * z, a * v) - a * h).norm(), 1e-12 * a * h.norm()) << "H(a z) = a H(z), a = " << a;
+    }
+    {  // Once built, evaluate() allocates nothing (it runs in predictions and closed-loop jumps).
+      Vec<8> z = Vec<8>::Zero(), h = Vec<8>::Zero();
+      const Vec<3> v(0.1, -0.2, 0.3);
+      long evaluated_allocations = 0;
+      {
+        CountAllocations guard;
+        for (int k = 0; k < 100; ++k) {
+          z[2] = k % 2 ? 1.0 : -1.0;  // both cones
+          z[5] = 0.01 * k;
+          h += gain.evaluate(z, v);
+        }
+        evaluated_allocations = allocations;
+      }
+      EXPECT_EQ(evaluated_allocations, 0) << h.transpose();
     }
     int faces = 0;
     const double jump = gain.face_discontinuity(200, &faces);
@@ -537,6 +553,44 @@ TEST(ConewiseGains, NumericalTwinPerConeMatchesEachPiece) {
   }
 }
 
+// What the twin per cone refuses, each with an exception naming it (found by a user's trial):
+// a piece of another event, a piece whose "interior" direction lies in another cone (its runs
+// fire the micro-events in the other order), steps that start the runs inside the surface; and
+// the gain refuses an empty-cone tolerance that would make every cone empty.
+TEST(ConewiseGains, NumericalTwinPerConeRefusesWhatItCannotDifference) {
+  scenes::PlankBox plank_box;
+  auto input = open_loop<scenes::PlankBox>([&](double) { return plank_box.lowering_input(); });
+  Vec<8> x0 = plank_box.flat_state();
+  const auto stick = simulate(plank_box, x0, 0.3, input);
+  x0[4] = 0.3;
+  const auto slip = simulate(plank_box, x0, 0.3, input);
+  ConewiseJumpGain<scenes::PlankBox> gain(plank_box, stick.events[0], stick.input, tight_conewise());
+  ASSERT_EQ(gain.build_all(), 2);
+  NumericalJumpGainOptions twin;
+  twin.simulation = references::tight();
+  const auto& piece = *gain.pieces()[0];
+  EXPECT_THROW((void)numerical_conewise_piece(plank_box, slip, 0, piece, twin), InvalidArgument);
+  ConewisePiece<scenes::PlankBox> misdirected = piece;
+  misdirected.interior_direction = gain.pieces()[1]->interior_direction;
+  try {
+    (void)numerical_conewise_piece(plank_box, stick, 0, misdirected, twin);
+    ADD_FAILURE() << "runs in the other cone were differenced as this piece";
+  } catch (const NumericalFailure& e) {
+    EXPECT_NE(std::string(e.what()).find("left the cone"), std::string::npos) << e.what();
+  }
+  NumericalJumpGainOptions large = twin;
+  large.cone_step = 1e-2;
+  try {
+    (void)numerical_conewise_piece(plank_box, stick, 0, piece, large);
+    ADD_FAILURE() << "a step larger than the gaps was accepted";
+  } catch (const NumericalFailure& e) {
+    EXPECT_NE(std::string(e.what()).find("inside the surface"), std::string::npos) << e.what();
+  }
+  ConewiseGainOptions wrong = tight_conewise();
+  wrong.empty_cone_tolerance = 2.0;
+  EXPECT_THROW(ConewiseJumpGain<scenes::PlankBox>(plank_box, stick.events[0], stick.input, wrong), InvalidArgument);
+}
+
 // Re-touchdowns inside the macro-event: the spatial box landing flat on its four bottom corners.
 // Its micro-events do not end after each corner has landed once: later impulses release corners
 // that landed earlier, and still later ones turn them back, so they land again within the
@@ -546,12 +600,13 @@ TEST(ConewiseGains, NumericalTwinPerConeMatchesEachPiece) {
 // 0.034-0.040 from the nominal one: those corners land again after about 0.2 ms and more, times
 // that do not shrink with the perturbation, events of their own). The twin per cone re-simulates
 // the whole cascade (window 0.1 ms, perturbations 1e-5: the cascade then lasts ~20 us) and
-// matches every piece. Landing while sliding (0.5 m/s) the tree builds 8 pieces too, but the
-// twin does not confirm them (printed, not asserted: bench/README.md "Simultaneous impacts"
-// says what is known): the pieces whose last micro-event fires two corners together differ from
-// their twins by 6e-4-1.5e-3 whatever the step, and the perturbed runs of the others end in
-// other modes (four slipping corners: a redundant contact set whose normal forces the flow does
-// not determine).
+// matches every piece. Landing while sliding (0.5 m/s), some orders end with two corners landing
+// together while the other two slip: an impact of four coplanar slipping corners whose
+// differentiated jump map misses the impact solver's post-impact state by 1.4e-5-3.3e-5 (the
+// split of the normal impulse between redundant contacts, and with it the friction impulse, is
+// settled differently by the two). Those pieces differed from their twins by 6e-4-1.5e-3 (in the
+// yaw-rate row) before JumpGainSolver checked the residual; now the gain refuses them with
+// ContactProblemFailure naming the order.
 TEST(ConewiseGains, SpatialBoxRetouchdownsMatchTheTwinInEachCone) {
   scenes::SpatialBox box;
   for (const double vx : {0.0, 0.5}) {
@@ -563,6 +618,21 @@ TEST(ConewiseGains, SpatialBoxRetouchdownsMatchTheTwinInEachCone) {
     ASSERT_GE(traj.events.size(), 1u);
     ASSERT_EQ(traj.events[0].transitions.front().guards.size(), 4u);
     ConewiseJumpGain<scenes::SpatialBox> gain(box, traj.events[0], traj.input, tight_conewise());
+    if (vx > 0) {
+      // Two corners landing together while the other two slip: an impact of four coplanar
+      // slipping contacts, whose differentiated jump map does not reproduce the impact solver's
+      // post-impact state (JumpGainOptions::jump_map_tolerance): refused, not a wrong gain.
+      try {
+        gain.build_all();
+        ADD_FAILURE() << "a piece through the four-corner slipping impact was built";
+      } catch (const ContactProblemFailure& e) {
+        const std::string what = e.what();
+        std::printf("spatial box vx = %.1f: %s\n", vx, what.c_str());
+        EXPECT_NE(what.find("conewise gain, micro-event order"), std::string::npos) << what;
+        EXPECT_NE(what.find("differentiated jump map"), std::string::npos) << what;
+      }
+      continue;
+    }
     const int pieces = gain.build_all();
     EXPECT_EQ(pieces, 8);
     NumericalJumpGainOptions twin;
@@ -592,7 +662,6 @@ TEST(ConewiseGains, SpatialBoxRetouchdownsMatchTheTwinInEachCone) {
     }
     std::printf("spatial box vx = %.1f: %d pieces, %d with re-touchdowns, %d matched by the twin to 1e-5 (worst %.1e), "
                 "%d twins failed\n", vx, pieces, retouchdowns, matched, worst, failed);
-    EXPECT_GT(retouchdowns, 0);
     // A bound on the cascade below its length is a clear error, never a truncated piece.
     ConewiseGainOptions short_cascade = tight_conewise();
     short_cascade.max_micro_events = 4;
@@ -603,11 +672,9 @@ TEST(ConewiseGains, SpatialBoxRetouchdownsMatchTheTwinInEachCone) {
     } catch (const NumericalFailure& e) {
       EXPECT_NE(std::string(e.what()).find("max_micro_events = 4"), std::string::npos) << e.what();
     }
-    if (vx == 0.0) {
-      EXPECT_EQ(retouchdowns, 8) << "every piece of the landing without sliding fires some corner twice";
-      EXPECT_EQ(matched, 8);
-      EXPECT_LE(worst, 1e-5);
-    }
+    EXPECT_EQ(retouchdowns, 8) << "every piece of the landing without sliding fires some corner twice";
+    EXPECT_EQ(matched, 8);
+    EXPECT_LE(worst, 1e-5);
   }
 }
 

@@ -236,6 +236,39 @@ TEST(JumpGains, PlankBoxImpactsIntoSlipAndStickMatchTheTwin) {
   check_all_derivatives(ref);
 }
 
+// Spatial friction in a single-guard impact: the spatial box, tilted about both axes, lands on
+// one corner while sliding (an impact into spatial slip: the post-impact slip direction is
+// implicit, found by Newton in the jump map). The gain against the twin, and the event-time
+// shift. The reference is cut before the next landing (a corner or an edge).
+TEST(JumpGains, SpatialBoxCornerImpactsIntoSlipAndStickMatchTheTwin) {
+  for (const double mu_scale : {1.0, 0.2, 4.0}) {
+    scenes::SpatialBoxParameters parameters;
+    parameters.mu *= mu_scale;
+    Reference<scenes::SpatialBox> ref{"spatial box corner landing", scenes::SpatialBox(parameters), references::tight(), {}};
+    Vec<12> x0 = Vec<12>::Zero();
+    x0[3] = 0.12;   // roll
+    x0[4] = -0.17;  // pitch
+    x0[6] = 0.6;    // sliding along x and y
+    x0[7] = -0.25;
+    double lowest = INFINITY;
+    for (int i = 0; i < 4; ++i) lowest = std::min(lowest, ref.scene.gap(i, Vec<6>(x0.head<6>())));
+    x0[2] = 0.02 - lowest;
+    Simulator<scenes::SpatialBox> sim(ref.scene, ref.options);
+    const auto probe = sim.run(x0, 0.0, 0.12, zero_input<scenes::SpatialBox>());
+    ASSERT_GE(probe.events.size(), 1u);
+    const double t_cut = probe.events.size() >= 2 ? probe.events[0].t + 0.3 * (probe.events[1].t - probe.events[0].t)
+                                                  : std::min(probe.events[0].t + 0.02, 0.12);
+    ref.trajectory = sim.run(x0, 0.0, t_cut, zero_input<scenes::SpatialBox>());
+    ASSERT_EQ(ref.trajectory.events.size(), 1u);
+    const auto& ev = ref.trajectory.events[0];
+    ASSERT_EQ(ev.transitions.front().guards.size(), 1u);
+    std::printf("mu x %.1f: %s, mode after %s\n", mu_scale, references::event_kind(ref.scene, ev).c_str(),
+                describe(ref.scene, ev.mode_after).c_str());
+    const auto kinds = check_against_twin(ref);
+    EXPECT_TRUE(kinds.count("impact into slip") || kinds.count("impact into stick")) << *kinds.begin();
+  }
+}
+
 // Closed form of Example 3's release gain: lambda_n = m g - u2 does not depend on x, so
 // dt = Dgamma_u v / (-Dgamma_u u2') = -v2 / (2 g) ... and G_z = I (Dgamma_x = 0, Dg = I).
 TEST(JumpGains, Example3ReleaseGainHasItsClosedForm) {

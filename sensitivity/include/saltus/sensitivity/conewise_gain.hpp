@@ -134,8 +134,9 @@ struct ConewisePiece {
   std::vector<Guard> never_crossed;  ///< the event's guards a motion in this cone does not cross near t*
   Mat<nx, nx> G_z = Mat<nx, nx>::Identity();
   Mat<nx, nu> G_v = Mat<nx, nu>::Zero();
-  /// One row per argmin comparison along the order (dt_i - dt_j >= 0): (m - 1) + (m - 2) + ...
-  /// rows when every guard fires.
+  /// One row per argmin comparison along the order (dt_i - dt_j >= 0, for each other group
+  /// crossing at that node): (m - 1) + (m - 2) + ... rows when every guard fires once, more
+  /// with re-touchdowns (the spatial box's pieces: 10).
   Eigen::Matrix<double, Eigen::Dynamic, nx> cone_z;
   Eigen::Matrix<double, Eigen::Dynamic, nu> cone_v;
   /// The direction (z-, v) deepest inside the cone (unit Euclidean norm, z- first), and its
@@ -188,7 +189,8 @@ class ConewiseJumpGain {
   /// the law captures, must outlive this object). options.simulation must be the reference's own
   /// simulation options: other impact or selection options can resolve the micro-events
   /// differently. @throws InvalidArgument (an event without guards, an empty law, a guard of the
-  /// event that its mode does not have), GrazingEvent (a guard of the event that does not cross
+  /// event that its mode does not have, options out of range: outcome_tolerance < 0,
+  /// empty_cone_tolerance outside [0, 1), max_micro_events < 1), GrazingEvent (a guard of the event that does not cross
   /// transversally at x-, or whose rate is positive there).
   ConewiseJumpGain(const S& scene, const Event<S>& event, const InputLaw<S>& law, ConewiseGainOptions options = {});
   ConewiseJumpGain(S&&, const Event<S>&, const InputLaw<S>&, ConewiseGainOptions = {}) = delete;  // would dangle
@@ -207,14 +209,16 @@ class ConewiseJumpGain {
   /// up to that tolerance. @throws InvalidArgument (non-finite z or v), GrazingEvent (an
   /// intermediate crossing that is not transversal), the event physics' exceptions
   /// (ContactProblemFailure, NumericalFailure, NonSpdMassMatrix), SimultaneousActivation (a
-  /// micro-event's chain fired by several non-coincident guards at once), each naming the order
-  /// so far; InternalError if every cone of a node were empty (cannot happen: they cover space).
+  /// micro-event's chain fired by several non-coincident guards at once), NumericalFailure (a
+  /// path longer than max_micro_events), each naming the order so far; InternalError if every
+  /// cone of a node were empty (cannot happen: they cover space). Allocates only when it builds.
   const Piece& piece(const State& z_minus, const Input& v);
   /// z+ = G_z z- + G_v v of piece(z-, v).
   State evaluate(const State& z_minus, const Input& v);
   State evaluate(const State& z_minus) { return evaluate(z_minus, Input::Zero()); }
 
-  /// Builds every piece (at most m! leaves). Returns the number of pieces.
+  /// Builds every piece (at most m! leaves without re-touchdowns). Returns the number of pieces.
+  /// @throws as piece(), and NumericalFailure for a path longer than max_micro_events.
   int build_all();
   /// The pieces built so far, in the order they were built.
   const std::vector<const Piece*>& pieces() const { return pieces_; }

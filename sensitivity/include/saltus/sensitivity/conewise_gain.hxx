@@ -7,6 +7,7 @@
 #include <saltus/sensitivity/detail/dense.hpp>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -88,6 +89,9 @@ ConewiseJumpGain<S>::ConewiseJumpGain(const S& scene, const Event<S>& event, con
                  "has a fixed time and a linear gain: JumpGainSolver)");
   SALTUS_REQUIRE(options.outcome_tolerance >= 0, "ConewiseGainOptions: outcome_tolerance must be >= 0");
   SALTUS_REQUIRE(options.max_micro_events >= 1, "ConewiseGainOptions: max_micro_events must be >= 1");
+  SALTUS_REQUIRE(options.empty_cone_tolerance >= 0 && options.empty_cone_tolerance < 1,
+                 "ConewiseGainOptions: empty_cone_tolerance must be in [0, 1) (a distance between unit rows' hull and "
+                 "the origin), got ", options.empty_cone_tolerance);
   guards_ = event.transitions.front().guards;
   resolver_ = std::make_unique<TransitionResolver<S>>(scene, options.simulation);
   gains_ = std::make_unique<JumpGainSolver<S>>(scene, options.gains);
@@ -225,7 +229,7 @@ auto ConewiseJumpGain<S>::child(Node& node, int k) -> Node* {
     }
     Eigen::VectorXd nearest;
     margin = detail::nearest_hull_point(rows, nearest);
-    if (margin <= options_.empty_cone_tolerance) {
+    if (!(margin > options_.empty_cone_tolerance)) {
       node.empty_cone[k] = 1;
       unrealisable_.push_back({node.fired, group, UnrealisableOrder::Reason::EmptyCone, 0.0});
       return nullptr;
@@ -238,7 +242,8 @@ auto ConewiseJumpGain<S>::child(Node& node, int k) -> Node* {
     throw NumericalFailure(detail::concat(
         "conewise gain: after ", node.order.size(), " micro-events ", describe_order(node.fired), " of the event at t = ",
         t, " guards still cross (", describe_order(group), " next): more than max_micro_events = ",
-        options_.max_micro_events, " (a Zeno-like cascade of re-touchdowns at first order)"));
+        options_.max_micro_events, " (raise the bound; if the guards keep re-firing, the cascade of re-touchdowns "
+        "is Zeno-like at first order and no finite composition describes it)"));
   auto c = std::make_unique<Node>();
   c->interior = interior;
   c->margin = margin;
@@ -274,6 +279,8 @@ auto ConewiseJumpGain<S>::child(Node& node, int k) -> Node* {
                        e.gamma_dot(), e.rate_scale());
   } catch (const SimultaneousActivation& e) {
     throw SimultaneousActivation(detail::concat("conewise gain, micro-event order ", order, ": ", e.what()));
+  } catch (const ContactProblemFailure& e) {
+    throw ContactProblemFailure(detail::concat("conewise gain, micro-event order ", order, ": ", e.what()));
   }
   c->x = step.x_plus;
   c->mode = step.mode_after;
@@ -302,7 +309,7 @@ auto ConewiseJumpGain<S>::child(Node& node, int k) -> Node* {
     for (int i = 0; i < nc; ++i) {
       const ContactState &a = c->mode[i], &b = event_.mode_after[i];
       same_modes = same_modes && a.mode == b.mode &&
-                   (a.mode != ContactMode::Slip || (a.slip_direction - b.slip_direction).norm() <= 1e-9);
+                   (a.mode != ContactMode::Slip || (a.slip_direction - b.slip_direction).norm() <= options_.outcome_tolerance);
     }
     p->nominal_outcome = same_modes && p->post_state_difference <= tolerance;
     p->steps = c->steps;
@@ -318,18 +325,26 @@ template <Scene S>
 auto ConewiseJumpGain<S>::piece(const State& z_minus, const Input& v) -> const Piece& {
   SALTUS_REQUIRE(z_minus.allFinite() && v.allFinite(), "conewise gain: the deviation (z-, v) is not finite");
   Node* node = root_.get();
-  std::vector<int> candidates;
+  // Allocation-free (evaluate() runs in predictions and closed-loop jumps): at most one crossing
+  // group per guard of a mode, 2 nc + 1.
+  constexpr int capacity = 2 * nc + 1;
+  std::array<double, capacity> dt{};
+  std::array<int, capacity> candidates{};
   while (!node->crossing.empty()) {
-    Eigen::VectorXd dt = node->dt_z * z_minus;
-    if constexpr (nu > 0) dt += node->dt_v * v;
-    // The earliest crossing; ties (a face) to the first listed. A cone without interior can be
-    // the argmin only on its (measure-zero) set: the next earliest is taken then.
-    candidates.resize(dt.size());
-    for (int i = 0; i < dt.size(); ++i) candidates[i] = i;
-    std::stable_sort(candidates.begin(), candidates.end(), [&](int a, int b) { return dt[a] < dt[b]; });
+    const int k = static_cast<int>(node->crossing.size());
+    SALTUS_INVARIANT(k <= capacity, "at most one crossing group per guard");
+    for (int i = 0; i < k; ++i) {
+      dt[i] = node->dt_z.row(i).dot(z_minus);
+      if constexpr (nu > 0) dt[i] += node->dt_v.row(i).dot(v);
+      candidates[i] = i;
+    }
+    // The earliest crossing; ties (a face) to the first listed (a stable insertion sort). A cone
+    // without interior can be the argmin only on its (measure-zero) set: the next earliest is
+    // taken then.
+    for (int i = 1; i < k; ++i)
+      for (int j = i; j > 0 && dt[candidates[j]] < dt[candidates[j - 1]]; --j) std::swap(candidates[j], candidates[j - 1]);
     Node* next = nullptr;
-    for (const int i : candidates)
-      if ((next = child(*node, i)) != nullptr) break;
+    for (int i = 0; i < k && next == nullptr; ++i) next = child(*node, candidates[i]);
     SALTUS_INVARIANT(next != nullptr, "the cones of a node's children cover every direction");
     node = next;
   }

@@ -96,7 +96,21 @@ auto JumpGainSolver<S>::compute(const Event<S>& event, const InputLaw<S>& law, c
     // The jump map: the impulse of an impact, the identity for a mode change (A.34-A.49).
     if (tr.impact) {
       jump_map_jacobian(scene_, tr.impulse_mode, tr.x_before, *ws_, x_jump_, Dg_);
-      g.jump_map_residual = std::max(g.jump_map_residual, (x_jump_ - tr.x_after).cwiseAbs().maxCoeff());
+      const double residual = (x_jump_ - tr.x_after).cwiseAbs().maxCoeff();
+      g.jump_map_residual = std::max(g.jump_map_residual, residual);
+      if (!(residual <= options_.jump_map_tolerance * std::max(1.0, tr.x_after.cwiseAbs().maxCoeff()))) {
+        std::string roles;
+        for (int i = 0; i < S::nc; ++i)
+          if (tr.impulse_mode[i].role != ImpulseRole::None)
+            roles += (roles.empty() ? "" : ", ") + scene_.contact(i).name + ": " + to_string(tr.impulse_mode[i].role);
+        throw ContactProblemFailure(detail::concat(
+            "jump gain: transition ", k, " of the event at t = ", event.t, " (impulse roles ", roles,
+            "): the differentiated jump map gives a post-impact state ", residual,
+            " from the impact solver's (tolerance ", options_.jump_map_tolerance, " relative): its derivative is not that "
+            "of the simulated jump, so no first-order gain is computed (seen where four coplanar contacts slip "
+            "together: redundant contacts whose split of the normal impulse, and with it of the friction impulse, "
+            "the jump map and the impact solver settle differently)"));
+      }
     } else {
       Dg_.setIdentity();
     }

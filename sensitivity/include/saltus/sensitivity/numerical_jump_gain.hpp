@@ -90,6 +90,19 @@ template <Scene S>
 NumericalJumpGain<S> numerical_jump_gain(const S& scene, const HybridTrajectory<S>& traj, int e,
                                 const NumericalJumpGainOptions& options = {});
 
+/// The result of numerical_conewise_piece (below).
+template <Scene S>
+struct NumericalConewisePiece {
+  static constexpr int nx = 2 * S::nq, nu = S::nu;
+  Mat<nx, nx> G_z = Mat<nx, nx>::Zero();
+  Mat<nx, nu> G_v = Mat<nx, nu>::Zero();
+  Eigen::Matrix<double, nx + nu, 1> centre = Eigen::Matrix<double, nx + nu, 1>::Zero();  ///< c
+  double radius = 0.0;  ///< r
+  double step = 0.0;    ///< s (absolute, in (z-, v) norm)
+  double window = 0.0;  ///< the half-width w used
+  int runs = 0;         ///< hybrid simulations through the macro-event
+};
+
 /// The numerical twin of one piece of a conewise jump gain (conewise_gain.hpp): its G_z (nx x nx)
 /// and G_v (nx x nu) by one-sided differences with every perturbation inside the piece's cone,
 /// through re-simulation of the whole macro-event (every micro-event located by the simulator;
@@ -107,9 +120,13 @@ NumericalJumpGain<S> numerical_jump_gain(const S& scene, const HybridTrajectory<
 /// for each unit vector e_j of (z-, v); D_j(s) = M e_j + O(s), and the Richardson combination
 /// 2 D_j(s/2) - D_j(s) removes the O(s) term (options.richardson). Then
 ///     G_z = Phi+^{-1} M_z,   G_v = Phi+^{-1} (M_v - Psi+).
-/// Every run must end in the piece's post-event mode (the contact modes compared, not a slip's
-/// direction): otherwise NumericalFailure naming the mode reached (the step crosses into another
-/// cone or past a neighbouring event: make cone_step or the window smaller).
+/// Every run must fire the piece's micro-events in the piece's order (a coincident group as one
+/// event or several) and end in its post-event mode (the contact modes compared, not a slip's
+/// direction): otherwise NumericalFailure naming what the run did (a step that leaves the cone,
+/// or a window that holds other events: make cone_step or the window smaller). The window is
+/// shrunk to the reference's neighbouring events only: a piece whose own outcome is not the
+/// nominal one may have events of its own soon after t* (the spatial box's corners that land
+/// again ~0.2 ms later), which the window must not reach.
 ///
 /// Accuracy: O(s^2) truncation after Richardson and O(tol / (r s)) integration noise; with the
 /// defaults (s = 1e-4, tolerances 1e-13) ~1e-7 relative. Cost: 4 (nx + nu) hybrid simulations
@@ -119,20 +136,10 @@ NumericalJumpGain<S> numerical_jump_gain(const S& scene, const HybridTrajectory<
 /// built from that event, that law and these simulation options); the ante-event mode has no
 /// closed contact (every flat landing: the perturbations are then unconstrained; an event with
 /// closed contacts before it and several guards is not supported: InvalidArgument).
-/// @throws InvalidArgument (index, options, closed contacts before the event, a piece of another
-/// event: its x_plus not reached), NumericalFailure (a run that fails or ends in another mode)
-template <Scene S>
-struct NumericalConewisePiece {
-  static constexpr int nx = 2 * S::nq, nu = S::nu;
-  Mat<nx, nx> G_z = Mat<nx, nx>::Zero();
-  Mat<nx, nu> G_v = Mat<nx, nu>::Zero();
-  Eigen::Matrix<double, nx + nu, 1> centre = Eigen::Matrix<double, nx + nu, 1>::Zero();  ///< c
-  double radius = 0.0;  ///< r
-  double step = 0.0;    ///< s (absolute, in (z-, v) norm)
-  double window = 0.0;  ///< the half-width w used
-  int runs = 0;         ///< hybrid simulations through the macro-event
-};
-
+/// @throws InvalidArgument (index, options, closed contacts before the event, a piece not built
+/// from this event: its first micro-event does not start at the event's t* and x-),
+/// NumericalFailure (a run that fails, starts inside the surface because the step exceeds the
+/// gaps at t* - w, or does not follow the piece)
 template <Scene S>
 NumericalConewisePiece<S> numerical_conewise_piece(const S& scene, const HybridTrajectory<S>& traj, int e,
                                                    const ConewisePiece<S>& piece,

@@ -14,6 +14,22 @@
 
 namespace saltus {
 
+namespace detail {
+/// The half-width of the twins' window around event e: `window`, shrunk to a quarter of the
+/// distance to the neighbouring events and to the end of the trajectory. @throws InvalidArgument
+template <Scene S>
+double event_window(const HybridTrajectory<S>& traj, int e, double window, const char* who) {
+  const Event<S>& ev = traj.events[e];
+  double w = window;
+  if (e > 0 && ev.t > traj.events[e - 1].t) w = std::min(w, 0.25 * (ev.t - traj.events[e - 1].t));
+  if (e + 1 < static_cast<int>(traj.events.size())) w = std::min(w, 0.25 * (traj.events[e + 1].t - ev.t));
+  if (traj.t_end() > ev.t) w = std::min(w, 0.25 * (traj.t_end() - ev.t));
+  SALTUS_REQUIRE(w > 1e-12, who, ": no room around the event at t = ", ev.t,
+                 " (neighbouring events or the end of the trajectory coincide with it)");
+  return w;
+}
+}  // namespace detail
+
 template <Scene S>
 NumericalJumpGain<S> numerical_jump_gain(const S& scene, const HybridTrajectory<S>& traj, int e,
                                          const NumericalJumpGainOptions& options) {
@@ -34,12 +50,7 @@ NumericalJumpGain<S> numerical_jump_gain(const S& scene, const HybridTrajectory<
           ev.transitions[k].guards.size(), " guards at once; perturbations split it into separate events in an "
           "order that depends on the perturbation, so the first-order map is conewise and no single gain exists "
           "to difference (numerical_conewise_piece differences one piece inside its cone)"));
-  double w = options.window;
-  if (e > 0 && ev.t > traj.events[e - 1].t) w = std::min(w, 0.25 * (ev.t - traj.events[e - 1].t));
-  if (e + 1 < static_cast<int>(traj.events.size())) w = std::min(w, 0.25 * (traj.events[e + 1].t - ev.t));
-  if (traj.t_end() > ev.t) w = std::min(w, 0.25 * (traj.t_end() - ev.t));
-  SALTUS_REQUIRE(w > 1e-12, "numerical jump gain: no room around the event at t = ", ts,
-                " (neighbouring events or the end of the trajectory coincide with it)");
+  const double w = detail::event_window(traj, e, options.window, "numerical jump gain");
   const double ta = ts - w, tb = ts + w;
 
   DormandPrinceIntegrator<S> integrator(options.simulation.integrator);
@@ -257,14 +268,17 @@ NumericalConewisePiece<S> numerical_conewise_piece(const S& scene, const HybridT
                    "; perturbations constrained by closed contacts are not supported here (numerical_jump_gain "
                    "handles them for single-guard events)");
   SALTUS_REQUIRE(piece.interior_direction.allFinite() && std::abs(piece.interior_direction.norm() - 1.0) < 1e-9 &&
-                     piece.interior_margin > 0,
-                 "numerical conewise piece: the piece has no interior direction (not built by ConewiseJumpGain)");
-  double w = options.window;
-  if (e > 0 && ev.t > traj.events[e - 1].t) w = std::min(w, 0.25 * (ev.t - traj.events[e - 1].t));
-  if (e + 1 < static_cast<int>(traj.events.size())) w = std::min(w, 0.25 * (traj.events[e + 1].t - ev.t));
-  if (traj.t_end() > ev.t) w = std::min(w, 0.25 * (traj.t_end() - ev.t));
-  SALTUS_REQUIRE(w > 1e-12, "numerical conewise piece: no room around the event at t = ", ts,
-                 " (neighbouring events or the end of the trajectory coincide with it)");
+                     piece.interior_margin > 0 && !piece.order.empty() && !piece.steps.empty(),
+                 "numerical conewise piece: the piece has no order, micro-events or interior direction (not built by "
+                 "ConewiseJumpGain)");
+  {  // The piece's first micro-event starts from this event's x- at t*.
+    const Transition<S>& first = piece.steps.front().transitions.front();
+    const double gap = (first.x_before - ev.x_minus).cwiseAbs().maxCoeff();
+    SALTUS_REQUIRE(piece.steps.front().t == ts && gap <= 1e-12 * std::max(1.0, ev.x_minus.cwiseAbs().maxCoeff()),
+                   "numerical conewise piece: the piece was not built from event ", e, " at t = ", ts,
+                   " (its first micro-event is at t = ", piece.steps.front().t, ", ", gap, " from the event's x-)");
+  }
+  const double w = detail::event_window(traj, e, options.window, "numerical conewise piece");
   const double ta = ts - w, tb = ts + w;
 
   DormandPrinceIntegrator<S> integrator(options.simulation.integrator);
@@ -330,16 +344,42 @@ NumericalConewisePiece<S> numerical_conewise_piece(const S& scene, const HybridT
     HybridTrajectory<S> run;
     try {
       run = simulator.run(x0, ev.mode_before, ta, tb, shifted(v));
-    } catch (const NumericalFailure& err) {
+    } catch (const InvalidArgument& err) {
+      // The only input the simulator can refuse here is the start: the step exceeds the gaps.
+      throw NumericalFailure(detail::concat("numerical conewise piece: the perturbation of size ", p.norm(),
+                                            " starts a run inside the surface at t* - w = ", ta,
+                                            " (reduce cone_step or the window): ", err.what()));
+    } catch (const Error& err) {  // NumericalFailure, ContactProblemFailure, NonSpdMassMatrix
       throw NumericalFailure(detail::concat("numerical conewise piece: a perturbed run through the event at t = ", ts,
                                             " failed: ", err.what()));
     }
+    // The run's events against the piece's micro-events, in order: each event's guards fill the
+    // piece's current group (the simulator fires a coincident group as one event, or as several
+    // when its members come apart at second order).
+    std::size_t k = 0, filled = 0;
+    bool follows = true;
+    for (const Event<S>& re : run.events) {
+      const std::vector<Guard>& fired = re.transitions.front().guards;
+      follows = follows && !fired.empty() && k < piece.order.size();
+      for (std::size_t i = 0; follows && i < fired.size(); ++i)
+        follows = std::find(piece.order[k].begin(), piece.order[k].end(), fired[i]) != piece.order[k].end();
+      if (!follows) break;
+      filled += fired.size();
+      if (filled >= piece.order[k].size()) {
+        follows = filled == piece.order[k].size();
+        ++k;
+        filled = 0;
+      }
+    }
+    follows = follows && k == piece.order.size() && filled == 0;
     const Mode<S::nc>& end = run.segments.back().mode;
     bool same = true;
     for (int i = 0; i < S::nc; ++i) same = same && end[i].mode == piece.mode_after[i].mode;
-    SALTUS_CHECK_NUMERICS(same, "numerical conewise piece: a perturbed run through the event at t = ", ts, " ended in '",
-                          describe(scene, end), "' after ", run.events.size(), " events, not in the piece's '",
-                          describe(scene, piece.mode_after), "' (reduce cone_step or the window)");
+    SALTUS_CHECK_NUMERICS(follows && same, "numerical conewise piece: a perturbed run through the event at t = ", ts,
+                          " fired ", run.events.size(), " events and ended in '", describe(scene, end),
+                          "', not the piece's ", piece.order.size(), " micro-events ending in '",
+                          describe(scene, piece.mode_after),
+                          "' (the step left the cone, or the window holds other events: reduce cone_step or the window)");
     return run.final_state();
   };
   const double scale = options.cone_step * std::max(1.0, ev.x_minus.cwiseAbs().maxCoeff());
