@@ -639,14 +639,20 @@ TEST(ConewiseGains, SpatialBoxRetouchdownsMatchTheTwinInEachCone) {
     twin.simulation = references::tight();
     twin.window = 1e-4;
     twin.cone_step = 1e-5;
-    int retouchdowns = 0, matched = 0, failed = 0;
+    int retouchdowns = 0, matched = 0, failed = 0, twinned = 0;
     double worst = 0.0;
+#if defined(SALTUS_TESTS_UNDER_SANITIZERS)
+    constexpr int twins = 2;  // 68 s for all 8 under ASan + UBSan; a memory error shows in any twin
+#else
+    constexpr int twins = 8;
+#endif
     for (const auto* piece : gain.pieces()) {
       std::set<int> landed;
       bool again = false;
       for (const auto& group : piece->order)
         for (const Guard& g : group) again = again || !landed.insert(g.contact).second;
       retouchdowns += again;
+      if (twinned++ >= twins) continue;
       try {
         const auto numeric = numerical_conewise_piece(box, traj, 0, *piece, twin);
         const double ez = relative_difference(numeric.G_z, piece->G_z);
@@ -673,7 +679,7 @@ TEST(ConewiseGains, SpatialBoxRetouchdownsMatchTheTwinInEachCone) {
       EXPECT_NE(std::string(e.what()).find("max_micro_events = 4"), std::string::npos) << e.what();
     }
     EXPECT_EQ(retouchdowns, 8) << "every piece of the landing without sliding fires some corner twice";
-    EXPECT_EQ(matched, 8);
+    EXPECT_EQ(matched, twins);
     EXPECT_LE(worst, 1e-5);
   }
 }

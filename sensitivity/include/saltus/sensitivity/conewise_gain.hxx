@@ -188,7 +188,7 @@ void ConewiseJumpGain<S>::classify(Node& node) {
   node.dt_v.resize(k, nu);
   for (int i = 0; i < k; ++i) {
     node.dt_z.row(i) = rows_z[i];
-    node.dt_v.row(i) = rows_v[i];
+    if constexpr (nu > 0) node.dt_v.row(i) = rows_v[i];  // (no rows of a 0-column matrix: UB in Eigen's Block)
   }
   node.children.resize(k);
   node.empty_cone.assign(k, 0);
@@ -207,11 +207,11 @@ auto ConewiseJumpGain<S>::child(Node& node, int k) -> Node* {
   Eigen::Matrix<double, Eigen::Dynamic, nx> cone_z(r0 + others, nx);
   Eigen::Matrix<double, Eigen::Dynamic, nu> cone_v(r0 + others, nu);
   cone_z.topRows(r0) = node.cone_z;
-  cone_v.topRows(r0) = node.cone_v;
+  if constexpr (nu > 0) cone_v.topRows(r0) = node.cone_v;
   for (int i = 0, r = r0; i <= others; ++i) {
     if (i == k) continue;
     cone_z.row(r) = node.dt_z.row(i) - node.dt_z.row(k);
-    cone_v.row(r) = node.dt_v.row(i) - node.dt_v.row(k);
+    if constexpr (nu > 0) cone_v.row(r) = node.dt_v.row(i) - node.dt_v.row(k);
     ++r;
   }
   // A cone without interior holds no open set of perturbations: the order happens on a set of
