@@ -15,7 +15,8 @@
 //                          ~1.6 eps s and leave corners that land again ~0.2 ms later)
 //                          (piece_remainder), fitted above the integration floor (points at least
 //                          30x the smallest remainder, remainder_slope.hpp); `cones_sampled` cones
-//   wrong_piece_slope      largest slope over eps = 1e-4..1e-6 when another piece is applied, the one with
+//   wrong_piece_slope      largest slope over the three smallest eps (1e-4..1e-6; spatial box 3e-6..3e-7)
+//                          when another piece is applied, the one with
 //                          the nearest outcome (about 1: a wrong first-order term; about 0: a wrong
 //                          outcome)
 //   max_face_discontinuity max |H_a(p) - H_b(p)| / |p| at points of shared cone faces between pieces

@@ -589,6 +589,11 @@ TEST(ConewiseGains, NumericalTwinPerConeRefusesWhatItCannotDifference) {
   ConewiseGainOptions wrong = tight_conewise();
   wrong.empty_cone_tolerance = 2.0;
   EXPECT_THROW(ConewiseJumpGain<scenes::PlankBox>(plank_box, stick.events[0], stick.input, wrong), InvalidArgument);
+  wrong.empty_cone_tolerance = 0.0;  // would call no cone empty (Wolfe's distance is found to round-off)
+  EXPECT_THROW(ConewiseJumpGain<scenes::PlankBox>(plank_box, stick.events[0], stick.input, wrong), InvalidArgument);
+  JumpGainOptions negative;
+  negative.jump_map_tolerance = -1.0;  // would refuse every impact
+  EXPECT_THROW(JumpGainSolver<scenes::PlankBox>(plank_box, negative), InvalidArgument);
 }
 
 // Re-touchdowns inside the macro-event: the spatial box landing flat on its four bottom corners.

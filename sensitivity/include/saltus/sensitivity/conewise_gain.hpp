@@ -42,13 +42,15 @@
 // Orders that cannot happen. A guard whose rate is positive at a node (gamma_dot_i > 0: the
 // previous impulse sends the contact away from the surface) cannot be the next micro-event: the
 // orders that put it next cannot happen. It is reported (UnrealisableOrder::Reason::SentAway) and
-// left out of the node's competition; every node classifies the guards not fired yet afresh (a
-// later impulse may turn the contact back), and a leaf where it still does not cross ends with
-// that contact open, a post-event mode the nominal event may not have (`nominal_outcome`). An
+// left out of the node's competition; every node classifies the guards afresh (a later impulse
+// may turn the contact back; "Re-touchdowns" below), and a leaf where it still does not cross
+// ends with that contact open, a post-event mode the nominal event may not have
+// (`nominal_outcome`). An
 // order whose cone has no interior (the argmin inequalities along its path admit only a set of
 // measure zero: the fourth corner of a box face comes down with the third, so the corner
-// diagonal to the first is never the second to land) is reported too (Reason::EmptyCone, tested
-// exactly by Gordan's alternative) and not built. More generally a piece whose post-event
+// diagonal to the first is never the second to land) is reported too (Reason::EmptyCone, by
+// Gordan's alternative: the origin lies in the convex hull of the normalised rows, to
+// empty_cone_tolerance; Wolfe's nearest point, detail/dense.hpp) and not built. More generally a piece whose post-event
 // state or mode differs from the nominal one (for instance sequential frictional impacts that end
 // sliding: the tangential velocity depends on the order) has no nominal post-event reference:
 // its z+ is the deviation from its own post-event state x_plus. Reference spreading has no
@@ -113,9 +115,10 @@ struct ConewiseGainOptions {
   SimulationOptions simulation;
   /// A piece's post-event state is the nominal one when max |x_plus - x+| <= this * max(1, |x+|).
   double outcome_tolerance = 1e-9;
-  /// A cone whose normalised rows have a convex combination shorter than this has no interior
-  /// (its order is unrealisable, UnrealisableOrder::Reason::EmptyCone). Checked for every cone
-  /// (the nearest point of the rows' convex hull to the origin, Wolfe's algorithm).
+  /// A cone whose certified margin (the smallest normalised row at its deepest direction found:
+  /// the nearest point of the rows' convex hull to the origin, Wolfe's algorithm) is not above
+  /// this has no interior (its order is unrealisable, UnrealisableOrder::Reason::EmptyCone).
+  /// Checked for every cone; in (0, 1).
   double empty_cone_tolerance = 1e-9;
   /// The most micro-events on one path of the tree, re-touchdowns included; a path still
   /// crossing guards beyond it throws NumericalFailure (a Zeno-like cascade at first order).
@@ -190,8 +193,8 @@ class ConewiseJumpGain {
   /// simulation options: other impact or selection options can resolve the micro-events
   /// differently. @throws InvalidArgument (an event without guards, an empty law, a guard of the
   /// event that its mode does not have, options out of range: outcome_tolerance < 0,
-  /// empty_cone_tolerance outside [0, 1), max_micro_events < 1), GrazingEvent (a guard of the event that does not cross
-  /// transversally at x-, or whose rate is positive there).
+  /// empty_cone_tolerance outside (0, 1), max_micro_events < 1), GrazingEvent (a guard of the
+  /// event that does not cross transversally at x-, or whose rate is positive there).
   ConewiseJumpGain(const S& scene, const Event<S>& event, const InputLaw<S>& law, ConewiseGainOptions options = {});
   ConewiseJumpGain(S&&, const Event<S>&, const InputLaw<S>&, ConewiseGainOptions = {}) = delete;  // would dangle
   ~ConewiseJumpGain();

@@ -89,9 +89,9 @@ ConewiseJumpGain<S>::ConewiseJumpGain(const S& scene, const Event<S>& event, con
                  "has a fixed time and a linear gain: JumpGainSolver)");
   SALTUS_REQUIRE(options.outcome_tolerance >= 0, "ConewiseGainOptions: outcome_tolerance must be >= 0");
   SALTUS_REQUIRE(options.max_micro_events >= 1, "ConewiseGainOptions: max_micro_events must be >= 1");
-  SALTUS_REQUIRE(options.empty_cone_tolerance >= 0 && options.empty_cone_tolerance < 1,
-                 "ConewiseGainOptions: empty_cone_tolerance must be in [0, 1) (a distance between unit rows' hull and "
-                 "the origin), got ", options.empty_cone_tolerance);
+  SALTUS_REQUIRE(options.empty_cone_tolerance > 0 && options.empty_cone_tolerance < 1,
+                 "ConewiseGainOptions: empty_cone_tolerance must be in (0, 1) (a distance between unit rows' hull and "
+                 "the origin, found to round-off: 0 would call no cone empty), got ", options.empty_cone_tolerance);
   guards_ = event.transitions.front().guards;
   resolver_ = std::make_unique<TransitionResolver<S>>(scene, options.simulation);
   gains_ = std::make_unique<JumpGainSolver<S>>(scene, options.gains);
@@ -228,13 +228,16 @@ auto ConewiseJumpGain<S>::child(Node& node, int k) -> Node* {
       if (norm > 0) rows.row(r) /= norm;
     }
     Eigen::VectorXd nearest;
-    margin = detail::nearest_hull_point(rows, nearest);
+    const double distance = detail::nearest_hull_point(rows, nearest);
+    // The margin certified at the direction found (Wolfe's point is the nearest only to its
+    // stopping tolerance): the smallest normalised row there.
+    margin = distance > 0 ? (rows * nearest).minCoeff() / distance : 0.0;
     if (!(margin > options_.empty_cone_tolerance)) {
       node.empty_cone[k] = 1;
       unrealisable_.push_back({node.fired, group, UnrealisableOrder::Reason::EmptyCone, 0.0});
       return nullptr;
     }
-    interior = nearest / margin;
+    interior = nearest / distance;
   }
   // A cascade of re-touchdowns that does not end within the bound: Zeno-like at first order (or
   // a cycle of releases), no finite composition of micro-events describes it.

@@ -9,8 +9,9 @@ template <Scene S>
 JumpGainSolver<S>::JumpGainSolver(const S& scene, JumpGainOptions options, int reserved_transitions)
     : scene_(scene), options_(options), ws_(std::make_unique<DerivativeWorkspace<S>>()) {
   SALTUS_REQUIRE(options.grazing_threshold >= 0 && options.input_rate_step > 0 && options.chain_time_tolerance >= 0 &&
-                    options.feedback_step > 0, "JumpGainOptions: grazing_threshold >= 0, input_rate_step > 0, ",
-                "chain_time_tolerance >= 0 and feedback_step > 0 are required");
+                    options.feedback_step > 0 && options.jump_map_tolerance >= 0,
+                "JumpGainOptions: grazing_threshold >= 0, input_rate_step > 0, chain_time_tolerance >= 0, "
+                "feedback_step > 0 and jump_map_tolerance >= 0 are required");
   gain_.info.reserve(reserved_transitions);
 }
 

@@ -134,8 +134,9 @@ struct NumericalConewisePiece {
 ///
 /// Preconditions: `piece` belongs to the conewise gain of event `e` of `traj` (ConewiseJumpGain
 /// built from that event, that law and these simulation options); the ante-event mode has no
-/// closed contact (every flat landing: the perturbations are then unconstrained; an event with
-/// closed contacts before it and several guards is not supported: InvalidArgument).
+/// closed contact (every flat landing: the perturbations are then unconstrained; any event with a
+/// closed contact before it is refused with InvalidArgument: numerical_jump_gain handles those
+/// for single-guard events).
 /// @throws InvalidArgument (index, options, closed contacts before the event, a piece not built
 /// from this event: its first micro-event does not start at the event's t* and x-),
 /// NumericalFailure (a run that fails, starts inside the surface because the step exceeds the
