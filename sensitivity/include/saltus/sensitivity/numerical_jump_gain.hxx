@@ -28,6 +28,37 @@ double event_window(const HybridTrajectory<S>& traj, int e, double window, const
                  " (neighbouring events or the end of the trajectory coincide with it)");
   return w;
 }
+
+/// x(t1) of `mode`'s smooth flow from (t0, x) under `law`, events off (the twins' Phi and Psi).
+template <Scene S>
+Vec<2 * S::nq> smooth_flow(const S& scene, DormandPrinceIntegrator<S>& integrator, const Mode<S::nc>& mode,
+                           const InputLaw<S>& law, double t0, Vec<2 * S::nq> x, double t1) {
+  ModeSystem<S> sys(scene, law);
+  sys.set_mode(mode);
+  integrator.integrate(sys, t0, x, t1, 0.0, nullptr, false);
+  return x;
+}
+
+/// The central difference (f(h) - f(-h)) / 2h of f at 0, Richardson-extrapolated to
+/// (4 D(h/2) - D(h)) / 3 when asked (O(h^4) truncation).
+template <class F>
+auto central_difference(F&& f, double h, bool richardson) {
+  const auto d = [&](double k) { return ((f(k) - f(-k)) / (2 * k)).eval(); };
+  if (!richardson) return d(h);
+  return ((4 * d(0.5 * h) - d(h)) / 3).eval();
+}
+
+/// `law` with the constant dv (nu) added to its input.
+template <Scene S>
+InputLaw<S> shifted_input(const InputLaw<S>& law, const Vec<S::nu>& dv) {
+  if constexpr (S::nu == 0) {
+    return law;
+  } else {
+    return [law, dv](double t, const Vec<2 * S::nq>& x, const Mode<S::nc>& mode) {
+      return Vec<S::nu>(law(t, x, mode) + dv);
+    };
+  }
+}
 }  // namespace detail
 
 template <Scene S>
@@ -54,12 +85,8 @@ NumericalJumpGain<S> numerical_jump_gain(const S& scene, const HybridTrajectory<
   const double ta = ts - w, tb = ts + w;
 
   DormandPrinceIntegrator<S> integrator(options.simulation.integrator);
-  // Smooth flow of `mode` from (t0, x) to t1 under `law`, events off.
-  auto smooth = [&](const Mode<S::nc>& mode, const InputLaw<S>& law, double t0, State x, double t1) {
-    ModeSystem<S> sys(scene, law);
-    sys.set_mode(mode);
-    integrator.integrate(sys, t0, x, t1, 0.0, nullptr, false);
-    return x;
+  auto smooth = [&](const Mode<S::nc>& mode, const InputLaw<S>& law, double t0, const State& x, double t1) {
+    return detail::smooth_flow<S>(scene, integrator, mode, law, t0, x, t1);
   };
   const State x_a = smooth(ev.mode_before, traj.input, ts, ev.x_minus, ta);
 
@@ -143,12 +170,7 @@ NumericalJumpGain<S> numerical_jump_gain(const S& scene, const HybridTrajectory<
     return y;
   };
 
-  // Central difference of f(s) at s = 0 with step h, Richardson-extrapolated if asked.
-  auto difference = [&](auto&& f, double h) {
-    const auto d = [&](double k) { return ((f(k) - f(-k)) / (2 * k)).eval(); };
-    if (!options.richardson) return d(h);
-    return ((4 * d(0.5 * h) - d(h)) / 3).eval();
-  };
+  auto difference = [&](auto&& f, double h) { return detail::central_difference(f, h, options.richardson); };
 
   // Admissible directions at x_a: the kernel of the Jacobian C of the mode's constraints c(x)
   // (constraints.hpp: gaps of the closed contacts, their normal velocities and the sticking
@@ -225,14 +247,7 @@ NumericalJumpGain<S> numerical_jump_gain(const S& scene, const HybridTrajectory<
     Eigen::Matrix<double, 1, nu> dt_v;
     for (int j = 0; j < nu; ++j) {
       const double h = options.input_step * std::max(1.0, std::abs(u_star[j]));
-      auto shifted = [&](double s) -> InputLaw<S> {
-        const InputLaw<S> base = traj.input;
-        return [base, j, s](double t, const State& x, const Mode<S::nc>& mode) {
-          Vec<nu> u = base(t, x, mode);
-          u[j] += s;
-          return u;
-        };
-      };
+      auto shifted = [&](double s) { return detail::shifted_input<S>(traj.input, Vec<nu>(s * Vec<nu>::Unit(j))); };
       const Augmented d = difference([&](double k) { return through_timed(x_a, shifted(k)); }, h);
       P_v.col(j) = d.template head<nx>();
       dt_v[j] = d[nx];
@@ -282,26 +297,12 @@ NumericalConewisePiece<S> numerical_conewise_piece(const S& scene, const HybridT
   const double ta = ts - w, tb = ts + w;
 
   DormandPrinceIntegrator<S> integrator(options.simulation.integrator);
-  auto smooth = [&](const Mode<S::nc>& mode, const InputLaw<S>& law, double t0, State x, double t1) {
-    ModeSystem<S> sys(scene, law);
-    sys.set_mode(mode);
-    integrator.integrate(sys, t0, x, t1, 0.0, nullptr, false);
-    return x;
+  auto smooth = [&](const Mode<S::nc>& mode, const InputLaw<S>& law, double t0, const State& x, double t1) {
+    return detail::smooth_flow<S>(scene, integrator, mode, law, t0, x, t1);
   };
   // The reference's input shifted by a constant dv over the window.
-  auto shifted = [&](const Vec<nu>& dv) -> InputLaw<S> {
-    if constexpr (nu == 0) {
-      return traj.input;
-    } else {
-      const InputLaw<S> base = traj.input;
-      return [base, dv](double t, const State& x, const Mode<S::nc>& mode) { return Vec<S::nu>(base(t, x, mode) + dv); };
-    }
-  };
-  auto difference = [&](auto&& f, double h) {
-    const auto d = [&](double k) { return ((f(k) - f(-k)) / (2 * k)).eval(); };
-    if (!options.richardson) return d(h);
-    return ((4 * d(0.5 * h) - d(h)) / 3).eval();
-  };
+  auto shifted = [&](const Vec<nu>& dv) { return detail::shifted_input<S>(traj.input, dv); };
+  auto difference = [&](auto&& f, double h) { return detail::central_difference(f, h, options.richardson); };
   const State x_a = smooth(ev.mode_before, traj.input, ts, ev.x_minus, ta);
   // Smooth flows on both sides: Phi-, Psi- from (ta, x_a); Phi+, Psi+ from the piece's outcome.
   Mat<nx, nx> Phi_minus, Phi_plus;
