@@ -12,7 +12,9 @@
 //                          over eps = 1e-2..1e-6 with each sampled cone's own piece, against the
 //                          piece's own outcome at T = t* + 0.02 s (plank-box; for the spatial box
 //                          eps = 3e-5..3e-7 at T = t* + 0.1 ms: its cascades of re-touchdowns last
-//                          ~1.6 eps s and leave corners that land again ~0.2 ms later)
+//                          ~1.6 eps s and leave corners that land again ~0.2 ms later; its
+//                          perturbed runs use simultaneity 1e-13 s and gap_tolerance 1e-12 m, else
+//                          the simulator lumps the cascade's micro-events at eps <= 1e-5..1e-6)
 //                          (piece_remainder), fitted above the integration floor (points at least
 //                          30x the smallest remainder, remainder_slope.hpp); `cones_sampled` cones
 //   wrong_piece_slope      largest slope over the three smallest eps (1e-4..1e-6; spatial box 3e-6..3e-7)
@@ -30,7 +32,9 @@
 //                          the cone) ran; `twin_failed` pieces whose perturbed runs ended elsewhere
 //   twin_ms                wall time of one twin, milliseconds
 //   error                  (only when present) the gain refused the event: the exception's message
-// Plain main; `--json` prints one JSON object, otherwise a table.
+// Plain main; `--json` prints one JSON object, otherwise a table. SALTUS_BENCH_VERBOSE=1 prints, for a
+// cone whose perturbed runs do not keep the piece's structure, each eps's events count and final
+// mode (SALTUS_BENCH_EVENTS=1: each run's events too), and every twin that failed.
 #include "remainder_slope.hpp"
 #include "scenes/references.hpp"
 #include <saltus/sensitivity/prediction_check.hpp>
@@ -83,6 +87,11 @@ struct Scales {
   double after = 0.02;
   std::vector<double> eps = default_prediction_eps();
   double twin_window = 1e-3, twin_step = 1e-4;
+  /// The perturbed runs' simultaneity window (s) and gap tolerance (m): a cascade whose micro-events
+  /// are separated by times and gaps shrinking like eps is lumped by the default windows (1e-9 s,
+  /// 1e-9 m) at small eps (the spatial box: 5 of 8 cones at eps <= 1e-5..1e-6).
+  double simultaneity = SimulationOptions{}.simultaneity;
+  double gap_tolerance = ImpactOptions{}.gap_tolerance;
 };
 
 template <Scene S>
@@ -166,6 +175,10 @@ Row measure_body(const std::string& name, const S& scene, const Vec<2 * S::nq>& 
   ConewiseJumpGain<S>& gain = lin.conewise_gain(0);
   gain.build_all();
   const double T = ev.t + after;
+  SimulationOptions perturbed_options = options;
+  perturbed_options.simultaneity = scales.simultaneity;
+  perturbed_options.impact.gap_tolerance = scales.gap_tolerance;
+  Simulator<S> perturbed_sim(scene, perturbed_options);
   std::mt19937 rng(5);
   std::normal_distribution<double> normal;
   std::map<const ConewisePiece<S>*, bool> sampled;
@@ -183,13 +196,22 @@ Row measure_body(const std::string& name, const S& scene, const Vec<2 * S::nq>& 
     for (const auto* q : gain.pieces())
       if (q != &own && (!other || (q->x_plus - own.x_plus).norm() < (other->x_plus - own.x_plus).norm())) other = q;
     try {
-      const RemainderFit right = piece_remainder(lin, options, 0, z0, own, T, scales.eps);
+      const RemainderFit right = piece_remainder(lin, perturbed_options, 0, z0, own, T, scales.eps);
       if (!right.structure_matched) {
         if (std::getenv("SALTUS_BENCH_VERBOSE")) {
-          const auto run = sim.run(Vec<nx>(x0 + scales.eps[scales.eps.size() / 2] * z0), 0.0, T, input);
-          std::cerr << name << ": structure differs: " << run.events.size() << " events before T (piece: "
-                    << own.order.size() << " micro-events), final mode " << describe(scene, run.segments.back().mode)
-                    << "\n";
+          for (std::size_t k = 0; k < scales.eps.size(); ++k) {
+            const auto run = perturbed_sim.run(Vec<nx>(x0 + scales.eps[k] * z0), 0.0, T, input);
+            std::cerr << name << ": eps " << scales.eps[k] << ": " << run.events.size() << " events before T (piece: "
+                      << own.order.size() << " micro-events), remainder " << right.remainder[k] << ", final mode "
+                      << describe(scene, run.segments.back().mode) << "\n";
+            if (std::getenv("SALTUS_BENCH_EVENTS"))
+              for (const auto& e : run.events) {
+                std::cerr << "    t - t* = " << e.t - ev.t << ":";
+                for (const auto& tr : e.transitions)
+                  for (const auto& g : tr.guards) std::cerr << " " << scene.contact(g.contact).name;
+                std::cerr << " -> " << describe(scene, e.mode_after) << "\n";
+              }
+          }
         }
         ++row.failed_runs;
         continue;
@@ -197,7 +219,7 @@ Row measure_body(const std::string& name, const S& scene, const Vec<2 * S::nq>& 
       ++row.cones_sampled;
       min_slope = std::min(min_slope, bench::slope_above_floor(right.eps, right.remainder).slope);
       if (other) {
-        const RemainderFit wrong = piece_remainder(lin, options, 0, z0, *other, T, scales.eps);
+        const RemainderFit wrong = piece_remainder(lin, perturbed_options, 0, z0, *other, T, scales.eps);
         // Its first-order error shows at the small eps (at the large ones the common eps^2 term
         // can still dominate when the pieces differ little along this perturbation).
         const std::vector<double> e3(wrong.eps.end() - 3, wrong.eps.end()), r3(wrong.remainder.end() - 3, wrong.remainder.end());
@@ -253,6 +275,8 @@ int main(int argc, char** argv) {
     spatial.eps = {3e-5, 1e-5, 3e-6, 1e-6, 3e-7};
     spatial.twin_window = 1e-4;
     spatial.twin_step = 1e-5;
+    spatial.simultaneity = 1e-13;
+    spatial.gap_tolerance = 1e-12;
     for (const double vx : {0.0, 0.5}) {
       Vec<12> x0 = Vec<12>::Zero();
       x0[2] = 0.5 * box.parameters().size[2] + 0.02;

@@ -10,7 +10,11 @@
 // J M^{-1} F is the Delassus matrix D of A.15/A.33 (symmetric when nothing slips; A.25 when all
 // contacts slip). It is singular when contacts are redundant (a box resting flat on two
 // corners has equal tangent rows; the spatial box on four corners has 12 rows for 6 degrees of
-// freedom). Then the accelerations are still unique but the forces are not: Saltus returns the
+// freedom). Then the forces are not unique; the accelerations are, unless redundant contacts
+// slip along different directions (a box sliding flat on four corners while it turns: a spread
+// of the normal forces that the normal rows do not see carries a friction wrench, derivation in
+// impact.hpp's file comment; rigid-body Coulomb friction leaves the acceleration undetermined
+// there, and the rule below is Saltus' selection). Saltus returns the
 // minimum-Euclidean-norm forces, from a complete orthogonal decomposition whose rank threshold
 // (1e-10 relative to the largest pivot) also treats contacts that are redundant up to drift of
 // the integrator as redundant. For a symmetric box this splits the load equally. Only the double

@@ -17,8 +17,17 @@
 // minimum-norm impulse, so that the value and the derivative used by the jump gains are those of
 // one and the same map. Redundant contacts (a box landing flat, or three points along one edge)
 // give a singular Delassus matrix (`singular_delassus`: the matrix of every contact in the
-// problem, normal and tangential rows): the velocity is unique, the impulses are not. The
-// impulse returned is then the minimum-Euclidean-norm impulse WITHIN the identified impulse
+// problem, normal and tangential rows): the impulses are not unique. The velocity is unique when
+// the redundant contacts stick, or slip along one common direction d: for coplanar contacts
+// with common normal n, a spread k of the normal impulses that the normal rows do not see
+// (sum_i k_i w_n,i = 0: sum_i k_i = 0 and, with r_i = rho_i + h n the contact points from the
+// centre of mass, sum_i k_i rho_i = 0) carries the friction wrench -mu (sum_i k_i d,
+// sum_i k_i r_i x d) = 0. When they slip along DIFFERENT directions (a box landing flat while it
+// turns, or inside the cascade of a perturbed flat landing) that wrench is not zero and v+
+// depends on the split: rigid-body Coulomb impacts leave v+ undetermined there, and what follows
+// is Saltus' selection, not the model's answer (the jump gains refuse such impacts when their
+// differentiated jump map does not reproduce the returned v+: JumpGainOptions::jump_map_tolerance;
+// seen on the spatial box, v+ differing by 1.4e-5-3.3e-5). The impulse returned is then the minimum-Euclidean-norm impulse WITHIN the identified impulse
 // mode (the contacts the solver gave an impulse, their stick/slip roles and slip directions;
 // equal shares for a symmetric box) whenever it satisfies the contact laws, and
 // `minimum_norm_impulse` says so; otherwise the solver's own impulse is returned and the flag
@@ -76,7 +85,8 @@ struct ImpactResult {
   /// (see the file comment: not the minimum over all admissible splits).
   bool minimum_norm_impulse = false;
   /// The Delassus matrix of every contact in the impact problem (normal and tangential rows) is
-  /// rank deficient: redundant contacts, the impulse split is not unique (the velocity is).
+  /// rank deficient: redundant contacts, the impulse split is not unique (the velocity is unless
+  /// redundant contacts slip along different directions: file comment).
   bool singular_delassus = false;
 };
 

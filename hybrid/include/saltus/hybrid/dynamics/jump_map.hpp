@@ -19,8 +19,10 @@
 // more steps, makes the derivatives those of the implicit function (each step contracts their
 // error like the value's).
 //
-// Redundant contacts make J M^{-1} F singular; the post-impact velocity is still unique and the
-// impulse returned is the minimum-norm one (same decomposition and threshold as flow.hpp).
+// Redundant contacts make J M^{-1} F singular; the impulse returned is the minimum-norm one
+// (same decomposition and threshold as flow.hpp). The post-impact velocity is unique unless
+// redundant contacts slip along different directions (impact.hpp's file comment): then the
+// minimum-norm split is a selection, and another solution of the same roles has another v+.
 #pragma once
 
 #include <saltus/hybrid/dynamics/delassus.hpp>
