@@ -2,6 +2,13 @@
 // forms, and the same Radau IIA scheme on a fixed grid, as the grid is refined.
 //
 //   fesd_accuracy [--json] [--budget SECONDS] [--scheme fesd|fesd-exact|fixed] [--stages N]
+//                 [--finite-elements N1,N2,...] [--refine TARGET]
+//
+// --finite-elements replaces the default N_fe = 1, 2, 4, 8 (the budget rule drops the last one).
+// --refine sets MpccSolverOptions::complementarity_refinement (in (0, 1e-9]) for the guiding
+// example: each control interval's converged homotopy goes on towards that residual.
+// SALTUS_BENCH_TRACE=1 prints, per configuration, the error of every element boundary's state
+// against the closed form y(tau) (exact_state below): where along the horizon the error arises.
 //
 // --scheme and --stages restrict the guiding example to one scheme or one n_s (e.g. to rerun a
 // dropped configuration with a larger --budget); the frictional landing runs only without them.
@@ -110,6 +117,25 @@ using Example3Input = scenes::Example3;
 /// y(3.5) = (q1, q2, v1, v2, t) of Example 3 (file comment).
 Vec<5> exact_final_state() { return scenes::Example3::final_state(); }
 
+/// y(tau) = (q1, q2, v1, v2, t) of Example 3 at any numerical time in [0, 3.5] (file comment).
+Vec<5> exact_state(double tau) {
+  const double t_td = std::sqrt(2.0 / g);
+  double t = 0.0, q2 = 0.0, v2 = 0.0, v1 = 0.0;
+  if (tau <= t_td) {
+    t = tau, q2 = 1.0 - 0.5 * g * t * t, v2 = -g * t;
+  } else if (tau <= 2.0 * t_td) {
+    t = t_td, v2 = -std::sqrt(2.0 * g) + g * (tau - t_td);  // frozen: the auxiliary field
+  } else if (tau <= 2.0) {
+    t = t_td + 0.5 * (tau - 2.0 * t_td);  // sliding, clock speed 1/2
+  } else if (tau <= 2.75) {
+    t = 2.0 - std::sqrt(3.0 - tau);  // sliding, tau = 4 t - t^2 - 1
+  } else {
+    t = 1.5 + (tau - 2.75), q2 = g * std::pow(t - 1.5, 3) / 3.0, v2 = g * (t - 1.5) * (t - 1.5);
+  }
+  v1 = 7.0 * t;
+  return (Vec<5>() << 3.5 * t * t, q2, v1, v2, t).finished();
+}
+
 struct Row {
   std::string scheme;
   int stages = 0, finite_elements = 0, elements = 0;
@@ -134,9 +160,12 @@ struct Order {
   double order = kNaN;
 };
 
+/// MpccSolverOptions::complementarity_refinement of the guiding example's runs (--refine).
+double refinement = 0.0;
+
 Row run_guiding(const std::string& scheme, int stages, int finite_elements) {
   Row r;
-  r.scheme = scheme;
+  r.scheme = refinement > 0.0 ? scheme + "+refine" : scheme;
   r.stages = stages;
   r.finite_elements = finite_elements;
   const TimeFreezingSystem<PointMass> system(PointMass(), g);
@@ -148,13 +177,24 @@ Row run_guiding(const std::string& scheme, int stages, int finite_elements) {
   o.switch_detection = scheme != "fixed";
   if (scheme == "fesd-exact") o.step_equilibration = StepEquilibration::Exact;
   const auto start = std::chrono::steady_clock::now();
-  const auto sim = simulate_time_freezing(system, Vec<2>(0, 1), Vec<2>(0, 0), o, Example3Input{});
+  MpccSolverOptions solver;
+  solver.complementarity_refinement = refinement;
+  const auto sim = simulate_time_freezing(system, Vec<2>(0, 1), Vec<2>(0, 0), o, Example3Input{}, solver);
   r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   r.elements = static_cast<int>(sim.element_lengths.size());
   r.converged = sim.converged();
   r.complementarity = sim.solution.complementarity;
   r.iterations = sim.solution.ipopt_iterations;
   r.final_error = (sim.final_state().head<5>() - exact_final_state()).cwiseAbs().maxCoeff();
+  if (std::getenv("SALTUS_BENCH_TRACE")) {  // the error at every element boundary, per component
+    std::fprintf(stderr, "  %s\n", sim.solution.message.c_str());
+    for (std::size_t e = 0; e <= sim.element_lengths.size(); ++e) {
+      const auto& p = sim.points[e * static_cast<std::size_t>(stages)];
+      const Vec<5> err = p.y.template head<5>() - exact_state(p.tau);
+      std::fprintf(stderr, "  tau %.6f  t %.9f  error q1 %+.2e q2 %+.2e v1 %+.2e v2 %+.2e t %+.2e\n", p.tau, p.y[4],
+                   err[0], err[1], err[2], err[3], err[4]);
+    }
+  }
 
   const double t_impact = std::sqrt(2.0 / g);
   const SwitchPoint* touchdown = nullptr;
@@ -236,6 +276,7 @@ int main(int argc, char** argv) {
   double budget = 30.0;
   std::string only_scheme;
   int only_stages = 0;
+  std::vector<int> element_counts = {1, 2, 4, 8};
   for (int i = 1; i < argc; ++i) {
     if (std::strcmp(argv[i], "--json") == 0) {
       json = true;
@@ -248,13 +289,30 @@ int main(int argc, char** argv) {
     } else if (std::strcmp(argv[i], "--stages") == 0 && i + 1 < argc && std::atoi(argv[i + 1]) >= 1 &&
                std::atoi(argv[i + 1]) <= 3) {
       only_stages = std::atoi(argv[++i]);
+    } else if (std::strcmp(argv[i], "--refine") == 0 && i + 1 < argc && std::atof(argv[i + 1]) > 0.0 &&
+               std::atof(argv[i + 1]) <= 1e-9) {
+      refinement = std::atof(argv[++i]);
+    } else if (std::strcmp(argv[i], "--finite-elements") == 0 && i + 1 < argc) {
+      element_counts.clear();
+      for (const char* c = argv[++i]; *c;) {
+        char* end = nullptr;
+        const long n = std::strtol(c, &end, 10);
+        if (end == c || n < 1 || n > 64) {
+          std::fprintf(stderr, "--finite-elements: a comma-separated list of counts in [1, 64]\n");
+          return 2;
+        }
+        element_counts.push_back(static_cast<int>(n));
+        c = *end == ',' ? end + 1 : end;
+      }
     } else {
-      std::fprintf(stderr, "usage: %s [--json] [--budget SECONDS] [--scheme fesd|fesd-exact|fixed] [--stages 1|2|3]\n", argv[0]);
+      std::fprintf(stderr,
+                   "usage: %s [--json] [--budget SECONDS] [--scheme fesd|fesd-exact|fixed] [--stages 1|2|3] "
+                   "[--finite-elements N1,N2,...] [--refine TARGET]\n",
+                   argv[0]);
       return 2;
     }
   }
 
-  const std::vector<int> element_counts = {1, 2, 4, 8};
   std::vector<Row> rows;
   std::vector<Dropped> dropped;
   std::vector<Order> orders;

@@ -349,6 +349,51 @@ TEST(MpccSolver, ScholtesReachesTheUniqueBStationaryPoint) {
   EXPECT_NE(progress.str().find("sigma"), std::string::npos);
 }
 
+// Refinement past convergence (MpccSolverOptions::complementarity_refinement): on SmallMpcc the
+// Scholtes row of x _|_ y is active (x y = sigma, x = sigma / 2), so the converged homotopy's x is
+// ~1e-10 from the solution; refined, the homotopy goes on decreasing sigma until the residual is at
+// the target or stops falling, and x follows it. A successful polish leaves nothing to refine.
+TEST(MpccSolver, RefinementGoesOnPastConvergence) {
+  SmallMpcc problem;
+  MpccSolverOptions options;
+  options.polish = false;
+  const MpccSolution plain = solve_mpcc(problem, options);
+  options.complementarity_refinement = 1e-13;
+  std::ostringstream progress;
+  options.progress = &progress;
+  const MpccSolution refined = solve_mpcc(problem, options);
+  print_steps("SmallMpcc, Scholtes, refined to 1e-13", refined);
+  std::cout << refined.message << "\n";
+  ASSERT_TRUE(plain.converged) << plain.message;
+  ASSERT_TRUE(refined.converged) << refined.message;
+  EXPECT_GT(refined.steps.size(), plain.steps.size() + 1);
+  EXPECT_EQ(count_lines(progress.str()), static_cast<int>(refined.steps.size())) << "one line per step";
+  EXPECT_LE(refined.complementarity, 1e-3 * plain.complementarity);
+  const double error_plain = (plain.x - SmallMpcc::solution()).cwiseAbs().maxCoeff();
+  const double error_refined = (refined.x - SmallMpcc::solution()).cwiseAbs().maxCoeff();
+  std::printf("x error: converged %.2e, refined %.2e; residual %.2e -> %.2e\n", error_plain, error_refined,
+              plain.complementarity, refined.complementarity);
+  EXPECT_LE(error_refined, 1e-2 * error_plain);  // x follows sigma; the other unknowns sit at Ipopt's tol
+  // The accepted refinement steps lower the residual; the returned point is the last of them.
+  double previous = INFINITY;
+  int accepted = 0;
+  for (const MpccHomotopyStep& st : refined.steps) {
+    if (!st.ipopt_succeeded || st.complementarity >= previous) continue;
+    previous = st.complementarity;
+    ++accepted;
+  }
+  EXPECT_EQ(previous, refined.complementarity);
+  EXPECT_GE(accepted, static_cast<int>(plain.steps.size()) + 2);
+
+  // With the default polish (exact on SmallMpcc) there is nothing left to refine.
+  MpccSolverOptions polished;
+  const MpccSolution p0 = solve_mpcc(problem, polished);
+  polished.complementarity_refinement = 1e-13;
+  const MpccSolution p1 = solve_mpcc(problem, polished);
+  ASSERT_TRUE(p1.converged && p1.polished) << p1.message;
+  EXPECT_EQ(p1.steps.size(), p0.steps.size());
+}
+
 TEST(MpccSolver, PenaltyReachesTheUniqueBStationaryPoint) {
   SmallMpcc problem;
   std::ostringstream progress;
@@ -638,6 +683,12 @@ TEST(MpccSolver, BadOptionsAreRefusedByName) {
   o = {};
   o.polish_single_flips = -1;
   refused(o, "polish_single_flips");
+  o = {};
+  o.complementarity_refinement = 1e-8;  // above complementarity_tolerance
+  refused(o, "complementarity_refinement");
+  o = {};
+  o.complementarity_refinement = -1e-12;
+  refused(o, "complementarity_refinement");
   o = {};
   o.polish_single_flip_max_biactive = -1;
   refused(o, "polish_single_flip_max_biactive");

@@ -405,8 +405,12 @@ MpccSolution solve_from(const Mpcc& problem, const MpccStart& start, bool with_m
   double sigma = options.sigma_0;
   std::string stop_message;
   bool converged = false;
+  // Converged, polish not succeeded, the residual above options.complementarity_refinement: the
+  // homotopy goes on (MpccSolverOptions::complementarity_refinement).
+  bool refining = false;
+  std::string refinement_end;
 
-  for (int k = 0; k < options.max_homotopy_steps && !converged && stop_message.empty(); ++k) {
+  for (int k = 0; k < options.max_homotopy_steps && (!converged || refining) && stop_message.empty(); ++k) {
     for (int retry = 0;; ++retry) {
       const Iterate& from = success ? *success : initial;
       const bool warm = options.warm_start && (success.has_value() || user_multipliers);
@@ -436,6 +440,32 @@ MpccSolution solve_from(const Mpcc& problem, const MpccStart& start, bool with_m
       solution.steps.push_back(step);
       if (options.progress) *options.progress << format_step(step, penalty) << std::flush;
 
+      if (refining) {
+        // A refinement step is kept only when it succeeded and lowered the residual; else the
+        // refinement ends with the previous (converged) step.
+        std::ostringstream why;
+        why.precision(3);
+        if (!step.ipopt_succeeded)
+          why << "refinement ended at homotopy step " << k << " (sigma = " << sigma << "): Ipopt " << step.ipopt_status;
+        else if (!(step.complementarity < success_complementarity))
+          why << "refinement ended at homotopy step " << k << " (sigma = " << sigma << "): complementarity "
+              << step.complementarity << " not below " << success_complementarity;
+        if (!why.str().empty()) {
+          refinement_end = why.str();
+          refining = false;
+          break;
+        }
+        if (nlp->has_result())
+          last = Iterate{nlp->result_x(), nlp->result_lambda(), nlp->result_z_lower(), nlp->result_z_upper()};
+        previous_x = success->x;
+        previous_sigma = success_sigma;
+        success = last;
+        success_index = k;
+        success_sigma = sigma;
+        success_complementarity = step.complementarity;
+        refining = step.complementarity > options.complementarity_refinement;
+        break;
+      }
       if (nlp->has_result())
         last = Iterate{nlp->result_x(), nlp->result_lambda(), nlp->result_z_lower(), nlp->result_z_upper()};
       if (step.ipopt_succeeded) {
@@ -454,6 +484,8 @@ MpccSolution solve_from(const Mpcc& problem, const MpccStart& start, bool with_m
           success_polished = true;
           if (try_polish(*success, k, sigma)) converged = true;
         }
+        refining = converged && !polished && options.complementarity_refinement > 0.0 &&
+                   step.complementarity > options.complementarity_refinement;
         break;
       }
       std::ostringstream why;
@@ -475,7 +507,7 @@ MpccSolution solve_from(const Mpcc& problem, const MpccStart& start, bool with_m
       kappa = std::sqrt(kappa);
       sigma = snap_to_decade(kappa * success_sigma);
     }
-    if (!converged && stop_message.empty()) sigma = snap_to_decade(sigma * kappa);
+    if ((!converged || refining) && stop_message.empty()) sigma = snap_to_decade(sigma * kappa);
   }
 
   // The homotopy stopped on a failure: polish its last successful step if not done yet.
@@ -504,6 +536,7 @@ MpccSolution solve_from(const Mpcc& problem, const MpccStart& start, bool with_m
     message << "converged: complementarity " << solution.complementarity
             << " <= " << options.complementarity_tolerance << " at homotopy step " << success_index
             << " (sigma = " << success_sigma << ")";
+    if (!refinement_end.empty()) message << "; " << refinement_end;
   } else if (!stop_message.empty()) {
     message << stop_message;
   } else {
@@ -525,6 +558,9 @@ void MpccSolverOptions::validate() const {
   SALTUS_REQUIRE(complementarity_tolerance >= 0.0 && std::isfinite(complementarity_tolerance),
                  "MpccSolverOptions::complementarity_tolerance must be >= 0 and finite, got ",
                  complementarity_tolerance);
+  SALTUS_REQUIRE(complementarity_refinement >= 0.0 && complementarity_refinement <= complementarity_tolerance,
+                 "MpccSolverOptions::complementarity_refinement must be in [0, complementarity_tolerance = ",
+                 complementarity_tolerance, "], got ", complementarity_refinement);
   SALTUS_REQUIRE(max_homotopy_steps >= 1, "MpccSolverOptions::max_homotopy_steps must be >= 1, got ",
                  max_homotopy_steps);
   SALTUS_REQUIRE(max_step_retries >= 0, "MpccSolverOptions::max_step_retries must be >= 0, got ", max_step_retries);

@@ -130,6 +130,16 @@ struct MpccSolverOptions {
   double kappa = 0.1;
   /// Converged when a successful step has max_j |G_j H_j| <= this.
   double complementarity_tolerance = 1e-9;
+  /// Refinement past convergence (0: off; else in [0, complementarity_tolerance]). A product
+  /// G_j H_j <= 1e-9 still lets both sides be ~3e-5: in a time-freezing simulation the frozen phase
+  /// of an impact, where the gap's pair is degenerate (both sides vanish exactly), then lets the
+  /// gap drift to -1.6e-5 and the clock creep 5e-6 (Example 3, n_s = 2: that drift was the whole
+  /// final error at 112 elements; bench/README.md, "FESD accuracy"). With a target, a converged
+  /// homotopy whose polish did not succeed goes on decreasing sigma while its steps succeed and
+  /// their residual shrinks, until the residual is <= this target; the first step that fails (no
+  /// retries) or does not lower the residual ends the refinement, and the result is the last
+  /// successful step, still converged. Refinement steps are listed in `steps` and not polished.
+  double complementarity_refinement = 0.0;
   /// Number of homotopy steps (sigma values), retries of a step not counted; >= 1.
   int max_homotopy_steps = 30;
   /// A step whose Ipopt solve fails is restarted from the last successful iterate with a slower
