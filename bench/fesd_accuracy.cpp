@@ -2,11 +2,14 @@
 // forms, and the same Radau IIA scheme on a fixed grid, as the grid is refined.
 //
 //   fesd_accuracy [--json] [--budget SECONDS] [--scheme fesd|fesd-exact|fixed] [--stages N]
-//                 [--finite-elements N1,N2,...] [--refine TARGET]
+//                 [--finite-elements N1,N2,...] [--refine TARGET] [--contact-side WEIGHT] [--landing-only]
 //
 // --finite-elements replaces the default N_fe = 1, 2, 4, 8 (the budget rule drops the last one).
 // --refine sets MpccSolverOptions::complementarity_refinement (in (0, 1e-9]) for the guiding
 // example: each control interval's converged homotopy goes on towards that residual.
+// --contact-side sets FesdOptions::contact_side_weight (>= 0; scheme "fesd+side" when > 0) for both
+// examples (default: 0 for the guiding example, the landing's own 1e-2); --landing-only runs the
+// frictional landing alone.
 // SALTUS_BENCH_TRACE=1 prints, per configuration, the error of every element boundary's state
 // against the closed form y(tau) (exact_state below): where along the horizon the error arises.
 //
@@ -162,10 +165,13 @@ struct Order {
 
 /// MpccSolverOptions::complementarity_refinement of the guiding example's runs (--refine).
 double refinement = 0.0;
+/// FesdOptions::contact_side_weight of both examples' runs (--contact-side; < 0: the example's
+/// own, 0 for the guiding example, 1e-2 for the frictional landing).
+double contact_side = -1.0;
 
 Row run_guiding(const std::string& scheme, int stages, int finite_elements) {
   Row r;
-  r.scheme = refinement > 0.0 ? scheme + "+refine" : scheme;
+  r.scheme = scheme + (contact_side > 0.0 ? "+side" : "") + (refinement > 0.0 ? "+refine" : "");
   r.stages = stages;
   r.finite_elements = finite_elements;
   const TimeFreezingSystem<PointMass> system(PointMass(), g);
@@ -175,6 +181,7 @@ Row run_guiding(const std::string& scheme, int stages, int finite_elements) {
   o.finite_elements = finite_elements;
   o.horizon = horizon;
   o.switch_detection = scheme != "fixed";
+  if (contact_side >= 0.0) o.contact_side_weight = contact_side;
   if (scheme == "fesd-exact") o.step_equilibration = StepEquilibration::Exact;
   const auto start = std::chrono::steady_clock::now();
   MpccSolverOptions solver;
@@ -236,7 +243,9 @@ Landing run_landing() {
   Landing l;
   using Case = scenes::FrictionalLanding;
   const auto start = std::chrono::steady_clock::now();
-  const auto sim = simulate_time_freezing(Case::system(), Case::q0(), Case::v0(), Case::grid());
+  timefreezing::FesdOptions grid = Case::grid();
+  if (contact_side >= 0.0) grid.contact_side_weight = contact_side;
+  const auto sim = simulate_time_freezing(Case::system(), Case::q0(), Case::v0(), grid);
   l.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   l.stop_error = std::abs(sim.final_state()[0] - Case::stop);
   l.converged = sim.converged();
@@ -276,6 +285,7 @@ int main(int argc, char** argv) {
   double budget = 30.0;
   std::string only_scheme;
   int only_stages = 0;
+  bool landing_only = false;
   std::vector<int> element_counts = {1, 2, 4, 8};
   for (int i = 1; i < argc; ++i) {
     if (std::strcmp(argv[i], "--json") == 0) {
@@ -292,6 +302,10 @@ int main(int argc, char** argv) {
     } else if (std::strcmp(argv[i], "--refine") == 0 && i + 1 < argc && std::atof(argv[i + 1]) > 0.0 &&
                std::atof(argv[i + 1]) <= 1e-9) {
       refinement = std::atof(argv[++i]);
+    } else if (std::strcmp(argv[i], "--landing-only") == 0) {
+      landing_only = true;
+    } else if (std::strcmp(argv[i], "--contact-side") == 0 && i + 1 < argc && std::atof(argv[i + 1]) >= 0.0) {
+      contact_side = std::atof(argv[++i]);
     } else if (std::strcmp(argv[i], "--finite-elements") == 0 && i + 1 < argc) {
       element_counts.clear();
       for (const char* c = argv[++i]; *c;) {
@@ -307,7 +321,7 @@ int main(int argc, char** argv) {
     } else {
       std::fprintf(stderr,
                    "usage: %s [--json] [--budget SECONDS] [--scheme fesd|fesd-exact|fixed] [--stages 1|2|3] "
-                   "[--finite-elements N1,N2,...] [--refine TARGET]\n",
+                   "[--finite-elements N1,N2,...] [--refine TARGET] [--contact-side WEIGHT] [--landing-only]\n",
                    argv[0]);
       return 2;
     }
@@ -318,7 +332,7 @@ int main(int argc, char** argv) {
   std::vector<Order> orders;
   bool failed = false;
   for (const std::string scheme : {"fesd", "fesd-exact", "fixed"}) {
-    if (!only_scheme.empty() && only_scheme != scheme) continue;
+    if (landing_only || (!only_scheme.empty() && only_scheme != scheme)) continue;
     for (int ns = 1; ns <= 3; ++ns) {
       if (only_stages != 0 && ns != only_stages) continue;
       const std::size_t first = rows.size();
@@ -370,7 +384,7 @@ int main(int argc, char** argv) {
     }
   }
   Landing landing;
-  const bool with_landing = only_scheme.empty() && only_stages == 0;
+  const bool with_landing = landing_only || (only_scheme.empty() && only_stages == 0);
   if (with_landing) {
     try {
       landing = run_landing();

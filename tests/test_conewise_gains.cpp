@@ -78,6 +78,48 @@ class FlatBox {
 using Box = FlatBox;
 constexpr double sqrt2 = std::numbers::sqrt2;
 
+// Six bouncing points on fixed flat ground (1 kg each, q_i the height of point i, restitution e,
+// frictionless), a vertical force u on point 0 (nu = 1): six guards that fire together when the
+// points fall side by side, and independent contacts (a diagonal Delassus matrix), so every one of
+// the 6! = 720 orders is realisable and every piece is the same block-diagonal matrix. Each block
+// is the bouncing point's saltation matrix in (q_i, v_i): with v- = -V, jump v+ = -e v-, flows
+// f- = (-V, -g) and f+ = (e V, -g), and the guard gradient (1, 0),
+//     Xi = D R + (f+ - D R f-) (1, 0) / (-V) = [[-e, 0], [(1 + e) g / V, -e]].
+class SixPoints {
+ public:
+  static constexpr int nq = 6, nu = 1, nc = 6;
+  static constexpr const char* name = "six_points";
+  explicit SixPoints(double e) {
+    for (int i = 0; i < nc; ++i) points_[i] = ContactSpec{"p" + std::to_string(i), Friction::None, 0.0, e};
+  }
+  const ContactSpec& contact(int i) const { return points_[i]; }
+  template <class T>
+  MatT<T, nq, nq> mass_matrix(const VecT<T, nq>&) const {
+    return MatT<T, nq, nq>::Identity();
+  }
+  template <class T>
+  VecT<T, nq> bias(const VecT<T, nq>&, const VecT<T, nq>&) const {
+    return VecT<T, nq>::Constant(T(9.81));
+  }
+  template <class T>
+  MatT<T, nq, nu> input_matrix(const VecT<T, nq>&) const {
+    MatT<T, nq, nu> B = MatT<T, nq, nu>::Zero();
+    B(0, 0) = T(1);
+    return B;
+  }
+  template <class T>
+  T gap(int i, const VecT<T, nq>& q) const {
+    return q[i];
+  }
+  template <class T>
+  VecT<T, 2> tangent_position(int, const VecT<T, nq>&) const {
+    return VecT<T, 2>(T(0), T(0));
+  }
+
+ private:
+  std::array<ContactSpec, nc> points_;
+};
+
 /// The box flat at height `clearance` above the ground with velocity (vx, vy, 0): both corners
 /// land at once.
 Vec<6> flat_start(const Box& box, double clearance, double vx, double vy) {
@@ -146,6 +188,51 @@ TEST(ConewiseGains, OrthogonalContactsGiveOneMatrix) {
     // The cones are the two half-spaces of one hyperplane, with opposite normals.
     EXPECT_LE(relative_difference(p[0]->cone_z, Eigen::MatrixXd(-p[1]->cone_z)), 1e-12);
   }
+}
+
+// Six guards at once (SixPoints): 720 orders, built lazily. Each evaluate() builds only the six
+// nodes on its path; every piece equals the closed-form block-diagonal saltation matrix (1e-12).
+TEST(ConewiseGains, SixSimultaneousGuardsAreBuiltLazily) {
+  const double e = 0.5, h = 0.02, v0 = -1.0, g = 9.81;
+  const SixPoints points(e);
+  Vec<12> x0 = Vec<12>::Zero();
+  x0.head<6>().setConstant(h);
+  x0.tail<6>().setConstant(v0);
+  const auto zero = open_loop<SixPoints>([](double) { return Vec<1>::Zero().eval(); });
+  const auto traj = simulate(points, x0, 0.05, zero);
+  ASSERT_GE(traj.events.size(), 1u);
+  ASSERT_EQ(traj.events[0].transitions.front().guards.size(), 6u) << "the six points land together";
+  const double V = std::sqrt(v0 * v0 + 2.0 * g * h);
+  Mat<12, 12> expected = Mat<12, 12>::Zero();  // state (q, v): block i on rows/columns (i, 6 + i)
+  for (int i = 0; i < 6; ++i) {
+    expected(i, i) = -e;
+    expected(6 + i, i) = (1.0 + e) * g / V;
+    expected(6 + i, 6 + i) = -e;
+  }
+  ConewiseJumpGain<SixPoints> gain(points, traj.events[0], traj.input, tight_conewise());
+  EXPECT_TRUE(gain.pieces().empty()) << "nothing is built before it is needed";
+  std::mt19937 rng(17);
+  std::normal_distribution<double> normal;
+  constexpr int samples = 24;
+  double worst = 0.0;
+  for (int s = 0; s < samples; ++s) {
+    Vec<12> z;
+    for (auto& c : z) c = normal(rng);
+    const Vec<12> h_z = gain.evaluate(z, Vec<1>::Zero());
+    worst = std::max(worst, (h_z - expected * z).cwiseAbs().maxCoeff() / z.cwiseAbs().maxCoeff());
+    const auto& piece = gain.piece(z, Vec<1>::Zero());
+    EXPECT_EQ(piece.order.size(), 6u);
+    EXPECT_LE(relative_difference(piece.G_z, expected), 1e-12) << order_of(points, piece.order);
+  }
+  double build_seconds = 0.0;
+  for (const auto* p : gain.pieces()) build_seconds += p->build_seconds;
+  std::printf("six simultaneous guards: %zu of 720 pieces built by %d evaluations (%.2f ms per piece), largest "
+              "|H(z) - Xi z| / |z| = %.1e\n",
+              gain.pieces().size(), samples, 1e3 * build_seconds / static_cast<double>(gain.pieces().size()), worst);
+  EXPECT_LE(gain.pieces().size(), static_cast<std::size_t>(samples)) << "only the evaluated cones are built";
+  EXPECT_GE(gain.pieces().size(), static_cast<std::size_t>(samples / 2)) << "random directions fall in distinct cones";
+  EXPECT_LE(worst, 1e-12);
+  EXPECT_TRUE(gain.unrealisable_orders().empty());
 }
 
 // The plank-box landing flat: two pieces, positively homogeneous to round-off, continuous across

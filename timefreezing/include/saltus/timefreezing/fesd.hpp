@@ -33,7 +33,28 @@
 //
 // OBJECTIVE: L(T~) (the running cost over physical time, eq. 29), plus the terminal cost, plus
 // the heuristic step equilibration rho_h sum (h_kj - h0)^2 (NOSNOC's heuristic_mean, unscaled
-// like NOSNOC's so that weights compare; StepEquilibration::Heuristic), plus rho_s sum (s_k - 1)^2.
+// like NOSNOC's so that weights compare; StepEquilibration::Heuristic), plus rho_s sum (s_k - 1)^2,
+// plus the contact-side selection rho_c sum alpha_gap (FesdOptions::contact_side_weight, below).
+//
+// CONTACT-SIDE SELECTION. While a contact's gap is exactly zero (its frozen phase: the auxiliary
+// field moves v only, q' = 0; sliding along the surface) the gap's switching function vanishes,
+// both its multipliers vanish, and complementarity leaves its step function alpha_gap anywhere in
+// [0, 1]. The Filippov field does not care which weights realise it: with alpha_gap = a and
+// alpha_vn = b the field weights the ODE by 1 - (1 - a)(1 - b), so sliding (clock speed 1/2 in
+// Example 3) is a = 0, b = 1/2 or a = 1/2, b = 0 alike. But the second choice moves the end of the
+// frozen phase into the degenerate gap pair, where cross-complementarity sees no switch, so the
+// grid does not locate it: Example 3 with n_s = 2 and 16 elements per control interval ends its
+// frozen phase inside an element (tau off by 3.2e-3, q1 by 9e-6), and a relaxed homotopy also
+// uses the freedom to let the gap drift (-1.6e-5) and the clock creep during the frozen phase.
+// The linear cost rho_c sum over contacts and stage points of alpha_gap picks the contact side
+// (alpha_gap = 0) wherever the gap is zero, and does nothing where the gap is not (there
+// complementarity fixes alpha_gap); so the frozen phase's end becomes a switch of J_n v, which
+// cross-complementarity locates. Under a relaxation it pulls alpha_gap in flight down to the
+// relaxed bound (1 - alpha_gap = sigma / lambda_p): an O(sigma) phantom support that vanishes
+// with sigma. A lift-off stays where it was: J_n v leaves zero into flight and the gap follows.
+// Off by default: measured on one contact it removes the drift and locates the frozen end, on
+// the plank-box's two contacts it costs 6x the Ipopt iterations (FesdOptions::contact_side_weight).
+// Derivatives: gradient rho_c on those entries, no Hessian term.
 //
 // EXACT STEP EQUILIBRATION (StepEquilibration::Exact; FESD paper's eta-constraints, NOSNOC's
 // "direct" mode, written here for the step DCS). Where no switch happens at the boundary between
@@ -136,6 +157,18 @@ struct FesdOptions {
   /// Only with switch_detection.
   StepEquilibration step_equilibration = StepEquilibration::Heuristic;
   double step_equilibration_weight = 1.0;  ///< rho_h of the heuristic penalty
+  /// rho_c >= 0 of the contact-side selection rho_c sum alpha_gap over contacts and stage points
+  /// (file comment): where a gap is exactly zero (frozen phases, sliding) complementarity leaves
+  /// alpha_gap free and this picks the contact side, so that frozen-phase ends are switches of
+  /// J_n v that the grid locates. 0: off (the default). Measured (bench/README.md, "Contact-side
+  /// selection"), simulations with rho_c = 1e-2: Example 3 (one contact), n_s = 2, 224 elements,
+  /// final error 9.8e-6 -> 7.1e-7 and 7,492 -> 3,104 Ipopt iterations; NOSNOC's frictional
+  /// landing, stop error 2.0e-6 -> 6.2e-12; but the plank-box flat landing (two contacts)
+  /// 2,567 -> 16,071 iterations and 6.7e-5 -> 1.3e-4 from the event-driven simulation: not a
+  /// default. Choose rho_c above rho_h h0^2 (the step equilibration's price of moving a boundary
+  /// by h0; Example 3 with h0 = 0.0625: 1e-3 left the frozen end inside an element, 1e-2 did not).
+  /// In an OCP the term is a reward of rho_c per stage point in contact and can move the optimum.
+  double contact_side_weight = 0.0;
   double speed_of_time_max = 1.0;          ///< s_max >= 1 (1: s fixed at 1)
   double speed_of_time_weight = 0.0;       ///< rho_s
   ClockConstraint clock = ClockConstraint::None;
@@ -273,6 +306,8 @@ class FesdMpcc final : public Mpcc {
                    "FESD: speed_of_time_max must be >= 1, got ", options.speed_of_time_max);
     SALTUS_REQUIRE(options.step_equilibration_weight >= 0.0 && options.speed_of_time_weight >= 0.0,
                    "FESD: penalty weights must be >= 0");
+    SALTUS_REQUIRE(std::isfinite(options.contact_side_weight) && options.contact_side_weight >= 0.0,
+                   "FESD: contact_side_weight must be >= 0 and finite, got ", options.contact_side_weight);
     for (double k : options.switching_scale)
       SALTUS_REQUIRE(std::isfinite(k) && k > 0.0, "FESD: switching_scale entries must be finite and > 0, got ", k);
     SALTUS_REQUIRE(options.clock == ClockConstraint::None ||
@@ -441,6 +476,10 @@ class FesdMpcc final : public Mpcc {
           const double dh = x[length_index(k, j)] - h0_;
           f += heuristic_weight() * dh * dh;
         }
+      if (options_.contact_side_weight > 0.0)
+        for (int j = 0; j < options_.finite_elements; ++j)
+          for (int r = 0; r < options_.stages; ++r)
+            for (int i = 0; i < nc; ++i) f += options_.contact_side_weight * x[alpha_index(k, j, r) + 3 * i];
     }
     return f;
   }
@@ -463,6 +502,10 @@ class FesdMpcc final : public Mpcc {
       if (options_.switch_detection)
         for (int j = 0; j < options_.finite_elements; ++j)
           g[length_index(k, j)] += 2.0 * heuristic_weight() * (x[length_index(k, j)] - h0_);
+      if (options_.contact_side_weight > 0.0)
+        for (int j = 0; j < options_.finite_elements; ++j)
+          for (int r = 0; r < options_.stages; ++r)
+            for (int i = 0; i < nc; ++i) g[alpha_index(k, j, r) + 3 * i] += options_.contact_side_weight;
     }
   }
 
