@@ -5,7 +5,7 @@
 //                 [--finite-elements N1,N2,...] [--refine TARGET] [--contact-side WEIGHT] [--landing-only]
 //
 // --finite-elements replaces the default N_fe = 1, 2, 4, 8 (the budget rule drops the last one).
-// --refine sets MpccSolverOptions::complementarity_refinement (in (0, 1e-9]) for the guiding
+// --refine sets MpccSolverOptions::complementarity_refinement (in (0, 1e-9)) for the guiding
 // example: each control interval's converged homotopy goes on towards that residual.
 // --contact-side sets FesdOptions::contact_side_weight (>= 0; scheme "fesd+side" when > 0) for both
 // examples (default: 0 for the guiding example, the landing's own 1e-2); --landing-only runs the
@@ -163,6 +163,14 @@ struct Order {
   double order = kNaN;
 };
 
+/// A whole command-line argument as a finite number, NaN otherwise (so that "--contact-side --json"
+/// is refused, not read as 0).
+double parse_number(const char* text) {
+  char* end = nullptr;
+  const double x = std::strtod(text, &end);
+  return end != text && *end == '\0' && std::isfinite(x) ? x : std::numeric_limits<double>::quiet_NaN();
+}
+
 /// MpccSolverOptions::complementarity_refinement of the guiding example's runs (--refine).
 double refinement = 0.0;
 /// FesdOptions::contact_side_weight of both examples' runs (--contact-side; < 0: the example's
@@ -299,13 +307,13 @@ int main(int argc, char** argv) {
     } else if (std::strcmp(argv[i], "--stages") == 0 && i + 1 < argc && std::atoi(argv[i + 1]) >= 1 &&
                std::atoi(argv[i + 1]) <= 3) {
       only_stages = std::atoi(argv[++i]);
-    } else if (std::strcmp(argv[i], "--refine") == 0 && i + 1 < argc && std::atof(argv[i + 1]) > 0.0 &&
-               std::atof(argv[i + 1]) <= 1e-9) {
-      refinement = std::atof(argv[++i]);
+    } else if (std::strcmp(argv[i], "--refine") == 0 && i + 1 < argc && parse_number(argv[i + 1]) > 0.0 &&
+               parse_number(argv[i + 1]) < 1e-9) {
+      refinement = parse_number(argv[++i]);
     } else if (std::strcmp(argv[i], "--landing-only") == 0) {
       landing_only = true;
-    } else if (std::strcmp(argv[i], "--contact-side") == 0 && i + 1 < argc && std::atof(argv[i + 1]) >= 0.0) {
-      contact_side = std::atof(argv[++i]);
+    } else if (std::strcmp(argv[i], "--contact-side") == 0 && i + 1 < argc && parse_number(argv[i + 1]) >= 0.0) {
+      contact_side = parse_number(argv[++i]);
     } else if (std::strcmp(argv[i], "--finite-elements") == 0 && i + 1 < argc) {
       element_counts.clear();
       for (const char* c = argv[++i]; *c;) {
@@ -317,6 +325,10 @@ int main(int argc, char** argv) {
         }
         element_counts.push_back(static_cast<int>(n));
         c = *end == ',' ? end + 1 : end;
+      }
+      if (element_counts.empty()) {
+        std::fprintf(stderr, "--finite-elements: a comma-separated list of counts in [1, 64]\n");
+        return 2;
       }
     } else {
       std::fprintf(stderr,
@@ -348,7 +360,7 @@ int main(int argc, char** argv) {
         try {
           r = run_guiding(scheme, ns, nfe);
         } catch (const std::exception& e) {
-          r.scheme = scheme;
+          r.scheme = scheme + (contact_side > 0.0 ? "+side" : "") + (refinement > 0.0 ? "+refine" : "");
           r.stages = ns;
           r.finite_elements = nfe;
           r.error = e.what();

@@ -10,6 +10,7 @@
 #include <saltus/sensitivity/detail/dense.hpp>
 #include <saltus/sensitivity/header_only.hpp>  // the test-local FlatBox below
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -222,6 +223,13 @@ TEST(ConewiseGains, SixSimultaneousGuardsAreBuiltLazily) {
     worst = std::max(worst, (h_z - expected * z).cwiseAbs().maxCoeff() / z.cwiseAbs().maxCoeff());
     const auto& piece = gain.piece(z, Vec<1>::Zero());
     EXPECT_EQ(piece.order.size(), 6u);
+    // Point i lands dt_i = dq_i / V after t*: the order is the points sorted by dq_i.
+    std::array<int, 6> by_time{0, 1, 2, 3, 4, 5};
+    std::sort(by_time.begin(), by_time.end(), [&](int a, int b) { return z[a] < z[b]; });
+    for (std::size_t m = 0; m < piece.order.size() && m < 6; ++m) {
+      ASSERT_EQ(piece.order[m].size(), 1u);
+      EXPECT_EQ(piece.order[m][0].contact, by_time[m]) << order_of(points, piece.order);
+    }
     EXPECT_LE(relative_difference(piece.G_z, expected), 1e-12) << order_of(points, piece.order);
   }
   double build_seconds = 0.0;

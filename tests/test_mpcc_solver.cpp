@@ -384,6 +384,20 @@ TEST(MpccSolver, RefinementGoesOnPastConvergence) {
   }
   EXPECT_EQ(previous, refined.complementarity);
   EXPECT_GE(accepted, static_cast<int>(plain.steps.size()) + 2);
+  EXPECT_NE(refined.message.find("refinement steps accepted"), std::string::npos) << refined.message;
+
+  // A target out of reach: the refinement ends on a step that fails, does not lower the residual,
+  // or exhausts max_homotopy_steps, and the result is the last accepted step, still converged.
+  options.complementarity_refinement = 1e-30;
+  options.progress = nullptr;
+  const MpccSolution unreachable = solve_mpcc(problem, options);
+  std::cout << unreachable.message << "\n";
+  ASSERT_TRUE(unreachable.converged) << unreachable.message;
+  EXPECT_LE(unreachable.complementarity, refined.complementarity);
+  const bool ended = unreachable.message.find("refinement ended") != std::string::npos ||
+                     unreachable.message.find("refinement stopped by max_homotopy_steps") != std::string::npos;
+  EXPECT_TRUE(ended) << unreachable.message;
+  EXPECT_LE(unreachable.constraint_violation, 1e-8);
 
   // With the default polish (exact on SmallMpcc) there is nothing left to refine.
   MpccSolverOptions polished;

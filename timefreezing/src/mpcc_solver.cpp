@@ -409,6 +409,8 @@ MpccSolution solve_from(const Mpcc& problem, const MpccStart& start, bool with_m
   // homotopy goes on (MpccSolverOptions::complementarity_refinement).
   bool refining = false;
   std::string refinement_end;
+  double success_violation = 0.0;  // of `success` (a refinement step may not exceed it)
+  int refinement_steps = 0;        // accepted
 
   for (int k = 0; k < options.max_homotopy_steps && (!converged || refining) && stop_message.empty(); ++k) {
     for (int retry = 0;; ++retry) {
@@ -445,11 +447,16 @@ MpccSolution solve_from(const Mpcc& problem, const MpccStart& start, bool with_m
         // refinement ends with the previous (converged) step.
         std::ostringstream why;
         why.precision(3);
+        const double allowed_violation = std::max(success_violation, options.polish_feasibility_tolerance);
         if (!step.ipopt_succeeded)
           why << "refinement ended at homotopy step " << k << " (sigma = " << sigma << "): Ipopt " << step.ipopt_status;
         else if (!(step.complementarity < success_complementarity))
           why << "refinement ended at homotopy step " << k << " (sigma = " << sigma << "): complementarity "
               << step.complementarity << " not below " << success_complementarity;
+        else if (step.constraint_violation > allowed_violation)
+          // An "acceptable" Ipopt exit may trade feasibility for the smaller residual.
+          why << "refinement ended at homotopy step " << k << " (sigma = " << sigma << "): constraint violation "
+              << step.constraint_violation << " above " << allowed_violation;
         if (!why.str().empty()) {
           refinement_end = why.str();
           refining = false;
@@ -463,7 +470,16 @@ MpccSolution solve_from(const Mpcc& problem, const MpccStart& start, bool with_m
         success_index = k;
         success_sigma = sigma;
         success_complementarity = step.complementarity;
+        success_violation = step.constraint_violation;
+        ++refinement_steps;
         refining = step.complementarity > options.complementarity_refinement;
+        if (refining && k + 1 == options.max_homotopy_steps) {
+          std::ostringstream budget;
+          budget.precision(3);
+          budget << "refinement stopped by max_homotopy_steps = " << options.max_homotopy_steps << " at complementarity "
+                 << step.complementarity << " > " << options.complementarity_refinement;
+          refinement_end = budget.str();
+        }
         break;
       }
       if (nlp->has_result())
@@ -486,6 +502,10 @@ MpccSolution solve_from(const Mpcc& problem, const MpccStart& start, bool with_m
         }
         refining = converged && !polished && options.complementarity_refinement > 0.0 &&
                    step.complementarity > options.complementarity_refinement;
+        success_violation = step.constraint_violation;
+        if (refining && k + 1 == options.max_homotopy_steps)
+          refinement_end = "refinement not started: max_homotopy_steps = " + std::to_string(options.max_homotopy_steps) +
+                           " reached at convergence";
         break;
       }
       std::ostringstream why;
@@ -536,7 +556,9 @@ MpccSolution solve_from(const Mpcc& problem, const MpccStart& start, bool with_m
     message << "converged: complementarity " << solution.complementarity
             << " <= " << options.complementarity_tolerance << " at homotopy step " << success_index
             << " (sigma = " << success_sigma << ")";
-    if (!refinement_end.empty()) message << "; " << refinement_end;
+    if (options.complementarity_refinement > 0.0)
+      message << "; " << refinement_steps << " refinement step" << (refinement_steps == 1 ? "" : "s") << " accepted"
+              << (refinement_end.empty() ? "" : ", " + refinement_end);
   } else if (!stop_message.empty()) {
     message << stop_message;
   } else {

@@ -50,8 +50,11 @@
 // (alpha_gap = 0) wherever the gap is zero, and does nothing where the gap is not (there
 // complementarity fixes alpha_gap); so the frozen phase's end becomes a switch of J_n v, which
 // cross-complementarity locates. Under a relaxation it pulls alpha_gap in flight down to the
-// relaxed bound (1 - alpha_gap = sigma / lambda_p): an O(sigma) phantom support that vanishes
-// with sigma. A lift-off stays where it was: J_n v leaves zero into flight and the gap follows.
+// relaxed bound 1 - alpha_gap = sigma / lambda_p <= sigma / (K gap): a phantom support that
+// vanishes with sigma away from the surface but not near it (integrated over an approach, about
+// sigma log sigma). At a lift-off the field is right (the ODE weight is 1 once alpha_vn = 1), but
+// the gap's step function stays at 0 until the gap has grown to about sigma, so the gap's switch
+// point comes late (Example 3's tangential lift-off: 3.6e-4 in tau).
 // Off by default: measured on one contact it removes the drift and locates the frozen end, on
 // the plank-box's two contacts it costs 6x the Ipopt iterations (FesdOptions::contact_side_weight).
 // Derivatives: gradient rho_c on those entries, no Hessian term.
@@ -157,17 +160,26 @@ struct FesdOptions {
   /// Only with switch_detection.
   StepEquilibration step_equilibration = StepEquilibration::Heuristic;
   double step_equilibration_weight = 1.0;  ///< rho_h of the heuristic penalty
-  /// rho_c >= 0 of the contact-side selection rho_c sum alpha_gap over contacts and stage points
-  /// (file comment): where a gap is exactly zero (frozen phases, sliding) complementarity leaves
-  /// alpha_gap free and this picks the contact side, so that frozen-phase ends are switches of
-  /// J_n v that the grid locates. 0: off (the default). Measured (bench/README.md, "Contact-side
-  /// selection"), simulations with rho_c = 1e-2: Example 3 (one contact), n_s = 2, 224 elements,
-  /// final error 9.8e-6 -> 7.1e-7 and 7,492 -> 3,104 Ipopt iterations; NOSNOC's frictional
-  /// landing, stop error 2.0e-6 -> 6.2e-12; but the plank-box flat landing (two contacts)
-  /// 2,567 -> 16,071 iterations and 6.7e-5 -> 1.3e-4 from the event-driven simulation: not a
-  /// default. Choose rho_c above rho_h h0^2 (the step equilibration's price of moving a boundary
-  /// by h0; Example 3 with h0 = 0.0625: 1e-3 left the frozen end inside an element, 1e-2 did not).
-  /// In an OCP the term is a reward of rho_c per stage point in contact and can move the optimum.
+  /// rho_c >= 0 (objective units per unit step function) of the contact-side selection
+  /// rho_c sum alpha_gap over contacts and stage points (file comment; a reward per stage point,
+  /// so it grows with n_s and the number of elements): where a gap is exactly zero (frozen
+  /// phases, sliding) complementarity leaves alpha_gap free and this picks the contact side, so
+  /// that frozen-phase ends are switches of J_n v that the grid locates. 0: off (the default).
+  /// When to turn it on: simulations of one contact with impacts or sliding (then rho_c = 1e-2 is
+  /// a safe choice); not measured to help with several contacts (below). Measured
+  /// (bench/README.md, "Where Example 3's error came from"), simulations with rho_c = 1e-2:
+  /// Example 3 (one contact), n_s = 2, 224 elements, final error 9.8e-6 -> 7.1e-7 and 7,492 ->
+  /// 3,104 Ipopt iterations; NOSNOC's frictional landing, stop error 2.0e-6 -> 6.2e-12; but the
+  /// plank-box flat landing (two contacts) 2,567 -> 16,071 iterations and 6.7e-5 -> 1.3e-4 from the
+  /// event-driven simulation, and Example 3 at 56 elements does not converge (its tangential
+  /// lift-off interval): not a default. A heuristic size: rho_c above rho_h h0^2, the heuristic
+  /// step equilibration's price of moving a boundary by h0 = horizon / (control_intervals
+  /// finite_elements) (Example 3, h0 = 0.0625: 1e-3 left the frozen end inside an element, 1e-2
+  /// did not; smaller weights can work when the switch falls near a grid node). With
+  /// switch_detection = false or StepEquilibration::Exact there is no such price: the term still
+  /// picks the side, which then only removes the drift (the grid cannot move). In an OCP the term
+  /// is a reward of rho_c per stage point in contact and can move the optimum; it is part of the
+  /// NLP's objective (MpccSolution::objective).
   double contact_side_weight = 0.0;
   double speed_of_time_max = 1.0;          ///< s_max >= 1 (1: s fixed at 1)
   double speed_of_time_weight = 0.0;       ///< rho_s
@@ -304,8 +316,10 @@ class FesdMpcc final : public Mpcc {
                    "FESD: element_length_freedom (gamma_h) must lie in [0, 1], got ", options.element_length_freedom);
     SALTUS_REQUIRE(std::isfinite(options.speed_of_time_max) && options.speed_of_time_max >= 1.0,
                    "FESD: speed_of_time_max must be >= 1, got ", options.speed_of_time_max);
-    SALTUS_REQUIRE(options.step_equilibration_weight >= 0.0 && options.speed_of_time_weight >= 0.0,
-                   "FESD: penalty weights must be >= 0");
+    SALTUS_REQUIRE(std::isfinite(options.step_equilibration_weight) && options.step_equilibration_weight >= 0.0,
+                   "FESD: step_equilibration_weight must be >= 0 and finite, got ", options.step_equilibration_weight);
+    SALTUS_REQUIRE(std::isfinite(options.speed_of_time_weight) && options.speed_of_time_weight >= 0.0,
+                   "FESD: speed_of_time_weight must be >= 0 and finite, got ", options.speed_of_time_weight);
     SALTUS_REQUIRE(std::isfinite(options.contact_side_weight) && options.contact_side_weight >= 0.0,
                    "FESD: contact_side_weight must be >= 0 and finite, got ", options.contact_side_weight);
     for (double k : options.switching_scale)

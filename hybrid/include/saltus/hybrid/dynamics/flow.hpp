@@ -11,10 +11,10 @@
 // contacts slip). It is singular when contacts are redundant (a box resting flat on two
 // corners has equal tangent rows; the spatial box on four corners has 12 rows for 6 degrees of
 // freedom). Then the forces are not unique; the accelerations are, unless redundant contacts
-// slip along different directions (a box sliding flat on four corners while it turns: a spread
-// of the normal forces that the normal rows do not see carries a friction wrench, derivation in
-// impact.hpp's file comment; rigid-body Coulomb friction leaves the acceleration undetermined
-// there, and the rule below is Saltus' selection). Saltus returns the
+// slip along different directions (a box sliding flat on four corners while it turns: the null
+// vector of J M^-1 F then changes M^-1 F lambda, derivation in impact.hpp's file comment; for the
+// mode's slip directions the acceleration is undetermined there, and the rule below is Saltus'
+// selection). Saltus returns the
 // minimum-Euclidean-norm forces, from a complete orthogonal decomposition whose rank threshold
 // (1e-10 relative to the largest pivot) also treats contacts that are redundant up to drift of
 // the integrator as redundant. For a symmetric box this splits the load equally. Only the double

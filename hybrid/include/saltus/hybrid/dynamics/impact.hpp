@@ -17,19 +17,25 @@
 // minimum-norm impulse, so that the value and the derivative used by the jump gains are those of
 // one and the same map. Redundant contacts (a box landing flat, or three points along one edge)
 // give a singular Delassus matrix (`singular_delassus`: the matrix of every contact in the
-// problem, normal and tangential rows): the impulses are not unique. The velocity is unique when
-// the redundant contacts stick, or slip along one common direction d: for coplanar contacts
-// with common normal n, a spread k of the normal impulses that the normal rows do not see
-// (sum_i k_i w_n,i = 0: sum_i k_i = 0 and, with r_i = rho_i + h n the contact points from the
-// centre of mass, sum_i k_i rho_i = 0) carries the friction wrench -mu (sum_i k_i d,
-// sum_i k_i r_i x d) = 0. When they slip along DIFFERENT directions (a box landing flat while it
-// turns, or inside the cascade of a perturbed flat landing) that wrench is not zero and v+
-// depends on the split: rigid-body Coulomb impacts leave v+ undetermined there, and what follows
-// is Saltus' selection, not the model's answer (the jump gains refuse such impacts when their
-// differentiated jump map does not reproduce the returned v+: JumpGainOptions::jump_map_tolerance;
-// seen on the spatial box, v+ differing by 1.4e-5-3.3e-5). The impulse returned is then the minimum-Euclidean-norm impulse WITHIN the identified impulse
-// mode (the contacts the solver gave an impulse, their stick/slip roles and slip directions;
-// equal shares for a symmetric box) whenever it satisfies the contact laws, and
+// problem, normal and tangential rows): the impulses are not unique. Whether v+ is: fix the
+// impulse mode (who takes an impulse, the slip directions d_i); contact i's impulse is
+// lambda_i f_i, f_i = w_n,i - mu W_t,i d_i for a slipping contact, and the impacting contacts need
+// A lambda = -J_n v- (e = 0), A = J_n M^-1 F. rank A <= rank J_n < n_c for redundant contacts
+// (four coplanar corners: rank 3), so A has a null vector k and lambda + s k (small s, lambda > 0)
+// meets the same normal conditions, with v+ changed by s M^-1 F k: v+ is unique only if F k = 0.
+// Coplanar contacts with common normal n slipping along ONE direction d: the spread k of
+// null(J_n^T) (sum k_i = 0, sum k_i rho_i = 0, r_i = rho_i + h n from the centre of mass) carries
+// the friction wrench -mu (sum k_i d, sum k_i r_i x d) = 0, so F k = 0 and, when A has rank
+// rank J_n (generically; a large mu can lower it, Painleve-like), null(A) is that k: v+ unique.
+// Slipping along DIFFERENT directions (a box landing flat while it turns, or inside the cascade of
+// a perturbed flat landing) the null vector of A is another k' with F k' != 0 (checked
+// numerically: a 0.4 x 0.2 box, h = 0.05, mu = 0.5, four distinct directions): for the mode's directions v+ is not unique; with the directions tied to
+// v+ uniqueness is not shown either way, and the returned v+ is Saltus' selection, not the model's
+// answer (the jump gains refuse such impacts when their differentiated jump map does not
+// reproduce it: JumpGainOptions::jump_map_tolerance; seen on the spatial box, v+ differing by
+// 1.4e-5-3.3e-5). The impulse returned is then the minimum-Euclidean-norm impulse WITHIN the
+// identified impulse mode (the contacts the solver gave an impulse, their stick/slip roles and
+// slip directions; equal shares for a symmetric box) whenever it satisfies the contact laws, and
 // `minimum_norm_impulse` says so; otherwise the solver's own impulse is returned and the flag
 // is false. It is not the minimum-norm impulse over all admissible splits: the solver may give
 // a redundant contact no impulse at all (three collinear points: 0 / 0.891 / 0.099 of the total
