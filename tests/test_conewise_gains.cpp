@@ -32,7 +32,6 @@ namespace {
 class FlatBox {
  public:
   static constexpr int nq = 3, nu = 1, nc = 2;
-  static constexpr const char* name = "flat_box";
   FlatBox(double a, double b, double mu, double e, double inertia = 0.0)
       : a_(a), b_(b), inertia_(inertia > 0 ? inertia : (a * a + b * b) / 3.0),
         corners_{ContactSpec{"left", mu > 0 ? Friction::Planar : Friction::None, mu, e},
@@ -89,7 +88,6 @@ constexpr double sqrt2 = std::numbers::sqrt2;
 class SixPoints {
  public:
   static constexpr int nq = 6, nu = 1, nc = 6;
-  static constexpr const char* name = "six_points";
   explicit SixPoints(double e) {
     for (int i = 0; i < nc; ++i) points_[i] = ContactSpec{"p" + std::to_string(i), Friction::None, 0.0, e};
   }
