@@ -484,8 +484,8 @@ TEST(TimeFreezingSimulation, GuidingExampleReachesTheRadauOrder) {
 // clock creep 5e-6 while the mass should stand still, and the drift stays in q2 for the rest of the
 // motion. Two remedies: refinement past convergence to 1e-14 (MpccSolverOptions::
 // complementarity_refinement) shrinks it below 1e-7; the contact-side selection
-// (FesdOptions::contact_side_weight = 1e-2) removes it. First 4 control intervals: free fall, touchdown, the frozen phase, sliding to
-// tau = 1 (t = 1/2: q = (0.875, 0), v = (3.5, 0)).
+// (FesdOptions::contact_side_weight = 1e-2) removes it. First 4 control intervals: free fall,
+// touchdown, the frozen phase, sliding to tau = 1 (t = 1/2: q = (0.875, 0), v = (3.5, 0)).
 TEST(TimeFreezingSimulation, FrozenPhaseDriftIsRemovedBySideSelectionOrRefinement) {
 #if defined(SALTUS_TESTS_UNDER_SANITIZERS)
   GTEST_SKIP() << "9 s in Release; under the sanitizers the refinement's code path runs in "

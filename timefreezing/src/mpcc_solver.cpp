@@ -411,6 +411,18 @@ MpccSolution solve_from(const Mpcc& problem, const MpccStart& start, bool with_m
   std::string refinement_end;
   double success_violation = 0.0;  // of `success` (a refinement step may not exceed it)
   int refinement_steps = 0;        // accepted
+  // `last` becomes the successful iterate; the one it replaces is kept for the polish's trend rule.
+  const auto accept = [&](const MpccHomotopyStep& step) {
+    if (success) {
+      previous_x = success->x;
+      previous_sigma = success_sigma;
+    }
+    success = last;
+    success_index = step.index;
+    success_sigma = step.sigma;
+    success_complementarity = step.complementarity;
+    success_violation = step.constraint_violation;
+  };
 
   for (int k = 0; k < options.max_homotopy_steps && (!converged || refining) && stop_message.empty(); ++k) {
     for (int retry = 0;; ++retry) {
@@ -464,13 +476,7 @@ MpccSolution solve_from(const Mpcc& problem, const MpccStart& start, bool with_m
         }
         if (nlp->has_result())
           last = Iterate{nlp->result_x(), nlp->result_lambda(), nlp->result_z_lower(), nlp->result_z_upper()};
-        previous_x = success->x;
-        previous_sigma = success_sigma;
-        success = last;
-        success_index = k;
-        success_sigma = sigma;
-        success_complementarity = step.complementarity;
-        success_violation = step.constraint_violation;
+        accept(step);
         ++refinement_steps;
         refining = step.complementarity > options.complementarity_refinement;
         if (refining && k + 1 == options.max_homotopy_steps) {
@@ -485,14 +491,7 @@ MpccSolution solve_from(const Mpcc& problem, const MpccStart& start, bool with_m
       if (nlp->has_result())
         last = Iterate{nlp->result_x(), nlp->result_lambda(), nlp->result_z_lower(), nlp->result_z_upper()};
       if (step.ipopt_succeeded) {
-        if (success) {
-          previous_x = success->x;
-          previous_sigma = success_sigma;
-        }
-        success = last;
-        success_index = k;
-        success_sigma = sigma;
-        success_complementarity = step.complementarity;
+        accept(step);
         success_polished = false;
         if (step.complementarity <= options.complementarity_tolerance) converged = true;
         const bool last_step = converged || k + 1 == options.max_homotopy_steps;
@@ -502,7 +501,6 @@ MpccSolution solve_from(const Mpcc& problem, const MpccStart& start, bool with_m
         }
         refining = converged && !polished && options.complementarity_refinement > 0.0 &&
                    step.complementarity > options.complementarity_refinement;
-        success_violation = step.constraint_violation;
         if (refining && k + 1 == options.max_homotopy_steps)
           refinement_end = "refinement not started: max_homotopy_steps = " + std::to_string(options.max_homotopy_steps) +
                            " reached at convergence";
