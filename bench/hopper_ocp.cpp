@@ -1,9 +1,12 @@
 // The flagship OCP, the hopper over three holes (scenes/hopper_holes.hpp; time-freezing paper
 // Section 6), under the solver and formulation variants the issue asks to measure one by one.
 //
-//   hopper_ocp [--json] [--only NAME]
+//   hopper_ocp [--json] [--only NAME] [--max-steps K] [--ipopt NAME=VALUE]...
 //
-// Every variant starts from the paper's initialisation (the start state at every stage point,
+// --max-steps K overrides the homotopy's step budget (10); --ipopt passes an Ipopt option to every
+// solve (ocp_bench_support.hpp; the measurements of bench/README.md's hopper section use both).
+//
+// Every variant but hop-guess starts from the paper's initialisation (the start state at every stage point,
 // zero torques; FesdMpcc::initial_point), on the paper's grid (N = 20, 3 elements, n_s = 2), with
 // sigma_0 = 1, kappa = 0.1, 10 steps, 1500 Ipopt iterations per step, Ipopt tol 1e-8; one
 // progress line per Ipopt solve on stderr. Columns, per variant:
@@ -21,11 +24,13 @@
 
 #include <saltus/timefreezing/simulation.hpp>
 
+#include "ocp_bench_support.hpp"
+
 #include <nlohmann/json.hpp>
 
 #include <cstdio>
-#include <cstring>
 #include <iostream>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -42,6 +47,13 @@ struct Variant {
   bool velocity_switch_detection = false;
   bool hole_continuation = true;
   int control_intervals = 20;
+  bool hop_guess = false;  ///< start from Ocp::hop_guess (the second initialisation) instead
+  /// > 0: the default's homotopy runs this many steps (no polish), then the penalty homotopy
+  /// continues from its primal-dual solution with rho_0 = 1 / penalty_sigma_0.
+  int smoothing_steps = 0;
+  double penalty_sigma_0 = 0.0;
+  double contact_side_weight = 0.0;  ///< FesdOptions::contact_side_weight
+  int stages = 2;                    ///< Radau IIA stages n_s
 };
 
 std::vector<Variant> variants() {
@@ -54,22 +66,25 @@ std::vector<Variant> variants() {
       {"scholtes", "the default with the Scholtes inequalities instead of the smoothing", R::Scholtes, false, true},
       {"velocity-cross", "the default with cross-complementarity on the velocities too", R::Smoothing, true, true},
       {"penalty", "the default with the penalty (elastic) homotopy", R::Penalty, false, true},
+      {"hop-guess", "second initialisation: the default from a kinematic three-hop guess, no continuation",
+       R::Smoothing, false, false, 20, true},
+      {"smoothing-then-penalty", "the default's continuation and first 4 steps (sigma 1 .. 1e-3), then the penalty from rho = 1e3",
+       R::Smoothing, false, true, 20, false, 4, 1e-3},
+      {"scholtes-side", "the Scholtes inequalities with the contact-side selection 1e-2 (no stiff sigmoid, no free band)",
+       R::Scholtes, false, true, 20, false, 0, 0.0, 1e-2},
+      {"stages-3", "the default with Radau IIA n_s = 3", R::Smoothing, false, true, 20, false, 0, 0.0, 0.0, 3},
   };
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
-  bool json = false;
-  std::string only;
-  for (int i = 1; i < argc; ++i) {
-    if (std::strcmp(argv[i], "--json") == 0) json = true;
-    else if (std::strcmp(argv[i], "--only") == 0 && i + 1 < argc) only = argv[++i];
-    else {
-      std::fprintf(stderr, "usage: hopper_ocp [--json] [--only NAME]\n");
-      return 2;
-    }
-  }
+  const std::optional<bench::OcpBenchArgs> args = bench::parse_ocp_bench_args(argc, argv, "hopper_ocp");
+  if (!args) return 2;
+  const bool json = args->json;
+  const std::string& only = args->only;
+  const int max_steps = args->max_steps;
+  const std::vector<IpoptOption>& ipopt_options = args->ipopt_options;
   nlohmann::ordered_json rows = nlohmann::ordered_json::array();
   if (!json)
     std::printf("%-24s %4s %5s %6s %9s %9s %9s %11s %-28s %8s\n", "variant", "conv", "steps", "iters", "compl",
@@ -81,11 +96,27 @@ int main(int argc, char** argv) {
     MpccSolverOptions s = Ocp::solver();
     s.relaxation = v.relaxation;
     s.progress = &std::cerr;
-    FesdOptions grid = Ocp::grid(v.control_intervals);
+    if (max_steps > 0) s.max_homotopy_steps = max_steps;
+    if (v.smoothing_steps > 0) {
+      s.max_homotopy_steps = v.smoothing_steps;
+      s.polish = false;
+    }
+    s.ipopt_options.insert(s.ipopt_options.end(), ipopt_options.begin(), ipopt_options.end());
+    FesdOptions grid = Ocp::grid(v.control_intervals, 3, v.stages);
     grid.velocity_switch_detection = v.velocity_switch_detection;
-    const auto r = v.hole_continuation ? solve_time_freezing_ocp_by_continuation(Ocp::system(), Ocp::hole_continuation(),
+    grid.contact_side_weight = v.contact_side_weight;
+    auto r = v.hop_guess ? solve_time_freezing_ocp_from_guess(Ocp::system(), ocp, Ocp::q0(), Ocp::v0(), grid,
+                                                                    &Ocp::hop_guess, s)
+                   : v.hole_continuation ? solve_time_freezing_ocp_by_continuation(Ocp::system(), Ocp::hole_continuation(),
                                                                                  ocp, Ocp::q0(), Ocp::v0(), grid, s)
                                        : solve_time_freezing_ocp(Ocp::system(), ocp, Ocp::q0(), Ocp::v0(), grid, s);
+    if (v.smoothing_steps > 0 && !r.converged()) {  // r ran smoothing_steps steps without polish (above)
+      const FesdMpcc<scenes::Hopper, Ocp> problem(Ocp::system(), ocp, Ocp::q0(), Ocp::v0(), grid);
+      r.solution = bench::continue_with_penalty(problem, r.solution, s, v.penalty_sigma_0,
+                                                (max_steps > 0 ? max_steps : 10) - v.smoothing_steps);
+      const auto pts = problem.points(r.solution.x);
+      r.points.assign(pts.begin(), pts.end());
+    }
     const Ocp::Feasibility f = Ocp::feasibility(r.points);
     const std::string status = r.solution.steps.empty() ? "" : r.solution.steps.back().ipopt_status;
     std::vector<int> per_step;

@@ -580,6 +580,7 @@ class Infeasible : public Mpcc {
     v.setConstant(2 * s + 2 * l[0]);
   }
   const std::vector<ComplementarityPair>& complementarity_pairs() const override { return pairs_; }
+  std::string constraint_name(int j) const override { return j == 0 ? "x^2 + y^2 <= 1" : "x + y >= 3"; }
 
  private:
   std::vector<SparseEntry> jac_{{0, 0}, {0, 1}, {1, 0}, {1, 1}};
@@ -603,6 +604,11 @@ TEST(MpccSolver, InfeasibleProblemIsReportedNotThrown) {
   EXPECT_NE(s.message.find("Infeasible_Problem_Detected"), std::string::npos) << s.message;
   EXPECT_GT(s.constraint_violation, 0.1);
   EXPECT_EQ(count_lines(progress.str()), static_cast<int>(s.steps.size()));
+  // The failed step names where its iterate is infeasible: one of the two rows, by its name, in
+  // the step and in its progress line.
+  const std::string& worst = s.steps.back().worst_violation;
+  EXPECT_TRUE(worst == "x^2 + y^2 <= 1" || worst == "x + y >= 3") << worst;
+  EXPECT_NE(progress.str().find("worst: " + worst), std::string::npos) << progress.str();
 }
 
 /// SmallMpcc with one flaw in its statement.

@@ -373,6 +373,60 @@ TEST(Fesd, RefusesBadOptionsAndStates) {
   }
 }
 
+// The second initialisation: a guess that IS the motion (a ballistic flight, no contact) gives a
+// starting point that satisfies every row but those the guess does not know (none here: no
+// objective, the clock follows the guess) up to the collocation's error, which is zero for a
+// quadratic motion on Radau IIA with n_s = 2 (stage order 2); the start state at every stage point
+// (initial_point) violates the dynamics by O(1). Non-finite guesses are refused with the time.
+TEST(Fesd, InitialPointFromAGuessOfTheMotion) {
+  const scenes::PointMassParameters p;
+  const TimeFreezingSystem<PointMass> system(PointMass(p), 10.0);
+  FesdOptions grid;
+  grid.control_intervals = 3;
+  grid.finite_elements = 2;
+  grid.stages = 2;
+  grid.horizon = 0.5;
+  grid.speed_of_time_max = 3.0;
+  grid.clock = ClockConstraint::Stagewise;
+  grid.physical_horizon = 0.8;  // the clock runs 1.6 times numerical time: s = 1.6
+  const Vec<2> q0(0.1, 5.0), v0(1.0, 0.5);
+  const auto flight = [&](double t) {
+    Vec<4> x;
+    x << q0[0] + v0[0] * t, q0[1] + v0[1] * t - 0.5 * p.gravity * t * t, v0[0], v0[1] - p.gravity * t;
+    return x;
+  };
+  const FesdMpcc<PointMass> problem(system, {}, q0, v0, grid);
+  const int n = problem.variable_count(), m = problem.constraint_count();
+  Eigen::VectorXd xl(n), xu(n), gl(m), gu(m), g(m);
+  problem.bounds(xl, xu, gl, gu);
+  const auto violation = [&](const Eigen::VectorXd& x) {
+    problem.constraints(x, g);
+    const double rows = (gl - g).cwiseMax(g - gu).cwiseMax(0.0).maxCoeff();
+    const double box = (xl - x).cwiseMax(x - xu).cwiseMax(0.0).maxCoeff();
+    return std::max(rows, box);
+  };
+  Eigen::VectorXd from_guess(n), from_start(n);
+  problem.initial_point_from_guess(from_guess, flight);
+  problem.initial_point(from_start);
+  EXPECT_LT(violation(from_guess), 1e-8);
+  EXPECT_GT(violation(from_start), 0.1);
+  EXPECT_DOUBLE_EQ(from_guess[problem.speed_index(0)], 1.6);
+  const auto points = problem.points(from_guess);
+  EXPECT_NEAR(points.back().y[4], 0.8, 1e-14);                         // the clock at the end
+  EXPECT_NEAR(points.back().y[1], flight(0.8)[1], 1e-12);              // the height at t = 0.8
+  EXPECT_DOUBLE_EQ(points.back().alpha[0], 1.0);                       // in flight: the gap's side
+  // Refused: a guess that is not finite somewhere (the message names the time), a wrong size.
+  const auto broken = [&](double t) { return t > 0.4 ? Vec<4>::Constant(std::nan("")) : flight(t); };
+  try {
+    problem.initial_point_from_guess(from_guess, broken);
+    ADD_FAILURE() << "a non-finite guess was accepted";
+  } catch (const InvalidArgument& e) {
+    EXPECT_NE(std::string(e.what()).find("not finite at t = "), std::string::npos) << e.what();
+  }
+  Eigen::VectorXd wrong(n + 1);
+  EXPECT_THROW(problem.initial_point_from_guess(wrong, flight), InvalidArgument);
+}
+
 constexpr double g_ex3 = scenes::Example3::gravity;
 
 TEST(TimeFreezingSimulation, GuidingExampleMatchesItsClosedForms) {

@@ -47,6 +47,9 @@ struct PlankBoxFlatLanding {
   static constexpr int terminal_constraint_count = 6;
 
   PlankBox plank_box{};
+  /// |theta - phi| <= flatness_tolerance at every stage point [rad]; 0 (the default): the box
+  /// exactly parallel to the plank. A positive tolerance is a measured variant (bench/plank_box_ocp).
+  double flatness_tolerance = 0.0;
 
   static Vec<4> q0() { return PlankBox{}.flat_state(start_along, clearance).head<4>(); }
   static Vec<4> v0() { return Vec<4>::Zero(); }
@@ -68,8 +71,8 @@ struct PlankBoxFlatLanding {
   VecT<T, 1> path_constraints(const VecT<T, 8>& x, const VecT<T, 3>&) const {
     return VecT<T, 1>(T(x[2] - x[3]));
   }
-  Vec<1> path_lower() const { return Vec<1>::Zero(); }
-  Vec<1> path_upper() const { return Vec<1>::Zero(); }
+  Vec<1> path_lower() const { return Vec<1>::Constant(-flatness_tolerance); }
+  Vec<1> path_upper() const { return Vec<1>::Constant(flatness_tolerance); }
 
   /// (x, y, theta) of the box and its velocity (v_x, v_y, omega) at T.
   template <class T>

@@ -194,11 +194,14 @@ detail::RelaxationKind relaxation_kind(MpccSolverOptions::Relaxation r) {
 std::string format_step(const MpccHomotopyStep& s, bool penalty) {
   char line[320];
   std::snprintf(line, sizeof line,
-                "mpcc step %3d%-10s %s %9.3e  compl %9.3e  f % .10e  viol %9.3e  iter %5d  %-34s %8.3f s\n", s.index,
+                "mpcc step %3d%-10s %s %9.3e  compl %9.3e  f % .10e  viol %9.3e  iter %5d  %-34s %8.3f s", s.index,
                 s.retry > 0 ? (" retry " + std::to_string(s.retry)).c_str() : "", penalty ? "rho  " : "sigma",
                 penalty ? 1.0 / s.sigma : s.sigma, s.complementarity, s.objective, s.constraint_violation,
                 s.ipopt_iterations, s.ipopt_status.c_str(), s.seconds);
-  return line;
+  // A failed step says where its iterate is infeasible (the wall of a homotopy: dynamics, a path
+  // row, a bound).
+  return std::string(line) + (!s.ipopt_succeeded && !s.worst_violation.empty() ? "  worst: " + s.worst_violation : "") +
+         "\n";
 }
 
 std::string format_polish(const MpccHomotopyStep& s, const std::string& label, int fixed, int eq_rows,
@@ -315,7 +318,7 @@ MpccSolution solve_from(const Mpcc& problem, const MpccStart& start, bool with_m
     const Eigen::VectorXd& x = solved ? branch->result_x() : from.x;
     step.complementarity = nlp->complementarity(x);
     step.objective = problem.objective(x);
-    step.constraint_violation = nlp->constraint_violation(x);
+    step.constraint_violation = nlp->constraint_violation(x, &step.worst_violation);
     if (!branch->infeasible()) {
       solved = solved && successful(status, step.constraint_violation, options);
       // The relaxed optimum lies below the MPCC's by about sum_j w_j |G_j H_j| (the pairs'
@@ -447,7 +450,7 @@ MpccSolution solve_from(const Mpcc& problem, const MpccStart& start, bool with_m
       const Eigen::VectorXd& x = nlp->has_result() ? nlp->result_x() : from.x;
       step.complementarity = nlp->complementarity(x);
       step.objective = problem.objective(x);
-      step.constraint_violation = nlp->constraint_violation(x);
+      step.constraint_violation = nlp->constraint_violation(x, &step.worst_violation);
       step.ipopt_succeeded = successful(status, step.constraint_violation, options);
       step.seconds = seconds_since(step_start);
       solution.ipopt_iterations += step.ipopt_iterations;

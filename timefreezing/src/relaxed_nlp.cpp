@@ -284,18 +284,30 @@ std::vector<int> RelaxedNlp::choose_branches(const Eigen::Ref<const Eigen::Vecto
   return zero_side;
 }
 
-double RelaxedNlp::constraint_violation(const Eigen::Ref<const Eigen::VectorXd>& x) {
+double RelaxedNlp::constraint_violation(const Eigen::Ref<const Eigen::VectorXd>& x, std::string* worst) {
   double violation = 0.0;
-  auto account = [&violation](double v) {
+  // Where the largest violation is: 0 bound i, 1 row i, 2 side i (named only when asked).
+  int kind = -1, index = -1;
+  auto account = [&](double v, int k, int i) {
     if (std::isnan(v)) v = std::numeric_limits<double>::infinity();
-    violation = std::max(violation, v);
+    if (v > violation) {
+      violation = v;
+      kind = k;
+      index = i;
+    }
   };
-  for (int i = 0; i < n_; ++i) account(std::max(x_lower_[i] - x[i], x[i] - x_upper_[i]));
+  for (int i = 0; i < n_; ++i) account(std::max(x_lower_[i] - x[i], x[i] - x_upper_[i]), 0, i);
   if (m_ > 0) {
     problem_.constraints(x, g_buffer_);
-    for (int j = 0; j < m_; ++j) account(std::max(g_lower_[j] - g_buffer_[j], g_buffer_[j] - g_upper_[j]));
+    for (int j = 0; j < m_; ++j) account(std::max(g_lower_[j] - g_buffer_[j], g_buffer_[j] - g_upper_[j]), 1, j);
   }
-  for (int s = 0; s < 2 * n_pairs_; ++s) account(-side_value(s, x.data()));
+  for (int s = 0; s < 2 * n_pairs_; ++s) account(-side_value(s, x.data()), 2, s);
+  if (worst != nullptr)
+    *worst = kind == 0   ? "bound of " + problem_.variable_name(index)
+             : kind == 1 ? problem_.constraint_name(index)
+             : kind == 2 ? std::string(index % 2 == 0 ? "left" : "right") + " side of " +
+                               problem_.complementarity_pairs()[static_cast<std::size_t>(index / 2)].name
+                         : std::string();
   return violation;
 }
 

@@ -114,9 +114,10 @@ class RelaxedNlp : public Ipopt::TNLP {
 
   /// max_j |G_j(x) H_j(x)| and the pair attaining it (-1 without pairs).
   double complementarity(const Eigen::Ref<const Eigen::VectorXd>& x, int* worst_pair = nullptr) const;
-  /// Largest violation of the original MPCC at x: bounds, g, and the sides' signs. Uses an
-  /// internal buffer: not for concurrent calls.
-  double constraint_violation(const Eigen::Ref<const Eigen::VectorXd>& x);
+  /// Largest violation of the original MPCC at x: bounds, g, and the sides' signs; `worst`, when
+  /// given, gets the name of the bound, row or side attaining it ("" when nothing is violated).
+  /// Uses an internal buffer: not for concurrent calls.
+  double constraint_violation(const Eigen::Ref<const Eigen::VectorXd>& x, std::string* worst = nullptr);
 
   // ---- Ipopt::TNLP
   bool get_nlp_info(Ipopt::Index& n, Ipopt::Index& m, Ipopt::Index& nnz_jac_g, Ipopt::Index& nnz_h_lag,

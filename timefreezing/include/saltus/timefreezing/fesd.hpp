@@ -477,6 +477,65 @@ class FesdMpcc final : public Mpcc {
     }
   }
 
+  /// An initial point from a guess of the motion (NOSNOC's `initialize_with_ref`): every stage
+  /// point gets the guessed state guess(t) = (q, v) (size nx = 2 nq) at the physical time t its
+  /// nominal position on the grid maps to, t = initial_time + r tau with r = physical_horizon /
+  /// horizon under a clock constraint (else r = 1) and tau = (k N_fe + j + c_i) h0; the clock t,
+  /// the running cost 0, the stage derivatives of that motion in numerical time (r v for q, r times
+  /// a central difference of v over 1e-6 s for v, r for the clock), the speed of time r clipped to
+  /// [1, s_max], the nominal element lengths h0, zero inputs (clipped to their bounds), and each
+  /// stage's step functions and multipliers from the switching functions at the guessed state, as
+  /// initial_point does at the initial state (alpha = 1 where c > 0, 0 where c < 0, 1/2 at 0;
+  /// lambda_p = max(c, 0), lambda_n = max(-c, 0)). The guess need not be dynamically consistent:
+  /// it is a starting point, not a constraint (the OCP's own rows decide what the solution is).
+  /// `guess` is called with t in [initial_time, initial_time + r horizon]; it must return finite
+  /// values there (InvalidArgument naming the time otherwise). x must have variable_count() entries.
+  template <class Guess>
+  void initial_point_from_guess(Eigen::Ref<Eigen::VectorXd> x, const Guess& guess) const {
+    SALTUS_REQUIRE(x.size() == n_, "FESD: initial_point_from_guess needs ", n_, " entries, got ", x.size());
+    initial_point(x);
+    const double rate = options_.clock == ClockConstraint::None ? 1.0 : options_.physical_horizon / options_.horizon;
+    const double speed = std::clamp(rate, 1.0, options_.speed_of_time_max);
+    const auto state_at = [&](double t) {
+      const Vec<nx> g = guess(t);
+      SALTUS_REQUIRE(g.allFinite(), "FESD: initial_point_from_guess: the guess is not finite at t = ", t);
+      return g;
+    };
+    constexpr double dt = 1e-6;  // central difference of the guessed velocity [s]
+    for (int k = 0; k < options_.control_intervals; ++k) {
+      x[speed_index(k)] = speed;
+      for (int j = 0; j < options_.finite_elements; ++j)
+        for (int r = 0; r < options_.stages; ++r) {
+          const double tau = ((k * options_.finite_elements + j) + tableau_.c[r]) * h0_;
+          const double t = options_.initial_time + rate * tau;
+          const Vec<nx> g = state_at(t);
+          const Vec<nq> accel = (state_at(t + dt).template tail<nq>() - state_at(t - dt).template tail<nq>()) / (2.0 * dt);
+          Eigen::Matrix<double, ny, 1> y = Eigen::Matrix<double, ny, 1>::Zero();
+          y.template head<nx>() = g;
+          y[System::clock_index] = t;
+          Eigen::Matrix<double, ny, 1> yd = Eigen::Matrix<double, ny, 1>::Zero();
+          yd.template head<nq>() = rate * g.template tail<nq>();
+          yd.template segment<nq>(nq) = rate * accel;
+          yd[System::clock_index] = rate;
+          x.template segment<ny>(state_index(k, j, r)) = y;
+          x.template segment<ny>(derivative_index(k, j, r)) = yd;
+          Vec<nsw> c =
+              system_.template switching_functions<double>(Vec<nq>(g.template head<nq>()), Vec<nq>(g.template tail<nq>()));
+          for (int m = 0; m < nsw; ++m) c[m] *= switching_scale(m);
+          Vec<nsw> a;
+          for (int m = 0; m < nsw; ++m) a[m] = c[m] > 0.0 ? 1.0 : (c[m] < 0.0 ? 0.0 : 0.5);
+          for (int i = 0; i < nc; ++i)
+            if (!system_.has_friction(i)) a[3 * i + 2] = 1.0;  // as the bounds fix it
+          Vec<nsw> lambda_n = (-c).cwiseMax(0.0);
+          for (int i = 0; i < nc; ++i)
+            if (!system_.has_friction(i)) lambda_n[3 * i + 2] = 0.0;  // as the bounds fix it
+          x.template segment<nsw>(alpha_index(k, j, r)) = a;
+          x.template segment<nsw>(lambda_p_index(k, j, r)) = c.cwiseMax(0.0);
+          x.template segment<nsw>(lambda_n_index(k, j, r)) = lambda_n;
+        }
+    }
+  }
+
   double objective(const Eigen::Ref<const Eigen::VectorXd>& x) const override {
     double f = x[final_state_index() + System::cost_index];
     const Eigen::Matrix<double, ny, 1> yf = x.template segment<ny>(final_state_index());

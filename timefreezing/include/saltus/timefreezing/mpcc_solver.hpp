@@ -287,6 +287,9 @@ struct MpccHomotopyStep {
   double complementarity = 0.0;       ///< max_j |G_j(x) H_j(x)| at the step's final iterate
   double objective = 0.0;             ///< original f at the step's final iterate (no penalty)
   double constraint_violation = 0.0;  ///< of the original MPCC (MpccSolution::constraint_violation)
+  /// The bound, row or complementarity side attaining constraint_violation, by the Mpcc's names
+  /// (Mpcc::variable_name, constraint_name, the pair's name); "" when nothing is violated.
+  std::string worst_violation;
   int ipopt_iterations = 0;
   std::string ipopt_status;  ///< Ipopt's ApplicationReturnStatus by name, e.g. "Solve_Succeeded"
   /// The step counts as successful (accept_acceptable); a polish: it was accepted (Ipopt, the

@@ -331,6 +331,24 @@ TimeFreezingOcpResult<S> solve_time_freezing_ocp(const TimeFreezingSystem<S>& sy
   return detail::solve_and_read<S>(problem, start, fesd, solver);
 }
 
+/// solve_time_freezing_ocp from a guess of the motion instead of the initial state at every stage
+/// point: `guess(t)` -> Vec<2 nq> (q, v) at physical time t (FesdMpcc::initial_point_from_guess
+/// says how the stage points, step functions and multipliers are set from it). A guess is a
+/// second initialisation, e.g. a gait whose contact timing the user knows; the contact-implicit
+/// setting is solve_time_freezing_ocp. Throws InvalidArgument as solve_time_freezing_ocp and for a
+/// guess that is not finite.
+template <Scene S, class Ocp, class Guess>
+TimeFreezingOcpResult<S> solve_time_freezing_ocp_from_guess(const TimeFreezingSystem<S>& system, const Ocp& ocp,
+                                                            const Vec<S::nq>& q0, const Vec<S::nq>& v0,
+                                                            const FesdOptions& fesd, const Guess& guess,
+                                                            const MpccSolverOptions& solver = {}) {
+  const FesdMpcc<S, Ocp> problem(system, ocp, q0, v0, fesd);
+  MpccStart start;
+  start.x.resize(problem.variable_count());
+  problem.initial_point_from_guess(start.x, guess);
+  return detail::solve_and_read<S>(problem, start, fesd, solver);
+}
+
 /// A continuation on the OCP's data before the homotopy: the relaxed NLP at the first relaxation
 /// parameter solver.sigma_0 is solved for each OCP of `continuation` in turn (one homotopy step
 /// each, no polish), the first from FesdMpcc's initial point and each later one from the previous

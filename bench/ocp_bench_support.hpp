@@ -1,0 +1,87 @@
+// What the flagship-OCP benchmarks (hopper_ocp, plank_box_ocp) share: their command line and the
+// "smoothing, then penalty" variant's second homotopy.
+//
+//   NAME [--json] [--only VARIANT] [--max-steps K] [--ipopt OPTION=VALUE]...
+//
+// --max-steps K overrides the homotopy's step budget; --ipopt passes an Ipopt option to every solve
+// (an integer or a number when VALUE parses as one, else a string), e.g. `--ipopt
+// mumps_pivtol=1e-4 --ipopt print_timing_statistics=yes --ipopt output_file=ip.log --ipopt
+// file_print_level=5`.
+#pragma once
+
+#include <saltus/timefreezing/mpcc_solver.hpp>
+
+#include <algorithm>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace saltus::bench {
+
+struct OcpBenchArgs {
+  bool json = false;
+  std::string only;   ///< one variant by name; empty: all
+  int max_steps = -1; ///< > 0: MpccSolverOptions::max_homotopy_steps
+  std::vector<timefreezing::IpoptOption> ipopt_options;
+};
+
+/// The parsed command line, or nullopt after printing the usage line (bad or unknown argument).
+inline std::optional<OcpBenchArgs> parse_ocp_bench_args(int argc, char** argv, const char* program) {
+  OcpBenchArgs a;
+  const auto usage = [program] {
+    std::fprintf(stderr, "usage: %s [--json] [--only NAME] [--max-steps K] [--ipopt NAME=VALUE]...\n", program);
+    return std::optional<OcpBenchArgs>();
+  };
+  for (int i = 1; i < argc; ++i) {
+    if (std::strcmp(argv[i], "--json") == 0) a.json = true;
+    else if (std::strcmp(argv[i], "--only") == 0 && i + 1 < argc) a.only = argv[++i];
+    else if (std::strcmp(argv[i], "--max-steps") == 0 && i + 1 < argc) {
+      char* end = nullptr;
+      const long k = std::strtol(argv[++i], &end, 10);
+      if (*end != '\0' || k < 1 || k > 1000) return usage();
+      a.max_steps = static_cast<int>(k);
+    } else if (std::strcmp(argv[i], "--ipopt") == 0 && i + 1 < argc) {
+      const std::string arg = argv[++i];
+      const std::size_t eq = arg.find('=');
+      if (eq == std::string::npos || eq == 0 || eq + 1 == arg.size()) return usage();
+      const std::string name = arg.substr(0, eq), value = arg.substr(eq + 1);
+      char* end = nullptr;
+      const long as_int = std::strtol(value.c_str(), &end, 10);
+      if (*end == '\0') {
+        a.ipopt_options.push_back({name, static_cast<int>(as_int)});
+        continue;
+      }
+      const double as_double = std::strtod(value.c_str(), &end);
+      if (*end == '\0') a.ipopt_options.push_back({name, as_double});
+      else a.ipopt_options.push_back({name, value});
+    } else
+      return usage();
+  }
+  return a;
+}
+
+/// The penalty homotopy (rho_0 = 1 / penalty_sigma_0, `steps` steps, polish on) from the
+/// primal-dual solution `first` of an earlier homotopy on the same problem; returns the penalty's
+/// solution with `first`'s steps, iterations and seconds put in front.
+inline timefreezing::MpccSolution continue_with_penalty(const timefreezing::Mpcc& problem,
+                                                        const timefreezing::MpccSolution& first,
+                                                        timefreezing::MpccSolverOptions options, double penalty_sigma_0,
+                                                        int steps) {
+  const timefreezing::MpccStart from{first.x, first.constraint_multipliers, first.bound_multipliers_lower,
+                                     first.bound_multipliers_upper};
+  options.relaxation = timefreezing::MpccSolverOptions::Relaxation::Penalty;
+  options.sigma_0 = penalty_sigma_0;
+  options.max_homotopy_steps = std::max(1, steps);
+  options.polish = true;
+  timefreezing::MpccSolution p = timefreezing::solve_mpcc(problem, from, options);
+  p.steps.insert(p.steps.begin(), first.steps.begin(), first.steps.end());
+  p.ipopt_iterations += first.ipopt_iterations;
+  p.seconds += first.seconds;
+  return p;
+}
+
+}  // namespace saltus::bench

@@ -1,0 +1,118 @@
+// The plank-box's flagship OCP, the flat landing (scenes/plank_box_landing.hpp), under the
+// formulation variants measured one by one (bench/README.md, "Plank-box flat landing").
+//
+//   plank_box_ocp [--json] [--only NAME] [--max-steps K] [--ipopt NAME=VALUE]...
+//
+// Every variant starts from the contact-implicit initialisation (the start state at every stage
+// point, zero inputs) on the default grid (N = 15, 2 elements, n_s = 2) with the default homotopy
+// (smoothing from sigma_0 = 1e-2, kappa = 0.1, 10 steps of at most 1500 Ipopt iterations); one
+// progress line per Ipopt solve on stderr. Columns as bench/hopper_ocp.cpp's; `flat` is the largest
+// |theta - phi| over the stage points [rad]. --max-steps and --ipopt: ocp_bench_support.hpp.
+#include "scenes/plank_box_landing.hpp"
+
+#include <saltus/timefreezing/simulation.hpp>
+
+#include "ocp_bench_support.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include <cstdio>
+#include <iostream>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace {
+
+using namespace saltus;
+using namespace saltus::timefreezing;
+using Ocp = scenes::PlankBoxFlatLanding;
+
+struct Variant {
+  const char* name;
+  const char* what;
+  double flatness_tolerance = 0.0;
+  /// > 0: the smoothing homotopy runs this many steps (no polish), then the penalty homotopy
+  /// continues from its primal-dual solution with rho_0 = 1 / penalty_sigma_0.
+  int smoothing_steps = 0;
+  double penalty_sigma_0 = 0.0;
+  bool scholtes = false;             ///< the Scholtes inequalities instead of the smoothing
+  double contact_side_weight = 0.0;  ///< FesdOptions::contact_side_weight
+};
+
+std::vector<Variant> variants() {
+  return {
+      {"default", "plank_box --json: theta - phi = 0 at every stage point"},
+      {"flat-1e-4", "|theta - phi| <= 1e-4 instead of the equality", 1e-4},
+      {"free-angle", "no flatness requirement (|theta - phi| <= 1: never active)", 1.0},
+      {"smoothing-then-penalty", "the default's first 4 smoothing steps (1e-2 .. 1e-5), then the penalty from rho = 1e5",
+       0.0, 4, 1e-5},
+      {"smoothing-then-penalty-100", "the default's first 4 smoothing steps, then the penalty from rho = 100", 0.0, 4,
+       1e-2},
+      {"scholtes-side", "the Scholtes inequalities with the contact-side selection 1e-2 (no stiff sigmoid, no free band)",
+       0.0, 0, 0.0, true, 1e-2},
+  };
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const std::optional<bench::OcpBenchArgs> args = bench::parse_ocp_bench_args(argc, argv, "plank_box_ocp");
+  if (!args) return 2;
+  const bool json = args->json;
+  const std::string& only = args->only;
+  const int max_steps = args->max_steps;
+  const std::vector<IpoptOption>& ipopt_options = args->ipopt_options;
+  nlohmann::ordered_json rows = nlohmann::ordered_json::array();
+  if (!json)
+    std::printf("%-24s %4s %5s %6s %9s %9s %9s %11s %-28s %8s\n", "variant", "conv", "steps", "iters", "compl", "flat",
+                "target", "J", "status", "seconds");
+  for (const Variant& v : variants()) {
+    if (!only.empty() && only != v.name) continue;
+    std::fprintf(stderr, "== %s: %s\n", v.name, v.what);
+    Ocp ocp;
+    ocp.flatness_tolerance = v.flatness_tolerance;
+    MpccSolverOptions s = Ocp::solver();
+    if (v.scholtes) s.relaxation = MpccSolverOptions::Relaxation::Scholtes;
+    s.progress = &std::cerr;
+    FesdOptions grid = Ocp::grid();
+    grid.contact_side_weight = v.contact_side_weight;
+    if (max_steps > 0) s.max_homotopy_steps = max_steps;
+    s.ipopt_options.insert(s.ipopt_options.end(), ipopt_options.begin(), ipopt_options.end());
+    TimeFreezingOcpResult<scenes::PlankBox> r;
+    if (v.smoothing_steps > 0) {
+      const FesdMpcc<scenes::PlankBox, Ocp> problem(Ocp::system(), ocp, Ocp::q0(), Ocp::v0(), grid);
+      MpccStart start;
+      start.x.resize(problem.variable_count());
+      problem.initial_point(start.x);
+      MpccSolverOptions first = s;
+      first.max_homotopy_steps = v.smoothing_steps;
+      first.polish = false;
+      const MpccSolution a = solve_mpcc(problem, start, first);
+      r.solution = bench::continue_with_penalty(problem, a, s, v.penalty_sigma_0,
+                                                s.max_homotopy_steps - v.smoothing_steps);
+      const auto pts = problem.points(r.solution.x);
+      r.points.assign(pts.begin(), pts.end());
+    } else {
+      r = solve_time_freezing_ocp(Ocp::system(), ocp, Ocp::q0(), Ocp::v0(), grid, s);
+    }
+    const Ocp::Feasibility f = Ocp::feasibility(r.points);
+    const std::string status = r.solution.steps.empty() ? "" : r.solution.steps.back().ipopt_status;
+    std::vector<int> per_step;
+    for (const MpccHomotopyStep& st : r.solution.steps) per_step.push_back(st.ipopt_iterations);
+    if (json)
+      rows.push_back({{"variant", v.name}, {"what", v.what}, {"converged", r.converged()},
+                      {"solves", per_step.size()}, {"ipopt_iterations", r.solution.ipopt_iterations},
+                      {"iterations_per_solve", per_step}, {"complementarity", r.solution.complementarity},
+                      {"flatness", f.path_violation}, {"target_error", f.target_error},
+                      {"objective", r.solution.objective}, {"status", status}, {"message", r.solution.message},
+                      {"worst_pair", r.solution.worst_pair}, {"seconds", r.solution.seconds}});
+    else
+      std::printf("%-24s %4s %5zu %6d %9.2e %9.2e %9.2e %11.4e %-28s %8.1f\n", v.name, r.converged() ? "yes" : "no",
+                  per_step.size(), r.solution.ipopt_iterations, r.solution.complementarity, f.path_violation,
+                  f.target_error, r.solution.objective, status.c_str(), r.solution.seconds);
+    std::fflush(stdout);
+  }
+  if (json) std::cout << nlohmann::ordered_json{{"plank_box_flat_landing", rows}}.dump(2) << "\n";
+  return 0;
+}
