@@ -48,12 +48,15 @@ struct Variant {
   bool hole_continuation = true;
   int control_intervals = 20;
   bool hop_guess = false;  ///< start from Ocp::hop_guess (the second initialisation) instead
-  /// > 0: the default's homotopy runs this many steps (no polish), then the penalty homotopy
-  /// continues from its primal-dual solution with rho_0 = 1 / penalty_sigma_0.
+  /// > 0: the default's homotopy runs this many steps (no polish), then `then` continues from its
+  /// primal-dual solution from sigma = then_sigma_0 (Penalty: rho_0 = 1 / then_sigma_0) on the
+  /// grid with contact_side_weight = then_side_weight.
   int smoothing_steps = 0;
-  double penalty_sigma_0 = 0.0;
+  double then_sigma_0 = 0.0;
   double contact_side_weight = 0.0;  ///< FesdOptions::contact_side_weight
   int stages = 2;                    ///< Radau IIA stages n_s
+  MpccSolverOptions::Relaxation then = MpccSolverOptions::Relaxation::Penalty;
+  double then_side_weight = 0.0;
 };
 
 std::vector<Variant> variants() {
@@ -73,6 +76,10 @@ std::vector<Variant> variants() {
       {"scholtes-side", "the Scholtes inequalities with the contact-side selection 1e-2 (no stiff sigmoid, no free band)",
        R::Scholtes, false, true, 20, false, 0, 0.0, 1e-2},
       {"stages-3", "the default with Radau IIA n_s = 3", R::Smoothing, false, true, 20, false, 0, 0.0, 0.0, 3},
+      {"smoothing-then-scholtes-side",
+       "the default's continuation and first 4 steps (sigma 1 .. 1e-3), then Scholtes with the contact-side selection "
+       "1e-2 from sigma = 1e-4",
+       R::Smoothing, false, true, 20, false, 4, 1e-4, 0.0, 2, R::Scholtes, 1e-2},
   };
 }
 
@@ -111,9 +118,11 @@ int main(int argc, char** argv) {
                                                                                  ocp, Ocp::q0(), Ocp::v0(), grid, s)
                                        : solve_time_freezing_ocp(Ocp::system(), ocp, Ocp::q0(), Ocp::v0(), grid, s);
     if (v.smoothing_steps > 0 && !r.converged()) {  // r ran smoothing_steps steps without polish (above)
-      const FesdMpcc<scenes::Hopper, Ocp> problem(Ocp::system(), ocp, Ocp::q0(), Ocp::v0(), grid);
-      r.solution = bench::continue_with_penalty(problem, r.solution, s, v.penalty_sigma_0,
-                                                (max_steps > 0 ? max_steps : 10) - v.smoothing_steps);
+      FesdOptions then_grid = grid;
+      then_grid.contact_side_weight = v.then_side_weight;
+      const FesdMpcc<scenes::Hopper, Ocp> problem(Ocp::system(), ocp, Ocp::q0(), Ocp::v0(), then_grid);
+      r.solution = bench::continue_homotopy(problem, r.solution, s, v.then, v.then_sigma_0,
+                                            (max_steps > 0 ? max_steps : 10) - v.smoothing_steps);
       const auto pts = problem.points(r.solution.x);
       r.points.assign(pts.begin(), pts.end());
     }

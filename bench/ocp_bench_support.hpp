@@ -1,5 +1,5 @@
 // What the flagship-OCP benchmarks (hopper_ocp, plank_box_ocp) share: their command line and the
-// "smoothing, then penalty" variant's second homotopy.
+// second homotopy of the variants that change the relaxation on the way ("smoothing, then ...").
 //
 //   NAME [--json] [--only VARIANT] [--max-steps K] [--ipopt OPTION=VALUE]...
 //
@@ -64,17 +64,18 @@ inline std::optional<OcpBenchArgs> parse_ocp_bench_args(int argc, char** argv, c
   return a;
 }
 
-/// The penalty homotopy (rho_0 = 1 / penalty_sigma_0, `steps` steps, polish on) from the
-/// primal-dual solution `first` of an earlier homotopy on the same problem; returns the penalty's
-/// solution with `first`'s steps, iterations and seconds put in front.
-inline timefreezing::MpccSolution continue_with_penalty(const timefreezing::Mpcc& problem,
-                                                        const timefreezing::MpccSolution& first,
-                                                        timefreezing::MpccSolverOptions options, double penalty_sigma_0,
-                                                        int steps) {
+/// A second homotopy (`relaxation` from sigma_0, `steps` steps, polish on) from the primal-dual
+/// solution `first` of an earlier homotopy on a problem with the same variables and rows; returns
+/// its solution with `first`'s steps, iterations and seconds put in front.
+inline timefreezing::MpccSolution continue_homotopy(const timefreezing::Mpcc& problem,
+                                                    const timefreezing::MpccSolution& first,
+                                                    timefreezing::MpccSolverOptions options,
+                                                    timefreezing::MpccSolverOptions::Relaxation relaxation,
+                                                    double sigma_0, int steps) {
   const timefreezing::MpccStart from{first.x, first.constraint_multipliers, first.bound_multipliers_lower,
                                      first.bound_multipliers_upper};
-  options.relaxation = timefreezing::MpccSolverOptions::Relaxation::Penalty;
-  options.sigma_0 = penalty_sigma_0;
+  options.relaxation = relaxation;
+  options.sigma_0 = sigma_0;
   options.max_homotopy_steps = std::max(1, steps);
   options.polish = true;
   timefreezing::MpccSolution p = timefreezing::solve_mpcc(problem, from, options);

@@ -32,12 +32,15 @@ struct Variant {
   const char* name;
   const char* what;
   double flatness_tolerance = 0.0;
-  /// > 0: the smoothing homotopy runs this many steps (no polish), then the penalty homotopy
-  /// continues from its primal-dual solution with rho_0 = 1 / penalty_sigma_0.
+  /// > 0: the smoothing homotopy runs this many steps (no polish), then `then` continues from its
+  /// primal-dual solution from sigma = then_sigma_0 (Penalty: rho_0 = 1 / then_sigma_0) on the
+  /// grid with contact_side_weight = then_side_weight.
   int smoothing_steps = 0;
-  double penalty_sigma_0 = 0.0;
+  double then_sigma_0 = 0.0;
   bool scholtes = false;             ///< the Scholtes inequalities instead of the smoothing
   double contact_side_weight = 0.0;  ///< FesdOptions::contact_side_weight
+  MpccSolverOptions::Relaxation then = MpccSolverOptions::Relaxation::Penalty;
+  double then_side_weight = 0.0;
 };
 
 std::vector<Variant> variants() {
@@ -51,6 +54,10 @@ std::vector<Variant> variants() {
        1e-2},
       {"scholtes-side", "the Scholtes inequalities with the contact-side selection 1e-2 (no stiff sigmoid, no free band)",
        0.0, 0, 0.0, true, 1e-2},
+      {"smoothing-then-scholtes-side",
+       "the default's first 4 smoothing steps (1e-2 .. 1e-5), then Scholtes with the contact-side selection 1e-2 from "
+       "1e-6",
+       0.0, 4, 1e-6, false, 0.0, MpccSolverOptions::Relaxation::Scholtes, 1e-2},
   };
 }
 
@@ -89,9 +96,12 @@ int main(int argc, char** argv) {
       first.max_homotopy_steps = v.smoothing_steps;
       first.polish = false;
       const MpccSolution a = solve_mpcc(problem, start, first);
-      r.solution = bench::continue_with_penalty(problem, a, s, v.penalty_sigma_0,
-                                                s.max_homotopy_steps - v.smoothing_steps);
-      const auto pts = problem.points(r.solution.x);
+      FesdOptions then_grid = grid;
+      then_grid.contact_side_weight = v.then_side_weight;
+      const FesdMpcc<scenes::PlankBox, Ocp> then_problem(Ocp::system(), ocp, Ocp::q0(), Ocp::v0(), then_grid);
+      r.solution = bench::continue_homotopy(then_problem, a, s, v.then, v.then_sigma_0,
+                                            s.max_homotopy_steps - v.smoothing_steps);
+      const auto pts = then_problem.points(r.solution.x);
       r.points.assign(pts.begin(), pts.end());
     } else {
       r = solve_time_freezing_ocp(Ocp::system(), ocp, Ocp::q0(), Ocp::v0(), grid, s);
