@@ -24,7 +24,8 @@ struct OcpFeasibility {
 /// {"converged", "message", "complementarity", "max_path_violation", "worst_path_constraint",
 /// "target_error", "constraint_violation", "objective", "homotopy_steps", "continuation_stages",
 /// "ipopt_iterations", "solve_seconds", "steps": [{sigma, polish, complementarity, objective,
-/// constraint_violation, ipopt_iterations, ipopt_status, seconds}], "continuation": [...],
+/// constraint_violation, ipopt_iterations, ipopt_status, worst_violation, seconds}],
+/// "continuation": [...],
 /// "events": [{kind: "impact" (t, clock_advance) | "gap" | "normal velocity" | "tangential
 /// velocity" (t, alpha_before, alpha_after, switching_function)}], "resim_max_error",
 /// "resim_event_time_error", "resim_events": [{t, guards}]}.
@@ -50,7 +51,8 @@ nlohmann::ordered_json ocp_report(const S& scene, const timefreezing::TimeFreezi
   for (const MpccHomotopyStep& s : r.solution.steps)
     steps.push_back({{"sigma", s.sigma}, {"polish", s.polish}, {"complementarity", s.complementarity},
                      {"objective", s.objective}, {"constraint_violation", s.constraint_violation},
-                     {"ipopt_iterations", s.ipopt_iterations}, {"ipopt_status", s.ipopt_status}, {"seconds", s.seconds}});
+                     {"ipopt_iterations", s.ipopt_iterations}, {"ipopt_status", s.ipopt_status},
+                     {"worst_violation", s.worst_violation}, {"seconds", s.seconds}});
   j["steps"] = steps;
   auto continuation = nlohmann::ordered_json::array();
   for (const MpccHomotopyStep& s : r.continuation_steps)
