@@ -73,8 +73,10 @@ std::vector<Variant> variants() {
        R::Smoothing, false, false, 20, true},
       {"smoothing-then-penalty", "the default's continuation and first 4 steps (sigma 1 .. 1e-3), then the penalty from rho = 1e3",
        R::Smoothing, false, true, 20, false, 4, 1e-3},
-      {"scholtes-side", "the Scholtes inequalities with the contact-side selection 1e-2 (no stiff sigmoid, no free band)",
+      {"scholtes-side", "Scholtes inequalities on every pair (no smoothed velocity pair) with the contact-side selection 1e-2",
        R::Scholtes, false, true, 20, false, 0, 0.0, 1e-2},
+      {"side", "the default with the contact-side selection 1e-2 (FesdOptions::contact_side_weight)", R::Smoothing,
+       false, true, 20, false, 0, 0.0, 1e-2},
       {"stages-3", "the default with Radau IIA n_s = 3", R::Smoothing, false, true, 20, false, 0, 0.0, 0.0, 3},
       {"smoothing-then-scholtes-side",
        "the default's continuation and first 4 steps (sigma 1 .. 1e-3), then Scholtes with the contact-side selection "

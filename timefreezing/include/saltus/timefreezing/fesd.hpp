@@ -488,8 +488,9 @@ class FesdMpcc final : public Mpcc {
   /// initial_point does at the initial state (alpha = 1 where c > 0, 0 where c < 0, 1/2 at 0;
   /// lambda_p = max(c, 0), lambda_n = max(-c, 0)). The guess need not be dynamically consistent:
   /// it is a starting point, not a constraint (the OCP's own rows decide what the solution is).
-  /// `guess` is called with t in [initial_time, initial_time + r horizon]; it must return finite
-  /// values there (InvalidArgument naming the time otherwise). x must have variable_count() entries.
+  /// `guess` is called with t in [initial_time, initial_time + r horizon] widened by the central
+  /// difference's 1e-6 s at both ends; it must return finite values there (InvalidArgument naming
+  /// the time otherwise). x must have variable_count() entries (InvalidArgument otherwise).
   template <class Guess>
   void initial_point_from_guess(Eigen::Ref<Eigen::VectorXd> x, const Guess& guess) const {
     SALTUS_REQUIRE(x.size() == n_, "FESD: initial_point_from_guess needs ", n_, " entries, got ", x.size());
