@@ -377,7 +377,8 @@ TEST(Fesd, RefusesBadOptionsAndStates) {
 // starting point that satisfies every row but those the guess does not know (none here: no
 // objective, the clock follows the guess) up to the collocation's error, which is zero for a
 // quadratic motion on Radau IIA with n_s = 2 (stage order 2); the start state at every stage point
-// (initial_point) violates the dynamics by O(1). Non-finite guesses are refused with the time.
+// (initial_point) violates the dynamics by O(1). Non-finite guesses are refused with the time,
+// guesses of the wrong size with the size.
 TEST(Fesd, InitialPointFromAGuessOfTheMotion) {
   const scenes::PointMassParameters p;
   const TimeFreezingSystem<PointMass> system(PointMass(p), 10.0);
@@ -417,6 +418,7 @@ TEST(Fesd, InitialPointFromAGuessOfTheMotion) {
   EXPECT_DOUBLE_EQ(points.back().alpha[0], 1.0);                       // in flight: the gap's side
   // Refused: a guess that is not finite somewhere (the message names the time), a wrong size.
   const auto broken = [&](double t) { return t > 0.4 ? Vec<4>::Constant(std::nan("")) : flight(t); };
+  const Eigen::VectorXd before = from_guess;  // a refused guess leaves x as it was
   try {
     problem.initial_point_from_guess(from_guess, broken);
     ADD_FAILURE() << "a non-finite guess was accepted";
@@ -425,6 +427,19 @@ TEST(Fesd, InitialPointFromAGuessOfTheMotion) {
   }
   Eigen::VectorXd wrong(n + 1);
   EXPECT_THROW(problem.initial_point_from_guess(wrong, flight), InvalidArgument);
+  // A dynamic-size guess of the wrong size (found by a user's trial: it was read past its end).
+  const auto short_guess = [&](double t) { return Eigen::VectorXd(flight(t).head<3>()); };
+  try {
+    problem.initial_point_from_guess(from_guess, short_guess);
+    ADD_FAILURE() << "a guess with 3 entries was accepted";
+  } catch (const InvalidArgument& e) {
+    EXPECT_NE(std::string(e.what()).find("the guess has 3 entries"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ((from_guess - before).cwiseAbs().maxCoeff(), 0.0);
+  const auto dynamic_guess = [&](double t) { return Eigen::VectorXd(flight(t)); };
+  Eigen::VectorXd from_dynamic(n);
+  problem.initial_point_from_guess(from_dynamic, dynamic_guess);
+  EXPECT_EQ((from_dynamic - from_guess).cwiseAbs().maxCoeff(), 0.0);
 }
 
 constexpr double g_ex3 = scenes::Example3::gravity;

@@ -155,7 +155,7 @@ struct HopperOverThreeHoles {
   /// every hole: the smallest ellipse value along the guess is 1.47 > 1), the joint angles 0. It
   /// says where the feet go, not how: it is not dynamically consistent (no stance, no push-off).
   /// Measured (bench/README.md, `hopper_ocp --only hop-guess`): from it the default homotopy meets
-  /// its wall at sigma ~ 1e-2, a decade earlier than from the start state.
+  /// its wall at sigma ~ 1e-2, two decades before its first failure from the start state (1e-4).
   static Vec<8> hop_guess(double t) {
     constexpr double height = 0.14, pi = std::numbers::pi;
     const double w = 3.0 * pi / horizon, s = std::sin(w * t), c = std::cos(w * t);

@@ -478,27 +478,35 @@ class FesdMpcc final : public Mpcc {
   }
 
   /// An initial point from a guess of the motion (NOSNOC's `initialize_with_ref`): every stage
-  /// point gets the guessed state guess(t) = (q, v) (size nx = 2 nq) at the physical time t its
+  /// point gets the guessed state guess(t) = (q, v) (nx = 2 nq entries) at the physical time t its
   /// nominal position on the grid maps to, t = initial_time + r tau with r = physical_horizon /
   /// horizon under a clock constraint (else r = 1) and tau = (k N_fe + j + c_i) h0; the clock t,
   /// the running cost 0, the stage derivatives of that motion in numerical time (r v for q, r times
-  /// a central difference of v over 1e-6 s for v, r for the clock), the speed of time r clipped to
-  /// [1, s_max], the nominal element lengths h0, zero inputs (clipped to their bounds), and each
-  /// stage's step functions and multipliers from the switching functions at the guessed state, as
-  /// initial_point does at the initial state (alpha = 1 where c > 0, 0 where c < 0, 1/2 at 0;
-  /// lambda_p = max(c, 0), lambda_n = max(-c, 0)). The guess need not be dynamically consistent:
-  /// it is a starting point, not a constraint (the OCP's own rows decide what the solution is).
-  /// `guess` is called with t in [initial_time, initial_time + r horizon] widened by the central
-  /// difference's 1e-6 s at both ends; it must return finite values there (InvalidArgument naming
-  /// the time otherwise). x must have variable_count() entries (InvalidArgument otherwise).
+  /// the central difference (v(t + 1e-6 s) - v(t - 1e-6 s)) / 2e-6 s for v, r for the clock), the
+  /// speed of time r clipped to [1, s_max] (r < 1 cannot be a speed of time; the derivatives keep
+  /// r, so such a start is not consistent), the nominal element lengths h0, zero inputs (clipped to
+  /// their bounds), and each stage's step functions and multipliers from the switching functions
+  /// at the guessed state, as initial_point does at the initial state (alpha = 1 where c > 0, 0
+  /// where c < 0, 1/2 at 0; lambda_p = max(c, 0), lambda_n = max(-c, 0); a frictionless contact's
+  /// tangential alpha = 1 and lambda_n = 0, as its bounds fix them). The guess need not be
+  /// dynamically consistent, nor start at (q0, v0) (the initial state is the constructor's; the
+  /// guess is not called at initial_time itself): it is a starting point, not a constraint.
+  /// `guess` is called with t in (initial_time, initial_time + r horizon] widened by 1e-6 s at
+  /// both ends; it must return nx finite values there (InvalidArgument naming the time or the size
+  /// otherwise; a dynamic-size vector is checked). x_out must have variable_count() entries
+  /// (InvalidArgument otherwise); it is left unchanged when this throws.
   template <class Guess>
-  void initial_point_from_guess(Eigen::Ref<Eigen::VectorXd> x, const Guess& guess) const {
-    SALTUS_REQUIRE(x.size() == n_, "FESD: initial_point_from_guess needs ", n_, " entries, got ", x.size());
+  void initial_point_from_guess(Eigen::Ref<Eigen::VectorXd> x_out, const Guess& guess) const {
+    SALTUS_REQUIRE(x_out.size() == n_, "FESD: initial_point_from_guess needs ", n_, " entries, got ", x_out.size());
+    Eigen::VectorXd x(n_);  // filled here, copied out once every guess value passed its checks
     initial_point(x);
     const double rate = options_.clock == ClockConstraint::None ? 1.0 : options_.physical_horizon / options_.horizon;
     const double speed = std::clamp(rate, 1.0, options_.speed_of_time_max);
     const auto state_at = [&](double t) {
-      const Vec<nx> g = guess(t);
+      const auto raw = guess(t);  // a fixed- or dynamic-size vector: its size is checked here
+      SALTUS_REQUIRE(raw.size() == nx, "FESD: initial_point_from_guess: the guess has ", raw.size(),
+                     " entries at t = ", t, ", expected nx = 2 nq = ", nx);
+      const Vec<nx> g = raw;
       SALTUS_REQUIRE(g.allFinite(), "FESD: initial_point_from_guess: the guess is not finite at t = ", t);
       return g;
     };
@@ -535,6 +543,7 @@ class FesdMpcc final : public Mpcc {
           x.template segment<nsw>(lambda_n_index(k, j, r)) = lambda_n;
         }
     }
+    x_out = x;
   }
 
   double objective(const Eigen::Ref<const Eigen::VectorXd>& x) const override {

@@ -288,7 +288,10 @@ struct MpccHomotopyStep {
   double objective = 0.0;             ///< original f at the step's final iterate (no penalty)
   double constraint_violation = 0.0;  ///< of the original MPCC (MpccSolution::constraint_violation)
   /// The bound, row or complementarity side attaining constraint_violation, by the Mpcc's names
-  /// (Mpcc::variable_name, constraint_name, the pair's name); "" when nothing is violated.
+  /// (Mpcc::variable_name, constraint_name, the pair's name; FesdMpcc's rows read e.g.
+  /// "stage dynamics[k,j,r][i]": control interval k, finite element j, stage r, state component i,
+  /// all from 0); set for every step, also a converged one whose violation is at rounding level;
+  /// "" only when nothing is violated at all. The progress line prints it for failed steps.
   std::string worst_violation;
   int ipopt_iterations = 0;
   std::string ipopt_status;  ///< Ipopt's ApplicationReturnStatus by name, e.g. "Solve_Succeeded"
