@@ -140,8 +140,6 @@ int main(int argc, char** argv) {
   if (!args) return 2;
   const bool json = args->json;
   const std::string& only = args->only;
-  const int max_steps = args->max_steps;
-  const std::vector<IpoptOption>& ipopt_options = args->ipopt_options;
   nlohmann::ordered_json rows = nlohmann::ordered_json::array();
   if (!json)
     std::printf("%-24s %4s %5s %6s %9s %9s %9s %11s %-28s %8s\n", "variant", "conv", "steps", "iters", "compl",
@@ -153,12 +151,11 @@ int main(int argc, char** argv) {
     MpccSolverOptions s = Ocp::solver();
     s.relaxation = v.relaxation;
     s.progress = &std::cerr;
-    if (max_steps > 0) s.max_homotopy_steps = max_steps;
+    args->apply(s);
     if (v.smoothing_steps > 0) {
       s.max_homotopy_steps = v.smoothing_steps;
       s.polish = false;
     }
-    s.ipopt_options.insert(s.ipopt_options.end(), ipopt_options.begin(), ipopt_options.end());
     FesdOptions grid = Ocp::grid(v.control_intervals, 3, v.stages);
     grid.velocity_switch_detection = v.velocity_switch_detection;
     grid.contact_side_weight = v.contact_side_weight;
@@ -173,7 +170,7 @@ int main(int argc, char** argv) {
       then_grid.contact_side_weight = v.then_side_weight;
       const FesdMpcc<scenes::Hopper, Ocp> problem(Ocp::system(), ocp, Ocp::q0(), Ocp::v0(), then_grid);
       r.solution = bench::continue_homotopy(problem, r.solution, s, v.then, v.then_sigma_0,
-                                            (max_steps > 0 ? max_steps : 10) - v.smoothing_steps);
+                                            (args->max_steps > 0 ? args->max_steps : 10) - v.smoothing_steps);
       const auto pts = problem.points(r.solution.x);
       r.points.assign(pts.begin(), pts.end());
     }

@@ -27,6 +27,12 @@ struct OcpBenchArgs {
   std::string only;   ///< one variant by name; empty: all
   int max_steps = -1; ///< > 0: MpccSolverOptions::max_homotopy_steps
   std::vector<timefreezing::IpoptOption> ipopt_options;
+
+  /// The command line's share of a variant's solver options: the step budget and the Ipopt options.
+  void apply(timefreezing::MpccSolverOptions& s) const {
+    if (max_steps > 0) s.max_homotopy_steps = max_steps;
+    s.ipopt_options.insert(s.ipopt_options.end(), ipopt_options.begin(), ipopt_options.end());
+  }
 };
 
 /// The parsed command line, or nullopt after printing the usage line (bad or unknown argument).

@@ -70,8 +70,6 @@ int main(int argc, char** argv) {
   if (!args) return 2;
   const bool json = args->json;
   const std::string& only = args->only;
-  const int max_steps = args->max_steps;
-  const std::vector<IpoptOption>& ipopt_options = args->ipopt_options;
   nlohmann::ordered_json rows = nlohmann::ordered_json::array();
   if (!json)
     std::printf("%-24s %4s %5s %6s %9s %9s %9s %11s %-28s %8s\n", "variant", "conv", "steps", "iters", "compl", "flat",
@@ -86,8 +84,7 @@ int main(int argc, char** argv) {
     s.progress = &std::cerr;
     FesdOptions grid = Ocp::grid();
     grid.contact_side_weight = v.contact_side_weight;
-    if (max_steps > 0) s.max_homotopy_steps = max_steps;
-    s.ipopt_options.insert(s.ipopt_options.end(), ipopt_options.begin(), ipopt_options.end());
+    args->apply(s);
     TimeFreezingOcpResult<scenes::PlankBox> r;
     if (v.smoothing_steps > 0) {
       const FesdMpcc<scenes::PlankBox, Ocp> problem(Ocp::system(), ocp, Ocp::q0(), Ocp::v0(), grid);
