@@ -2,14 +2,16 @@
 // forms, and the same Radau IIA scheme on a fixed grid, as the grid is refined.
 //
 //   fesd_accuracy [--json] [--budget SECONDS] [--scheme fesd|fesd-exact|fixed] [--stages N]
-//                 [--finite-elements N1,N2,...] [--refine TARGET] [--contact-side WEIGHT] [--landing-only]
+//                 [--finite-elements N1,N2,...] [--refine TARGET] [--contact-side WEIGHT] [--lift]
+//                 [--landing-only]
 //
 // --finite-elements replaces the default N_fe = 1, 2, 4, 8 (the budget rule drops the last one).
 // --refine sets MpccSolverOptions::complementarity_refinement (in (0, 1e-9)) for the guiding
 // example: each control interval's converged homotopy goes on towards that residual.
 // --contact-side sets FesdOptions::contact_side_weight (>= 0; scheme "fesd+side" when > 0) for both
 // examples (default: 0 for the guiding example, the landing's own 1e-2); --landing-only runs the
-// frictional landing alone.
+// frictional landing alone. --lift solves both with the lifted step functions
+// (FesdOptions::lift_step_functions; scheme suffix "+lift").
 // SALTUS_BENCH_TRACE=1 prints, per configuration, the error of every element boundary's state
 // against the closed form y(tau) (exact_state below): where along the horizon the error arises.
 //
@@ -81,7 +83,7 @@
 // "lift_off_estimated", "final_state_error", "converged", "complementarity", "ipopt_iterations",
 // "seconds"}, ...], "orders": [{"scheme", "n_s", "from_finite_elements", "to_finite_elements",
 // "order"}, ...], "dropped": [{"scheme", "n_s", "finite_elements", "reason"}, ...],
-// "frictional_landing": {"stop_error", "converged", "complementarity", "ipopt_iterations",
+// "frictional_landing": {"scheme", "stop_error", "converged", "complementarity", "ipopt_iterations",
 // "seconds"}} (errors null when not measurable; frictional_landing null when not run). Without
 // it, a table. One progress line per configuration goes to stderr either way. Exit status 0
 // unless a simulation threw.
@@ -176,10 +178,16 @@ double refinement = 0.0;
 /// FesdOptions::contact_side_weight of both examples' runs (--contact-side; < 0: the example's
 /// own, 0 for the guiding example, 1e-2 for the frictional landing).
 double contact_side = -1.0;
+/// FesdOptions::lift_step_functions of both examples' runs (--lift).
+bool lift = false;
+/// The scheme's name with the options that change it.
+std::string scheme_label(const std::string& scheme) {
+  return scheme + (contact_side > 0.0 ? "+side" : "") + (refinement > 0.0 ? "+refine" : "") + (lift ? "+lift" : "");
+}
 
 Row run_guiding(const std::string& scheme, int stages, int finite_elements) {
   Row r;
-  r.scheme = scheme + (contact_side > 0.0 ? "+side" : "") + (refinement > 0.0 ? "+refine" : "");
+  r.scheme = scheme_label(scheme);
   r.stages = stages;
   r.finite_elements = finite_elements;
   const TimeFreezingSystem<PointMass> system(PointMass(), g);
@@ -190,6 +198,7 @@ Row run_guiding(const std::string& scheme, int stages, int finite_elements) {
   o.horizon = horizon;
   o.switch_detection = scheme != "fixed";
   if (contact_side >= 0.0) o.contact_side_weight = contact_side;
+  o.lift_step_functions = lift;
   if (scheme == "fesd-exact") o.step_equilibration = StepEquilibration::Exact;
   const auto start = std::chrono::steady_clock::now();
   MpccSolverOptions solver;
@@ -253,6 +262,7 @@ Landing run_landing() {
   const auto start = std::chrono::steady_clock::now();
   timefreezing::FesdOptions grid = Case::grid();
   if (contact_side >= 0.0) grid.contact_side_weight = contact_side;
+  grid.lift_step_functions = lift;
   const auto sim = simulate_time_freezing(Case::system(), Case::q0(), Case::v0(), grid);
   l.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   l.stop_error = std::abs(sim.final_state()[0] - Case::stop);
@@ -310,6 +320,8 @@ int main(int argc, char** argv) {
     } else if (std::strcmp(argv[i], "--refine") == 0 && i + 1 < argc && parse_number(argv[i + 1]) > 0.0 &&
                parse_number(argv[i + 1]) < 1e-9) {
       refinement = parse_number(argv[++i]);
+    } else if (std::strcmp(argv[i], "--lift") == 0) {
+      lift = true;
     } else if (std::strcmp(argv[i], "--landing-only") == 0) {
       landing_only = true;
     } else if (std::strcmp(argv[i], "--contact-side") == 0 && i + 1 < argc && parse_number(argv[i + 1]) >= 0.0) {
@@ -333,7 +345,7 @@ int main(int argc, char** argv) {
     } else {
       std::fprintf(stderr,
                    "usage: %s [--json] [--budget SECONDS] [--scheme fesd|fesd-exact|fixed] [--stages 1|2|3] "
-                   "[--finite-elements N1,N2,...] [--refine TARGET] [--contact-side WEIGHT] [--landing-only]\n",
+                   "[--finite-elements N1,N2,...] [--refine TARGET] [--contact-side WEIGHT] [--lift] [--landing-only]\n",
                    argv[0]);
       return 2;
     }
@@ -360,7 +372,7 @@ int main(int argc, char** argv) {
         try {
           r = run_guiding(scheme, ns, nfe);
         } catch (const std::exception& e) {
-          r.scheme = scheme + (contact_side > 0.0 ? "+side" : "") + (refinement > 0.0 ? "+refine" : "");
+          r.scheme = scheme_label(scheme);
           r.stages = ns;
           r.finite_elements = nfe;
           r.error = e.what();
@@ -400,8 +412,8 @@ int main(int argc, char** argv) {
   if (with_landing) {
     try {
       landing = run_landing();
-      std::fprintf(stderr, "[landing fesd n_s=2 N_fe=5] stop err %s, %s, compl %s, %d iterations, %.1f s\n",
-                   cell(landing.stop_error).c_str(), landing.converged ? "converged" : "NOT converged",
+      std::fprintf(stderr, "[landing %s n_s=2 N_fe=5] stop err %s, %s, compl %s, %d iterations, %.1f s\n",
+                   lift ? "fesd+lift" : "fesd", cell(landing.stop_error).c_str(), landing.converged ? "converged" : "NOT converged",
                    cell(landing.complementarity).c_str(), landing.iterations, landing.seconds);
     } catch (const std::exception& e) {
       landing.error = e.what();
@@ -440,7 +452,8 @@ int main(int argc, char** argv) {
     for (const Dropped& d : dropped)
       dropped_list.push_back(
           {{"scheme", d.scheme}, {"n_s", d.stages}, {"finite_elements", d.finite_elements}, {"reason", d.reason}});
-    nlohmann::ordered_json land = {{"stop_error", number(landing.stop_error)},
+    nlohmann::ordered_json land = {{"scheme", lift ? "fesd+lift" : "fesd"},
+                                   {"stop_error", number(landing.stop_error)},
                                    {"converged", landing.converged},
                                    {"complementarity", number(landing.complementarity)},
                                    {"ipopt_iterations", landing.iterations},

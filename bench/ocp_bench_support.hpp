@@ -1,9 +1,10 @@
 // What the flagship-OCP benchmarks (hopper_ocp, plank_box_ocp) share: their command line and the
 // second homotopy of the variants that change the relaxation on the way ("smoothing, then ...").
 //
-//   NAME [--json] [--only VARIANT] [--max-steps K] [--ipopt OPTION=VALUE]...
+//   NAME [--json] [--only VARIANT] [--max-steps K] [--lift] [--ipopt OPTION=VALUE]...
 //
-// --max-steps K overrides the homotopy's step budget; --ipopt passes an Ipopt option to every solve
+// --max-steps K overrides the homotopy's step budget; --lift solves every variant with the lifted
+// step functions (FesdOptions::lift_step_functions); --ipopt passes an Ipopt option to every solve
 // (an integer or a number when VALUE parses as one, else a string), e.g. `--ipopt
 // mumps_pivtol=1e-4 --ipopt print_timing_statistics=yes --ipopt output_file=ip.log --ipopt
 // file_print_level=5`.
@@ -26,6 +27,7 @@ struct OcpBenchArgs {
   bool json = false;
   std::string only;   ///< one variant by name; empty: all
   int max_steps = -1; ///< > 0: MpccSolverOptions::max_homotopy_steps
+  bool lift = false;  ///< FesdOptions::lift_step_functions for every variant
   std::vector<timefreezing::IpoptOption> ipopt_options;
 
   /// The command line's share of a variant's solver options: the step budget and the Ipopt options.
@@ -33,18 +35,23 @@ struct OcpBenchArgs {
     if (max_steps > 0) s.max_homotopy_steps = max_steps;
     s.ipopt_options.insert(s.ipopt_options.end(), ipopt_options.begin(), ipopt_options.end());
   }
+  /// The command line's share of a variant's grid options: the lifted step functions.
+  void apply(timefreezing::FesdOptions& grid) const {
+    if (lift) grid.lift_step_functions = true;
+  }
 };
 
 /// The parsed command line, or nullopt after printing the usage line (bad or unknown argument).
 inline std::optional<OcpBenchArgs> parse_ocp_bench_args(int argc, char** argv, const char* program) {
   OcpBenchArgs a;
   const auto usage = [program] {
-    std::fprintf(stderr, "usage: %s [--json] [--only NAME] [--max-steps K] [--ipopt NAME=VALUE]...\n", program);
+    std::fprintf(stderr, "usage: %s [--json] [--only NAME] [--max-steps K] [--lift] [--ipopt NAME=VALUE]...\n", program);
     return std::optional<OcpBenchArgs>();
   };
   for (int i = 1; i < argc; ++i) {
     if (std::strcmp(argv[i], "--json") == 0) a.json = true;
     else if (std::strcmp(argv[i], "--only") == 0 && i + 1 < argc) a.only = argv[++i];
+    else if (std::strcmp(argv[i], "--lift") == 0) a.lift = true;
     else if (std::strcmp(argv[i], "--max-steps") == 0 && i + 1 < argc) {
       char* end = nullptr;
       const long k = std::strtol(argv[++i], &end, 10);

@@ -1,7 +1,7 @@
 // The plank-box's flagship OCP, the flat landing (scenes/plank_box_landing.hpp), under the
 // formulation variants measured one by one (bench/README.md, "Plank-box flat landing").
 //
-//   plank_box_ocp [--json] [--only NAME] [--max-steps K] [--ipopt NAME=VALUE]...
+//   plank_box_ocp [--json] [--only NAME] [--max-steps K] [--lift] [--ipopt NAME=VALUE]...
 //
 // Every variant starts from the contact-implicit initialisation (the start state at every stage
 // point, zero inputs) on the default grid (N = 15, 2 elements, n_s = 2) with the default homotopy
@@ -85,6 +85,7 @@ int main(int argc, char** argv) {
     FesdOptions grid = Ocp::grid();
     grid.contact_side_weight = v.contact_side_weight;
     args->apply(s);
+    args->apply(grid);
     TimeFreezingOcpResult<scenes::PlankBox> r;
     if (v.smoothing_steps > 0) {
       const FesdMpcc<scenes::PlankBox, Ocp> problem(Ocp::system(), ocp, Ocp::q0(), Ocp::v0(), grid);
@@ -110,7 +111,7 @@ int main(int argc, char** argv) {
     std::vector<int> per_step;
     for (const MpccHomotopyStep& st : r.solution.steps) per_step.push_back(st.ipopt_iterations);
     if (json)
-      rows.push_back({{"variant", v.name}, {"what", v.what}, {"converged", r.converged()},
+      rows.push_back({{"variant", v.name}, {"what", v.what}, {"lifted_step_functions", args->lift}, {"converged", r.converged()},
                       {"solves", per_step.size()}, {"ipopt_iterations", r.solution.ipopt_iterations},
                       {"iterations_per_solve", per_step}, {"complementarity", r.solution.complementarity},
                       {"flatness", f.path_violation}, {"target_error", f.target_error},

@@ -27,7 +27,9 @@ struct OcpFeasibility {
 /// constraint_violation, ipopt_iterations, ipopt_status, worst_violation, seconds}],
 /// "continuation": [...],
 /// "events": [{kind: "impact" (t, clock_advance) | "gap" | "normal velocity" | "tangential
-/// velocity" (t, alpha_before, alpha_after, switching_function)}], "resim_max_error",
+/// velocity" (t, alpha_before, alpha_after, switching_function)}], "recovered_events": [{t,
+/// impact, guards: ["touchdown C_L", ...], mode_before, mode_after}] (the HybridTrajectory of
+/// recover_trajectory: impacts and mode changes in physical time), "resim_max_error",
 /// "resim_event_time_error", "resim_events": [{t, guards}]}.
 template <Scene S>
 nlohmann::ordered_json ocp_report(const S& scene, const timefreezing::TimeFreezingOcpResult<S>& r,
@@ -70,6 +72,17 @@ nlohmann::ordered_json ocp_report(const S& scene, const timefreezing::TimeFreezi
                       {"alpha_after", s.alpha_after}});
   }
   j["events"] = events;
+  auto recovered = nlohmann::ordered_json::array();
+  for (const auto& ev : r.trajectory.events) {
+    auto guards = nlohmann::ordered_json::array();
+    for (const Guard& g : ev.guards()) guards.push_back(std::string(to_string(g.kind)) + " " + scene.contact(g.contact).name);
+    recovered.push_back({{"t", ev.t},
+                         {"impact", ev.impact()},
+                         {"guards", guards},
+                         {"mode_before", describe(scene, ev.mode_before)},
+                         {"mode_after", describe(scene, ev.mode_after)}});
+  }
+  j["recovered_events"] = recovered;
   j["resim_max_error"] = nullptr;
   j["resim_event_time_error"] = nullptr;
   j["resim_events"] = nlohmann::ordered_json::array();

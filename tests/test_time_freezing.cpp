@@ -97,6 +97,11 @@ TEST(TimeFreezingSystem, PlankBoxRegionsGiveTheDocumentedFields) {
   // Fractional alphas: Theta is the product of the contacts' theta^free.
   const Alpha mixed = (Alpha() << 0.3, 0.4, 0.5, 0.8, 0.1, 0.2).finished();
   EXPECT_NEAR(system.ode_weight<double>(mixed), (0.3 + 0.7 * 0.4) * (0.8 + 0.2 * 0.1), 1e-15);
+  // The lifted form (closing weights beta_i = (1 - alpha_i1)(1 - alpha_i2)) is the same field.
+  const Vec<2> closing(0.7 * 0.6, 0.2 * 0.9);
+  EXPECT_NEAR(system.ode_weight_lifted<double>(closing), system.ode_weight<double>(mixed), 1e-15);
+  EXPECT_LT((system.generalised_force_lifted<double>(q, v, u, closing, mixed) -
+             system.generalised_force<double>(q, v, u, mixed)).norm(), 1e-12);
   // Switching functions: gap, J_n v, J_t v.
   const Vec<6> c = system.switching_functions<double>(q, v);
   for (int i = 0; i < 2; ++i) {
@@ -193,8 +198,8 @@ TEST(Fesd, DerivativesMatchFiniteDifferences) {
   const TimeFreezingSystem<PointMass> system(PointMass(p), 10.0);
   // FESD with the heuristic penalty, the fixed grid, FESD with the exact step equilibration (its
   // eta rows couple the multipliers of neighbouring elements, across control intervals too) and
-  // scaled switching functions.
-  for (int variant : {0, 1, 2}) {
+  // scaled switching functions; FESD with the lifted step functions.
+  for (int variant : {0, 1, 2, 3}) {
     const bool fesd = variant != 1;
     FesdOptions grid = small_grid(fesd);
     if (variant == 2) {
@@ -202,6 +207,7 @@ TEST(Fesd, DerivativesMatchFiniteDifferences) {
       grid.finite_elements = 3;
       grid.switching_scale = {3.0, 0.5, 2.0};
     }
+    grid.lift_step_functions = variant == 3;
     const FesdMpcc<PointMass, EveryTermOcp> problem(system, EveryTermOcp{}, Vec<2>(0.1, 0.5), Vec<2>(1.0, -0.5), grid);
     int equilibration_rows = 0;
     for (int row = 0; row < problem.constraint_count(); ++row)
@@ -294,6 +300,11 @@ TEST(Fesd, IpoptDerivativeCheckerFindsNoError) {
   const FesdMpcc<PlankBox> two(plank, NoObjective{}, Vec<4>(0.5, 0.08, 0.01, 0.0), Vec<4>(0.2, -1.0, 0.3, 0.0), o);
   const DerivativeCheckReport report2 = check_derivatives(two, interior_point(two, 7));
   EXPECT_EQ(report2.errors, 0) << report2.output;
+  // The same lifted: Theta = (1 - beta_1)(1 - beta_2), the step-lifting rows.
+  o.lift_step_functions = true;
+  const FesdMpcc<PlankBox> two_lifted(plank, NoObjective{}, Vec<4>(0.5, 0.08, 0.01, 0.0), Vec<4>(0.2, -1.0, 0.3, 0.0), o);
+  const DerivativeCheckReport report3 = check_derivatives(two_lifted, interior_point(two_lifted, 7));
+  EXPECT_EQ(report3.errors, 0) << report3.output;
 }
 
 // Which pairs the smoothing relaxation may smooth: the stage-wise ones (velocity switching
@@ -318,6 +329,55 @@ TEST(Fesd, MarksTheStageWisePairsSmoothable) {
   EXPECT_EQ(smoothable(o), 2 * stage_points);  // J_n v only
   o.velocity_switch_detection = true;
   EXPECT_EQ(smoothable(o), 0);  // every function has cross-complementarity
+}
+
+// The lifted step functions' layout: nc closing weights per stage point after the multipliers,
+// nc "step lifting" rows after the path rows, both named; the initial points satisfy those rows.
+TEST(Fesd, LiftedStepFunctionsAddOneWeightAndOneRowPerContactAndStage) {
+  const TimeFreezingSystem<PlankBox> plank(PlankBox(), 50.0);
+  FesdOptions o = small_grid(true);
+  const Vec<4> q0(0.5, 0.08, 0.01, 0.0), v0(0.2, -1.0, 0.3, 0.0);
+  const FesdMpcc<PlankBox> plain(plank, NoObjective{}, q0, v0, o);
+  o.lift_step_functions = true;
+  const FesdMpcc<PlankBox> lifted(plank, NoObjective{}, q0, v0, o);
+  const int stage_points = o.control_intervals * o.finite_elements * o.stages;  // 8
+  EXPECT_EQ(lifted.variable_count() - plain.variable_count(), 2 * stage_points);
+  EXPECT_EQ(lifted.constraint_count() - plain.constraint_count(), 2 * stage_points);
+  EXPECT_EQ(lifted.variable_name(lifted.closing_index(1, 0, 1) + 1), "beta[1,0,1][1]");
+  EXPECT_EQ(lifted.complementarity_pairs().size(), plain.complementarity_pairs().size());
+  Eigen::VectorXd x(lifted.variable_count()), g(lifted.constraint_count());
+  auto check_lifting_rows = [&](const char* which) {
+    lifted.constraints(x, g);
+    int rows = 0;
+    for (int row = 0; row < lifted.constraint_count(); ++row)
+      if (lifted.constraint_name(row).rfind("step lifting", 0) == 0) {
+        ++rows;
+        EXPECT_NEAR(g[row], 0.0, 1e-15) << which << ": " << lifted.constraint_name(row);
+      }
+    EXPECT_EQ(rows, 2 * stage_points) << which;
+  };
+  lifted.initial_point(x);
+  check_lifting_rows("initial_point");
+  // A guess that touches down: the start state is in flight, the guess crosses the plank.
+  lifted.initial_point_from_guess(x, [&](double t) {
+    Vec<8> y;
+    y << q0 + t * v0, v0;
+    return y;
+  });
+  check_lifting_rows("initial_point_from_guess");
+  // The stage dynamics agree with the plain form's where the lifting rows hold.
+  Eigen::VectorXd xp(plain.variable_count()), gp(plain.constraint_count());
+  plain.initial_point_from_guess(xp, [&](double t) {
+    Vec<8> y;
+    y << q0 + t * v0, v0;
+    return y;
+  });
+  plain.constraints(xp, gp);
+  for (int row = 0, lrow = 0; row < plain.constraint_count(); ++row, ++lrow) {
+    while (lifted.constraint_name(lrow).rfind("step lifting", 0) == 0) ++lrow;
+    ASSERT_EQ(plain.constraint_name(row), lifted.constraint_name(lrow));
+    EXPECT_NEAR(gp[row], g[lrow], 1e-12) << plain.constraint_name(row);
+  }
 }
 
 TEST(Fesd, RefusesBadOptionsAndStates) {
@@ -467,6 +527,23 @@ TEST(TimeFreezingSimulation, GuidingExampleMatchesItsClosedForms) {
   const auto sim = simulate_time_freezing(system, Vec<2>(0, 1), Vec<2>(0, 0), o, scenes::Example3{});
   ASSERT_TRUE(sim.converged()) << sim.solution.message;
   const double t_impact = std::sqrt(2.0 / g_ex3);
+  // The recovered trajectory (recover_trajectory): the impact at t = sqrt(2/g) from flight into
+  // the closed (frictionless) contact, x+ at rest vertically; the free fall before it exactly
+  // (x = 7 t^2 / 2, z = 1 - g t^2 / 2: quadratics, which the n_s = 2 pieces reproduce).
+  const HybridTrajectory<PointMass>& traj = sim.trajectory;
+  ASSERT_GE(traj.events.size(), 1u);
+  EXPECT_TRUE(traj.events[0].impact());
+  EXPECT_NEAR(traj.events[0].t, t_impact, 1e-9);
+  EXPECT_EQ(traj.events[0].guards(), (std::vector<Guard>{{0, GuardKind::Touchdown}}));
+  EXPECT_EQ(traj.events[0].mode_before[0], ContactState::open());
+  EXPECT_EQ(traj.events[0].mode_after[0], ContactState::slip(Eigen::Vector2d::Zero()));
+  EXPECT_NEAR(traj.events[0].x_plus[3], 0.0, 1e-9);
+  EXPECT_NEAR(traj.events[0].x_plus[2], traj.events[0].x_minus[2], 1e-9);  // frictionless: v_t kept
+  const double tf = 0.3;
+  EXPECT_LT((traj.state_at(tf) - (Vec<4>() << 3.5 * tf * tf, 1.0 - 0.5 * g_ex3 * tf * tf, 7.0 * tf, -g_ex3 * tf).finished())
+                .cwiseAbs()
+                .maxCoeff(),
+            1e-9);
   if (!whole_horizon) {
     const SwitchPoint* touchdown = nullptr;
     const SwitchPoint* frozen_end = nullptr;
@@ -513,6 +590,14 @@ TEST(TimeFreezingSimulation, GuidingExampleMatchesItsClosedForms) {
   EXPECT_NEAR(lift_off->time, 1.5, 1e-3);
   ASSERT_FALSE(sim.frozen_phases.empty());
   EXPECT_NEAR(sim.frozen_phases.front().time, t_impact, 1e-9);
+  // The trajectory's second and last event: the lift-off (Release), read from the states with
+  // recover_trajectory's tolerance 1e-4 m/s on J_n v = g (t - 1.5)^2, i.e. about 3e-3 s late.
+  for (const Event<PointMass>& e : traj.events)
+    std::printf("recovered event at t %.9f: %s\n", e.t, e.impact() ? "impact" : "mode change");
+  ASSERT_EQ(traj.events.size(), 2u);
+  EXPECT_EQ(traj.events[1].guards(), (std::vector<Guard>{{0, GuardKind::Release}}));
+  EXPECT_NEAR(traj.events[1].t, 1.5, 1e-2);
+  EXPECT_EQ(traj.segments.back().mode[0], ContactState::open());
 }
 
 // Example 3 to 1e-8 and FESD's Radau order: n_s = 3 with the contact-side selection (the frozen
@@ -585,6 +670,12 @@ TEST(TimeFreezingSimulation, FrozenPhaseDriftIsRemovedBySideSelectionOrRefinemen
   EXPECT_LE(refined.cwiseAbs().maxCoeff(), 1e-7);
   const Vec<5> selected = error_at_the_end(o, MpccSolverOptions{}, "side selection 1e-2");
   EXPECT_LE(selected.cwiseAbs().maxCoeff(), 1e-10);
+  // The lifted step functions (the same discrete problem) reach the same end state to the
+  // homotopy's tolerance: measured 1.4e-9 in q2 (a remnant of the drift: residual 1e-9), 601
+  // Ipopt iterations against 527.
+  o.lift_step_functions = true;
+  const Vec<5> lifted = error_at_the_end(o, MpccSolverOptions{}, "side selection 1e-2, lifted step functions");
+  EXPECT_LE(lifted.cwiseAbs().maxCoeff(), 1e-8);
 }
 
 // NOSNOC's smallest time-freezing example: the mass lands at t = sqrt(2/g) with v = (3, -sqrt(2 g)),
@@ -612,6 +703,16 @@ TEST(TimeFreezingSimulation, FrictionalLandingStopsAtTheClosedForm) {
   for (const SwitchPoint& s : sim.switch_points)
     if (s.switching_function == 2 && std::abs(s.time - 1.5) < 1e-6) stop = true;
   EXPECT_TRUE(stop);
+  // The recovered trajectory: the impact into slip+ at sqrt(2/g), the stop into stick at 1.5.
+  const auto& traj = sim.trajectory;
+  ASSERT_EQ(traj.events.size(), 2u);
+  EXPECT_TRUE(traj.events[0].impact());
+  EXPECT_NEAR(traj.events[0].t, std::sqrt(0.2), 1e-9);
+  EXPECT_EQ(traj.events[0].mode_after[0], ContactState::slip_planar(1));
+  EXPECT_NEAR(traj.events[0].x_plus[2], 3.0 - 0.2 * std::sqrt(20.0), 1e-6);  // v_t - mu sqrt(2 g)
+  EXPECT_EQ(traj.events[1].guards(), (std::vector<Guard>{{0, GuardKind::Stop}}));
+  EXPECT_NEAR(traj.events[1].t, 1.5, 1e-6);
+  EXPECT_EQ(traj.segments.back().mode[0], ContactState::stick());
 }
 
 // Two contacts: the plank-box's box lowered flat onto the plank under a constant input (both
@@ -672,6 +773,16 @@ TEST(TimeFreezingSimulation, PlankBoxFlatLandingAgreesWithTheEventDrivenSimulato
   std::cout << "plank-box flat landing: time-freezing against event-driven, final distance " << distance << " at t = "
             << t_final << ", " << sim.solution.ipopt_iterations << " Ipopt iterations, " << sim.solution.seconds << " s\n";
   EXPECT_LT(distance, 1e-3);  // measured 6e-5: the clock advances a little in the impact element
+  // The recovered trajectory's first event: both corners' touchdowns in one impact, as the
+  // event-driven simulator's, at the same time.
+  ASSERT_GE(sim.trajectory.events.size(), 1u);
+  const Event<PlankBox>& landing = sim.trajectory.events[0];
+  EXPECT_TRUE(landing.impact());
+  EXPECT_EQ(landing.guards(), (std::vector<Guard>{{0, GuardKind::Touchdown}, {1, GuardKind::Touchdown}}));
+  EXPECT_NEAR(landing.t, trajectory.events[0].t, 1e-6);
+  EXPECT_TRUE(landing.mode_after[0].closed() && landing.mode_after[1].closed());
+  std::cout << "recovered: " << sim.trajectory.events.size() << " events, the landing's x+ "
+            << (landing.x_plus - trajectory.events[0].x_plus).cwiseAbs().maxCoeff() << " from the simulator's\n";
 }
 
 // The small OCP (scenes::PointMassToTheTarget): land the point mass and slide it to x = 3.
@@ -706,6 +817,77 @@ TEST(TimeFreezingRecovery, FrozenRunOnAControlIntervalBoundary) {
   EXPECT_EQ(ref.u[2][0], 2.0);  // the repeat carries the next interval's input
   EXPECT_EQ(ref.segment_of(2), 0);
   EXPECT_EQ(ref.x[3][3], 0.0);  // x+: the impact ended
+}
+
+// recover_trajectory on a hand-made solution (n_s = 2, a point mass with friction mu = 0.3):
+// flight onto the table, a frozen run (the impact: v from (1, -1) to (0.7, 0)), a slide, a stop,
+// a lift-off. Expected: three events (impact with a touchdown guard, stop, release), four segments
+// with the modes open, slip+, stick, open, and dense output through the points.
+TEST(TimeFreezingRecovery, TrajectoryOfALandingASlideAStopAndALiftOff) {
+  scenes::PointMassParameters pm;
+  pm.friction = Friction::Planar;
+  pm.mu = 0.3;
+  const TimeFreezingSystem<PointMass> system(PointMass(pm), 10.0);
+  using Point = FesdPoint<6, 3, 2>;
+  std::vector<Point> points;
+  auto add = [&](int element, int stage, double tau, double t, Vec<2> q, Vec<2> v, double weight) {
+    Point p;
+    p.interval = 0;
+    p.element = element;
+    p.stage = stage;
+    p.tau = tau;
+    p.y << q, v, t, 0.0;
+    p.alpha.setConstant(weight);
+    p.ode_weight = weight;
+    p.u = Vec<2>(t, 0.0);
+    points.push_back(p);
+  };
+  // x(t) = t, z(t) = 0.1 - t in flight: linear, so the pieces reproduce it exactly.
+  add(-1, -1, 0.0, 0.0, Vec<2>(0.0, 0.1), Vec<2>(1.0, -1.0), 1.0);
+  add(0, 0, 0.05, 0.05, Vec<2>(0.05, 0.05), Vec<2>(1.0, -1.0), 1.0);
+  add(0, 1, 0.10, 0.10, Vec<2>(0.10, 0.0), Vec<2>(1.0, -1.0), 1.0);
+  add(1, 0, 0.15, 0.10, Vec<2>(0.10, 0.0), Vec<2>(0.85, -0.5), 0.0);  // frozen
+  add(1, 1, 0.20, 0.10, Vec<2>(0.10, 0.0), Vec<2>(0.7, 0.0), 0.0);
+  add(2, 0, 0.25, 0.15, Vec<2>(0.13, 0.0), Vec<2>(0.55, 0.0), 1.0);    // slip+
+  add(2, 1, 0.30, 0.20, Vec<2>(0.16, 0.0), Vec<2>(0.4, 0.0), 1.0);
+  add(3, 0, 0.35, 0.25, Vec<2>(0.18, 0.0), Vec<2>(0.0, 0.0), 1.0);     // stick
+  add(3, 1, 0.40, 0.30, Vec<2>(0.18, 0.0), Vec<2>(0.0, 0.0), 1.0);
+  add(4, 0, 0.45, 0.35, Vec<2>(0.18, 0.01), Vec<2>(0.0, 0.2), 1.0);    // open
+  add(4, 1, 0.50, 0.40, Vec<2>(0.18, 0.02), Vec<2>(0.0, 0.2), 1.0);
+  const HybridTrajectory<PointMass> traj = recover_trajectory(system, points, 2);
+  ASSERT_EQ(traj.events.size(), 3u);
+  ASSERT_EQ(traj.segments.size(), 4u);
+  const Event<PointMass>& impact = traj.events[0];
+  EXPECT_EQ(impact.t, 0.1);
+  EXPECT_TRUE(impact.impact());
+  EXPECT_EQ(impact.guards(), (std::vector<Guard>{{0, GuardKind::Touchdown}}));
+  EXPECT_EQ(impact.x_minus, (Vec<4>() << 0.1, 0.0, 1.0, -1.0).finished());
+  EXPECT_EQ(impact.x_plus, (Vec<4>() << 0.1, 0.0, 0.7, 0.0).finished());
+  EXPECT_EQ(impact.mode_before[0], ContactState::open());
+  EXPECT_EQ(impact.mode_after[0], ContactState::slip_planar(1));
+  EXPECT_EQ(traj.events[1].t, 0.2);
+  EXPECT_FALSE(traj.events[1].impact());
+  EXPECT_EQ(traj.events[1].guards(), (std::vector<Guard>{{0, GuardKind::Stop}}));
+  EXPECT_EQ(traj.events[1].mode_after[0], ContactState::stick());
+  EXPECT_EQ(traj.events[2].t, 0.3);
+  EXPECT_EQ(traj.events[2].guards(), (std::vector<Guard>{{0, GuardKind::Release}}));
+  EXPECT_EQ(traj.segments[0].mode[0], ContactState::open());
+  EXPECT_EQ(traj.segments[1].mode[0], ContactState::slip_planar(1));
+  EXPECT_EQ(traj.segments[2].mode[0], ContactState::stick());
+  EXPECT_EQ(traj.segments[3].mode[0], ContactState::open());
+  for (int i = 0; i < 4; ++i) EXPECT_EQ(traj.segments[i].t_begin, i == 0 ? 0.0 : traj.events[i - 1].t);
+  EXPECT_EQ(traj.segments[3].t_end, 0.4);
+  // Dense output: through the points, the flight exactly.
+  EXPECT_LT((traj.state(0, 0.03) - (Vec<4>() << 0.03, 0.07, 1.0, -1.0).finished()).cwiseAbs().maxCoeff(), 1e-14);
+  EXPECT_LT((traj.state(1, 0.15) - points[5].y.head<4>()).cwiseAbs().maxCoeff(), 1e-14);
+  EXPECT_LT((traj.state(1, 0.1) - impact.x_plus).cwiseAbs().maxCoeff(), 1e-14);
+  EXPECT_EQ(traj.final_state(), points.back().y.head<4>());
+  // The input: recover_reference's samples (u = (t, 0) at every point, linear in between).
+  EXPECT_NEAR(traj.input(0.125, Vec<4>::Zero(), Mode<1>{})[0], 0.125, 1e-14);
+  // Bad tolerances are refused by name.
+  TrajectoryRecoveryOptions bad;
+  bad.gap_tolerance = 0.0;
+  EXPECT_THROW(recover_trajectory(system, points, 2, bad), InvalidArgument);
 }
 
 TEST(TimeFreezingOcp, PointMassReachesTheTargetOnTheTable) {
@@ -746,6 +928,28 @@ TEST(TimeFreezingOcp, PointMassReachesTheTargetOnTheTable) {
   const auto resim = polish(scenes::PointMass(Case::parameters()), r.reference);
   EXPECT_LT(resim.state_distance, 1e-2);
   EXPECT_NEAR(resim.trajectory.events.at(0).t, r.reference.event_times[0], 1e-9);
+  // The trajectory recovered directly (recover_trajectory): the impact from flight into a slide,
+  // then the motion on the table; against the re-simulation away from the events.
+  const HybridTrajectory<scenes::PointMass>& traj = r.trajectory;
+  for (const auto& ev : traj.events)
+    std::cout << "recovered event at t " << ev.t << (ev.impact() ? " (impact)" : "") << ": "
+              << describe(scenes::PointMass(Case::parameters()), ev.mode_before) << " -> "
+              << describe(scenes::PointMass(Case::parameters()), ev.mode_after) << "\n";
+  ASSERT_GE(traj.events.size(), 1u);
+  EXPECT_TRUE(traj.events[0].impact());
+  EXPECT_EQ(traj.events[0].t, r.frozen_phases[0].time);
+  EXPECT_EQ(traj.events[0].guards(), (std::vector<Guard>{{0, GuardKind::Touchdown}}));
+  EXPECT_EQ(traj.events[0].mode_after[0].mode, ContactMode::Slip);
+  double distance = 0.0;
+  for (int k = 0; k <= 200; ++k) {
+    const double t = 2.0 * k / 200;
+    bool near_event = false;
+    for (const auto& ev : traj.events) near_event = near_event || std::abs(t - ev.t) < 0.1;
+    for (const auto& ev : resim.trajectory.events) near_event = near_event || std::abs(t - ev.t) < 0.1;
+    if (!near_event) distance = std::max(distance, (traj.state_at(t) - resim.trajectory.state_at(t)).cwiseAbs().maxCoeff());
+  }
+  std::cout << "recovered trajectory against the re-simulation (0.1 s away from events): " << distance << "\n";
+  EXPECT_LT(distance, 1e-2);
 }
 
 /// The point-mass OCP with its target x as data (a continuation moves it).

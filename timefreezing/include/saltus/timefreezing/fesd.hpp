@@ -14,13 +14,16 @@
 //     Y (ny = 2 nq + 2: q, v, t, L)   the stage state,
 //     K (ny)                           the stage derivative,
 //     alpha (3 nc)                     the step functions of the switching functions,
-//     lambda_p, lambda_n (3 nc)        their multipliers.
+//     lambda_p, lambda_n (3 nc)        their multipliers,
+//     beta (nc)                        with FesdOptions::lift_step_functions only: the contacts'
+//                                      closing weights (time_freezing_system.hpp, lifted form).
 // The stage DERIVATIVE K is a variable (NOSNOC's "differential" representation) so that the
 // mass matrix is multiplied, never inverted: the nonlinear rows of a stage are
 //     K_q - s Theta v = 0,   M(q) K_v - s F(q, v, u, alpha) = 0,   K_t - s Theta = 0,
 //     K_L - s Theta l(x, u) = 0                                  (time_freezing_system.hpp),
 // and the collocation rows Y_r - y_start - h sum_l a_rl K_l = 0 are bilinear. Switching rows
-// (eq. 31): c(q_r, v_r) - lambda_p,r + lambda_n,r = 0.
+// (eq. 31): c(q_r, v_r) - lambda_p,r + lambda_n,r = 0. Lifted: beta_i - (1 - alpha_i1)(1 - alpha_i2)
+// = 0 per contact, and the field reads beta where the plain form multiplies the alphas out.
 //
 // COMPLEMENTARITY (all sides affine). Switch detection (FESD paper, cross-complementarity in
 // NOSNOC's FE_STAGE form): for each element, each switching function m and each point p among
@@ -145,6 +148,14 @@ struct FesdOptions {
   /// (bench/README.md): false did not help the hopper (the same wall) and made the plank-box's
   /// first NLP fail (Restoration_Failed).
   bool smooth_tangential_pairs = true;
+  /// Lift the step DCS (time_freezing_system.hpp, ode_weight_lifted; NOSNOC's
+  /// pss_lift_step_functions): each contact's closing weight beta_i = (1 - alpha_i1)(1 - alpha_i2)
+  /// becomes a variable per stage point with the row beta_i - (1 - alpha_i1)(1 - alpha_i2) = 0
+  /// ("step lifting"), and the stage dynamics use beta: bilinear weights instead of trilinear ones
+  /// (Theta of nc contacts: degree nc in beta instead of 2 nc in alpha). nc more variables and rows per stage point; beta has no bounds (the
+  /// row fixes it in [0, 1]; bounds would duplicate alpha's active bounds). Same solutions as the
+  /// plain form. Measured in bench/README.md ("Lifted step functions").
+  bool lift_step_functions = false;
   double element_length_freedom = 1.0;  ///< gamma_h in [0, 1]: h in [(1-gamma_h) h0, (1+gamma_h) h0]
   /// Scales K = {gap [1/m], J_n v [s/m], J_t v [s/m]} of the switching functions, the same for
   /// every contact (function m uses entry m % 3); > 0. The rows
@@ -292,7 +303,10 @@ class FesdMpcc final : public Mpcc {
   static constexpr int nt = detail::terminal_count<Ocp>();
   /// Local variables of the stage field G (below): z = (q, v, t, u, alpha).
   static constexpr int nz = 2 * nq + 1 + nu + nsw;
-  static constexpr int stage_size = 2 * ny + 3 * nsw;
+  /// Lifted closing weights per stage point (FesdOptions::lift_step_functions): nc or 0.
+  int lifted_count() const { return options_.lift_step_functions ? nc : 0; }
+  /// Variables per stage point: Y, K, alpha, lambda_p, lambda_n, then beta when lifted.
+  int stage_size() const { return 2 * ny + 3 * nsw + lifted_count(); }
   using Point = FesdPoint<ny, nsw, nu>;
   // The OCP's functions are differentiated by AD: each must be a member template in T taking T
   // everywhere, or the values and the derivatives would silently use different functions.
@@ -351,17 +365,19 @@ class FesdMpcc final : public Mpcc {
 
   // ---- layout -------------------------------------------------------------------------------
   int stages() const { return options_.stages; }
-  int element_size() const { return 1 + options_.stages * stage_size; }
+  int element_size() const { return 1 + options_.stages * stage_size(); }
   int interval_size() const { return 1 + nu + options_.finite_elements * element_size(); }
   int speed_index(int k) const { return k * interval_size(); }
   int control_index(int k) const { return speed_index(k) + 1; }
   int length_index(int k, int j) const { return control_index(k) + nu + j * element_size(); }
-  int stage_index(int k, int j, int r) const { return length_index(k, j) + 1 + r * stage_size; }
+  int stage_index(int k, int j, int r) const { return length_index(k, j) + 1 + r * stage_size(); }
   int state_index(int k, int j, int r) const { return stage_index(k, j, r); }
   int derivative_index(int k, int j, int r) const { return stage_index(k, j, r) + ny; }
   int alpha_index(int k, int j, int r) const { return stage_index(k, j, r) + 2 * ny; }
   int lambda_p_index(int k, int j, int r) const { return alpha_index(k, j, r) + nsw; }
   int lambda_n_index(int k, int j, int r) const { return alpha_index(k, j, r) + 2 * nsw; }
+  /// The first closing weight beta_0 (lifted only).
+  int closing_index(int k, int j, int r) const { return alpha_index(k, j, r) + 3 * nsw; }
   /// Index of the state at the start of element (k, j): the previous element's last stage, or -1
   /// for the very first element (the fixed initial state).
   int start_state_index(int k, int j) const {
@@ -472,6 +488,7 @@ class FesdMpcc final : public Mpcc {
           x.template segment<nsw>(alpha_index(k, j, r)) = a0;
           x.template segment<nsw>(lambda_p_index(k, j, r)) = c0.cwiseMax(0.0);
           x.template segment<nsw>(lambda_n_index(k, j, r)) = (-c0).cwiseMax(0.0);
+          set_closing_weights(x, k, j, r);
         }
       }
     }
@@ -541,6 +558,7 @@ class FesdMpcc final : public Mpcc {
           x.template segment<nsw>(alpha_index(k, j, r)) = a;
           x.template segment<nsw>(lambda_p_index(k, j, r)) = c.cwiseMax(0.0);
           x.template segment<nsw>(lambda_n_index(k, j, r)) = lambda_n;
+          set_closing_weights(x, k, j, r);
         }
     }
     x_out = x;
@@ -617,15 +635,16 @@ class FesdMpcc final : public Mpcc {
     const std::string el = "[" + std::to_string(k) + "," + std::to_string(j);
     if (rest == 0) return "h" + el + "]";
     rest -= 1;
-    const int r = rest / stage_size;
-    rest -= r * stage_size;
+    const int r = rest / stage_size();
+    rest -= r * stage_size();
     const std::string at = el + "," + std::to_string(r) + "]";
     if (rest < ny) return "Y" + at + "[" + std::to_string(rest) + "]";
     if (rest < 2 * ny) return "K" + at + "[" + std::to_string(rest - ny) + "]";
     rest -= 2 * ny;
     if (rest < nsw) return "alpha" + at + "[" + std::to_string(rest) + "]";
     if (rest < 2 * nsw) return "lambda_p" + at + "[" + std::to_string(rest - nsw) + "]";
-    return "lambda_n" + at + "[" + std::to_string(rest - 2 * nsw) + "]";
+    if (rest < 3 * nsw) return "lambda_n" + at + "[" + std::to_string(rest - 2 * nsw) + "]";
+    return "beta" + at + "[" + std::to_string(rest - 3 * nsw) + "]";
   }
   std::string constraint_name(int row) const override {
     if (row >= terminal_row_) return "terminal constraint " + std::to_string(row - terminal_row_);
@@ -645,7 +664,8 @@ class FesdMpcc final : public Mpcc {
     if (off < ny) return "stage dynamics" + at + "[" + std::to_string(off) + "]";
     if (off < 2 * ny) return "collocation" + at + "[" + std::to_string(off - ny) + "]";
     if (off < 2 * ny + nsw) return "switching function" + at + "[" + std::to_string(off - 2 * ny) + "]";
-    return "path constraint" + at + "[" + std::to_string(off - 2 * ny - nsw) + "]";
+    if (off < 2 * ny + nsw + np) return "path constraint" + at + "[" + std::to_string(off - 2 * ny - nsw) + "]";
+    return "step lifting" + at + "[" + std::to_string(off - 2 * ny - nsw - np) + "]";
   }
 
  private:
@@ -673,10 +693,21 @@ class FesdMpcc final : public Mpcc {
     const T& t = z[2 * nq];
     const VecT<T, nu> u = input_law<T>(t, VecT<T, nu>(z.template segment<nu>(2 * nq + 1)));
     const VecT<T, nsw> alpha = z.template segment<nsw>(2 * nq + 1 + nu);
-    const T theta = System::template ode_weight<T>(alpha);
+    T theta;
+    VecT<T, nq> force;
+    if (options_.lift_step_functions) {
+      // z's slot of alpha_i1 carries beta_i (field_local); alpha_i2's slot is not read.
+      VecT<T, (nc > 0 ? nc : 1)> closing;
+      for (int i = 0; i < nc; ++i) closing[i] = alpha[3 * i];
+      theta = System::template ode_weight_lifted<T>(closing);
+      force = system_.template generalised_force_lifted<T>(q, v, u, closing, alpha);
+    } else {
+      theta = System::template ode_weight<T>(alpha);
+      force = system_.template generalised_force<T>(q, v, u, alpha);
+    }
     VecT<T, ny> gz;
     gz.template head<nq>() = theta * v;
-    gz.template segment<nq>(nq) = system_.template generalised_force<T>(q, v, u, alpha);
+    gz.template segment<nq>(nq) = force;
     gz[System::clock_index] = theta;
     T running(0.0);
     if constexpr (detail::HasTimedRunningCost<Ocp, T, nx, nu>)
@@ -697,12 +728,24 @@ class FesdMpcc final : public Mpcc {
     z.template head<2 * nq + 1>() = x.template segment<2 * nq + 1>(state_index(k, j, r));
     z.template segment<nu>(2 * nq + 1) = x.template segment<nu>(control_index(k));
     z.template segment<nsw>(2 * nq + 1 + nu) = x.template segment<nsw>(alpha_index(k, j, r));
+    if (options_.lift_step_functions)
+      for (int i = 0; i < nc; ++i) z[2 * nq + 1 + nu + 3 * i] = x[closing_index(k, j, r) + i];
     return z;
   }
+  // The global variable of the field's local slot a. Lifted: the slot of alpha_i1 is beta_i; the
+  // field does not depend on alpha_i2's slot (its entries are structural zeros).
   int field_global(int k, int j, int r, int a) const {
     if (a < 2 * nq + 1) return state_index(k, j, r) + a;
     if (a < 2 * nq + 1 + nu) return control_index(k) + (a - 2 * nq - 1);
-    return alpha_index(k, j, r) + (a - 2 * nq - 1 - nu);
+    const int m = a - 2 * nq - 1 - nu;
+    if (options_.lift_step_functions && m % 3 == 0) return closing_index(k, j, r) + m / 3;
+    return alpha_index(k, j, r) + m;
+  }
+  // beta_i = (1 - alpha_i1)(1 - alpha_i2) at stage (k, j, r) of x (lifted only).
+  void set_closing_weights(Eigen::Ref<Eigen::VectorXd> x, int k, int j, int r) const {
+    if (!options_.lift_step_functions) return;
+    const int a = alpha_index(k, j, r);
+    for (int i = 0; i < nc; ++i) x[closing_index(k, j, r) + i] = (1.0 - x[a + 3 * i]) * (1.0 - x[a + 3 * i + 1]);
   }
   Eigen::Matrix<double, 2 * nq, 1> mass_local(const Eigen::Ref<const Eigen::VectorXd>& x, int k, int j, int r) const {
     Eigen::Matrix<double, 2 * nq, 1> w;
@@ -736,7 +779,8 @@ class FesdMpcc final : public Mpcc {
   }
 
   // ---- rows ----------------------------------------------------------------------------------
-  // Row blocks in this order: per stage [dynamics ny][collocation ny][switching nsw][path np];
+  // Row blocks in this order: per stage [dynamics ny][collocation ny][switching nsw][path np]
+  // [step lifting nc, lifted only];
   // per control interval, after its stages: [element sum 1][clock 0 or 1]; then [terminal nt].
   int stage_row(int k, int j, int r) const { return stage_row_[(k * options_.finite_elements + j) * options_.stages + r]; }
 
@@ -748,7 +792,7 @@ class FesdMpcc final : public Mpcc {
       for (int j = 0; j < options_.finite_elements; ++j)
         for (int r = 0; r < options_.stages; ++r) {
           stage_row_.push_back(row);
-          row += 2 * ny + nsw + np;
+          row += 2 * ny + nsw + np + lifted_count();
         }
       interval_row_.push_back(row);
       row += 1 + (has_clock_row(k) ? 1 : 0) + equilibration_count();
@@ -985,6 +1029,17 @@ class FesdMpcc final : public Mpcc {
                 put(prow + i, b < ny ? state_index(k, j, r) + b : control_index(k) + (b - ny), p[i].derivatives()[b]);
             }
           }
+          // step lifting: beta_i - (1 - alpha_i1)(1 - alpha_i2)
+          if (options_.lift_step_functions) {
+            const int lrow = row + 2 * ny + nsw + np, a = alpha_index(k, j, r), b = closing_index(k, j, r);
+            for (int i = 0; i < nc; ++i) {
+              const double open1 = 1.0 - x[a + 3 * i], open2 = 1.0 - x[a + 3 * i + 1];
+              if (g) (*g)[lrow + i] = x[b + i] - open1 * open2;
+              put(lrow + i, b + i, 1.0);
+              put(lrow + i, a + 3 * i, open2);
+              put(lrow + i, a + 3 * i + 1, open1);
+            }
+          }
         }
       }
       // sum of element lengths, clock
@@ -1108,6 +1163,11 @@ class FesdMpcc final : public Mpcc {
             }
             for (int a = 0; a < npw; ++a)
               for (int b = 0; b <= a; ++b) put(global(a), global(b), hl(a, b));
+          }
+          // step lifting: d2/dalpha_i1 dalpha_i2 of -(1 - alpha_i1)(1 - alpha_i2) = -1
+          if (options_.lift_step_functions) {
+            const int lrow = row + 2 * ny + nsw + np, a = alpha_index(k, j, r);
+            for (int i = 0; i < nc; ++i) put(a + 3 * i + 1, a + 3 * i, values ? -mu[lrow + i] : 0.0);
           }
         }
       }

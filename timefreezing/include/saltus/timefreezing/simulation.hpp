@@ -9,7 +9,10 @@
 #include <saltus/hybrid/vocabulary/trajectory.hpp>
 #include <saltus/timefreezing/mpcc_solver.hpp>
 
+#include <Eigen/LU>
+
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <string>
@@ -51,6 +54,7 @@ struct TimeFreezingSimulation {
   std::vector<double> element_lengths;        ///< h of every element, in order
   std::vector<FrozenPhase<nx>> frozen_phases;
   std::vector<SwitchPoint> switch_points;
+  HybridTrajectory<S> trajectory;  ///< in physical time, recovered directly (recover_trajectory)
   MpccSolution solution;  ///< the homotopy's result: converged, complementarity, steps, times
   bool converged() const { return solution.converged; }
   /// The state (q, v, t, L) at the end of the horizon.
@@ -191,6 +195,250 @@ ImportedReference<S> recover_reference(const std::vector<FesdPoint<ny, nsw, nu>>
   return ref;
 }
 
+/// Tolerances of recover_trajectory.
+struct TrajectoryRecoveryOptions {
+  /// A contact is closed at a point where its gap is <= gap_tolerance [m] and its normal velocity
+  /// |J_n v| <= velocity_tolerance [m/s] (a point that reaches the surface at a negative J_n v, the
+  /// end of a flight, is not closed); a closed contact with friction slips where |J_t v| >
+  /// velocity_tolerance (with that sign) and sticks where not. Both > 0. Sized above the
+  /// discretisation's residual drift (a frozen phase's gap of -1.6e-5 without the contact-side
+  /// selection, fesd.hpp) and below the motions' own scales.
+  double gap_tolerance = 1e-4;
+  double velocity_tolerance = 1e-4;
+  /// Elements whose clock advances by at most frozen_tolerance * h are frozen (as recover_reference).
+  double frozen_tolerance = 1e-7;
+};
+
+/// Recovers the physical-time HybridTrajectory of a discrete time-freezing solution (time-freezing
+/// Theorem 5), without re-simulating it: the frozen intervals are removed and every run of frozen
+/// elements becomes an impact event; the contact modes are read off the states; a mode change
+/// between two flowing elements becomes an event without impact. Compare polish() (resimulation.hpp),
+/// which re-simulates recover_reference's samples with the event-driven simulator instead.
+///
+/// - Modes: per flowing element and contact, from the switching functions at the element's last
+///   interior stage point (c_r < 1: Radau's end point is the next element's start and lies on the
+///   switching surface when a switch is there; n_s = 1 has only the end point), with the
+///   tolerances of TrajectoryRecoveryOptions. A frictionless contact (or mu = 0) that is closed is
+///   ContactState::slip(0), as the simulator stores it. A switch inside an element (the grid did
+///   not locate it, e.g. a slip-stick with velocity_switch_detection = false) appears at the
+///   element boundary next to it.
+/// - Segments: one per run of flowing elements with the same mode. Dense output: per element the
+///   polynomial through its start point and its n_s stage points, in physical time (degree n_s;
+///   exact where the clock runs at a constant rate: Theta = 1). Where the stage clocks are not
+///   strictly increasing (Radau's interior stages under a nearly frozen clock) the piece is the
+///   straight line between the element's end points.
+/// - Impact events (runs of frozen elements): at the clock time of the run's start, x- its start
+///   state and x+ its end state, mode_before the previous segment's mode and mode_after the next
+///   one's; one transition with impact = true and a Touchdown guard for every contact that was
+///   open before and approaching (gap <= gap_tolerance, J_n v < -velocity_tolerance at x-): both
+///   corners of a flat landing. impulse and impulse_mode are left at their defaults (not
+///   recovered). When the run's clock advanced (FrozenPhase::clock_advance: its last element went
+///   on past the end of the impact), x+ is the state that much later and the next segment's first
+///   piece holds x+ constant over the advance: the trajectory is off by the motion over
+///   clock_advance there.
+/// - Mode changes without impact: x- = x+ = the boundary state; guards per contact: Touchdown
+///   (open -> closed without a frozen run: a touchdown at zero normal velocity), Release (closed ->
+///   open), Stop (slip -> stick), SlipOnset (stick -> slip, or a reversal of the slip direction).
+/// - The input law u(t) is recover_reference's (ImportedReference::input: linear between the
+///   samples, right-continuous at control-interval boundaries), whatever x and the mode.
+/// Throws InvalidArgument as recover_reference does, and for tolerances that are not > 0.
+template <Scene S, int ny, int nsw, int nu>
+HybridTrajectory<S> recover_trajectory(const TimeFreezingSystem<S>& system,
+                                       const std::vector<FesdPoint<ny, nsw, nu>>& points, int stages,
+                                       const TrajectoryRecoveryOptions& options = {}) {
+  constexpr int nq = S::nq, nx = 2 * S::nq, nc = S::nc;
+  using Point = FesdPoint<ny, nsw, nu>;
+  using ModeT = Mode<nc>;
+  using State = VecT<double, nx>;
+  static_assert(ny == nx + 2 && nsw == 3 * nc, "recover_trajectory: points of another scene");
+  SALTUS_REQUIRE(options.gap_tolerance > 0.0 && options.velocity_tolerance > 0.0 && options.frozen_tolerance > 0.0,
+                 "recover_trajectory: the tolerances must be > 0, got gap ", options.gap_tolerance, ", velocity ",
+                 options.velocity_tolerance, ", frozen ", options.frozen_tolerance);
+  const ImportedReference<S> samples = recover_reference<S>(points, stages, options.frozen_tolerance);
+  const int elements = static_cast<int>((points.size() - 1) / static_cast<std::size_t>(stages));
+  auto start_of = [&](int e) -> const Point& { return points[static_cast<std::size_t>(e == 0 ? 0 : e * stages)]; };
+  auto stage_of = [&](int e, int r) -> const Point& { return points[static_cast<std::size_t>(1 + e * stages + r)]; };
+  auto end_of = [&](int e) -> const Point& { return stage_of(e, stages - 1); };
+  auto state = [](const Point& p) { return State(p.y.template head<nx>()); };
+  auto clock = [](const Point& p) { return p.y[nx]; };
+  auto switching = [&](const Point& p) {
+    return system.template switching_functions<double>(Vec<nq>(p.y.template head<nq>()),
+                                                       Vec<nq>(p.y.template segment<nq>(nq)));
+  };
+  const double gap_tol = options.gap_tolerance, vel_tol = options.velocity_tolerance;
+  auto frictional = [&](int i) { return system.has_friction(i) && system.scene().contact(i).mu > 0.0; };
+  // One contact's state at one point: 0 open, 1 stick, 2 slip+, 3 slip-, 4 closed frictionless.
+  auto contact_class = [&](const Vec<nsw>& c, int i) {
+    if (!(c[3 * i] <= gap_tol && std::abs(c[3 * i + 1]) <= vel_tol)) return 0;  // open, or approaching
+    if (!frictional(i)) return 4;
+    const double vt = c[3 * i + 2];
+    return std::abs(vt) <= vel_tol ? 1 : (vt > 0.0 ? 2 : 3);
+  };
+  auto to_state = [](int cls) {
+    switch (cls) {
+      case 1: return ContactState::stick();
+      case 2: return ContactState::slip_planar(1);
+      case 3: return ContactState::slip_planar(-1);
+      case 4: return ContactState::slip(Eigen::Vector2d::Zero());
+      default: return ContactState::open();
+    }
+  };
+  // The element's mode from its interior stage points (all but the end point, which is the next
+  // element's start and sits on the switching surface when the switch is there); n_s = 1 has only
+  // the end point. If they disagree (a switch inside the element) the last interior one decides.
+  auto mode_of_element = [&](int e) {
+    ModeT m;
+    const int interior = stages >= 2 ? stages - 1 : 1;
+    std::array<Vec<nsw>, 3> c;  // n_s <= 3
+    for (int r = 0; r < interior; ++r) c[static_cast<std::size_t>(r)] = switching(stage_of(e, r));
+    for (int i = 0; i < nc; ++i) m[i] = to_state(contact_class(c[static_cast<std::size_t>(interior - 1)], i));
+    return m;
+  };
+  auto mode_at = [&](const Point& p) {
+    ModeT m;
+    const Vec<nsw> c = switching(p);
+    for (int i = 0; i < nc; ++i) m[i] = to_state(contact_class(c, i));
+    return m;
+  };
+  auto frozen = [&](int e) { return detail::element_frozen(points, stages, e, options.frozen_tolerance); };
+  // The piece of flowing element e in physical time.
+  auto piece_of = [&](int e) {
+    PolynomialPiece<nx> p;
+    const int n = stages + 1;
+    std::array<double, 4> t{};
+    std::array<State, 4> x;
+    t[0] = clock(start_of(e));
+    x[0] = state(start_of(e));
+    for (int r = 0; r < stages; ++r) {
+      t[static_cast<std::size_t>(r + 1)] = clock(stage_of(e, r));
+      x[static_cast<std::size_t>(r + 1)] = state(stage_of(e, r));
+    }
+    p.t0 = p.t_ref = t[0];
+    p.t1 = t[static_cast<std::size_t>(stages)];
+    p.h = p.t1 - p.t0;
+    bool increasing = p.h > 0.0;
+    for (int r = 1; r < n && increasing; ++r)
+      increasing = t[static_cast<std::size_t>(r)] - t[static_cast<std::size_t>(r - 1)] > 1e-12 * (1.0 + std::abs(p.t0));
+    if (!increasing) {
+      p.degree = 1;
+      p.c.col(0) = x[0];
+      p.c.col(1) = x[static_cast<std::size_t>(stages)] - x[0];
+      if (!(p.h > 0.0)) p.h = 1.0;  // a zero-length piece: only its value at t0 is ever read
+      return p;
+    }
+    // Interpolation in theta = (t - t0) / h at the n nodes: the Vandermonde system, n <= 4.
+    Eigen::Matrix4d v = Eigen::Matrix4d::Identity();
+    Eigen::Matrix<double, 4, nx> rhs = Eigen::Matrix<double, 4, nx>::Zero();
+    for (int a = 0; a < n; ++a) {
+      const double th = (t[static_cast<std::size_t>(a)] - p.t0) / p.h;
+      double pw = 1.0;
+      for (int b = 0; b < n; ++b, pw *= th) v(a, b) = pw;
+      rhs.row(a) = x[static_cast<std::size_t>(a)].transpose();
+    }
+    const Eigen::Matrix<double, 4, nx> coef = v.topLeftCorner(n, n).fullPivLu().solve(rhs.topRows(n)).eval().topRows(n);
+    p.degree = stages;
+    for (int b = 0; b < n; ++b) p.c.col(b) = coef.row(b).transpose();
+    return p;
+  };
+
+  HybridTrajectory<S> traj;
+  traj.input = [samples](double t, const State&, const ModeT&) { return samples.input(t); };
+  Segment<S> seg;
+  seg.t_begin = clock(points[0]);
+  seg.t_end = seg.t_begin;
+  bool seg_has_mode = false;
+  auto close_segment = [&](double t_end) {
+    seg.t_end = t_end;
+    traj.segments.push_back(seg);
+    seg = Segment<S>{};
+    seg.t_begin = t_end;
+    seg.t_end = t_end;
+    seg_has_mode = false;
+  };
+  auto add_event = [&](double t, const State& xm, const State& xp, const ModeT& before, const ModeT& after,
+                       std::vector<Guard> guards, bool impact) {
+    Event<S> ev;
+    ev.t = t;
+    ev.x_minus = xm;
+    ev.x_plus = xp;
+    ev.mode_before = before;
+    ev.mode_after = after;
+    Transition<S> tr;
+    tr.guards = std::move(guards);
+    tr.mode_before = before;
+    tr.mode_after = after;
+    tr.x_before = xm;
+    tr.x_after = xp;
+    tr.impact = impact;
+    ev.transitions.push_back(std::move(tr));
+    traj.events.push_back(std::move(ev));
+  };
+  auto changes = [&](const ModeT& before, const ModeT& after) {
+    std::vector<Guard> guards;
+    for (int i = 0; i < nc; ++i) {
+      if (before[i] == after[i]) continue;
+      if (!before[i].closed()) guards.push_back({i, GuardKind::Touchdown});
+      else if (!after[i].closed()) guards.push_back({i, GuardKind::Release});
+      else if (after[i].mode == ContactMode::Stick) guards.push_back({i, GuardKind::Stop});
+      else guards.push_back({i, GuardKind::SlipOnset});
+    }
+    return guards;
+  };
+  ModeT current = mode_at(points[0]);
+  for (int e = 0; e < elements;) {
+    if (frozen(e)) {
+      int f = e;
+      while (f + 1 < elements && frozen(f + 1)) ++f;
+      const Point& minus = start_of(e);
+      const Point& plus = end_of(f);
+      const double t = clock(minus);
+      const ModeT after = f + 1 < elements ? mode_of_element(f + 1) : mode_at(plus);
+      const Vec<nsw> c = switching(minus);
+      std::vector<Guard> guards;
+      for (int i = 0; i < nc; ++i)
+        if (!current[i].closed() && c[3 * i] <= gap_tol && c[3 * i + 1] < -vel_tol) guards.push_back({i, GuardKind::Touchdown});
+      if (!seg_has_mode) seg.mode = current;
+      close_segment(t);
+      add_event(t, state(minus), state(plus), current, after, std::move(guards), true);
+      current = after;
+      seg.mode = after;
+      seg_has_mode = true;
+      const double advance = clock(plus) - t;
+      if (advance > 0.0) {  // the run's clock advanced: hold x+ over it (see the docstring)
+        PolynomialPiece<nx> hold;
+        hold.t0 = hold.t_ref = t;
+        hold.t1 = clock(plus);
+        hold.h = advance;
+        hold.degree = 0;
+        hold.c.col(0) = state(plus);
+        seg.x.append(hold);
+      }
+      e = f + 1;
+      continue;
+    }
+    const ModeT m = mode_of_element(e);
+    if (!seg_has_mode) {  // the first element (after an impact the next element's mode is set)
+      seg.mode = m;
+      seg_has_mode = true;
+    } else if (!(m == seg.mode)) {
+      const double t = clock(start_of(e));
+      close_segment(t);
+      add_event(t, state(start_of(e)), state(start_of(e)), current, m, changes(current, m), false);
+      seg.mode = m;
+      seg_has_mode = true;
+    }
+    current = m;
+    seg.x.append(piece_of(e));
+    ++e;
+  }
+  if (!seg_has_mode) seg.mode = current;
+  seg.t_end = std::max(seg.t_begin, clock(points.back()));
+  traj.segments.push_back(seg);
+  traj.set_final_state(state(points.back()));
+  traj.status = SimulationStatus::Completed;
+  return traj;
+}
+
 /// How simulate_time_freezing splits the horizon into MPCCs.
 enum class SimulationSplit {
   PerControlInterval,  ///< one MPCC per control interval, each from the previous one's end (NOSNOC's integrator)
@@ -273,6 +521,7 @@ TimeFreezingSimulation<S> simulate_time_freezing(const TimeFreezingSystem<S>& sy
   if (out.solution.converged) out.solution.message = "every homotopy converged";
   detail::read_events<FesdMpcc<S>::ny, FesdMpcc<S>::nsw, S::nu, 2 * S::nq>(out.points, fesd.stages, out.element_lengths,
                                                                           out.frozen_phases, out.switch_points);
+  out.trajectory = recover_trajectory<S>(system, out.points, fesd.stages);
   return out;
 }
 
@@ -287,6 +536,7 @@ struct TimeFreezingOcpResult {
   std::vector<FrozenPhase<nx>> frozen_phases;  ///< the impacts
   std::vector<SwitchPoint> switch_points;      ///< touchdowns, lift-offs, slip-stick
   ImportedReference<S> reference;              ///< recovered in physical time (recover_reference)
+  HybridTrajectory<S> trajectory;              ///< recovered in physical time (recover_trajectory)
   /// solve_time_freezing_ocp_by_continuation: one relaxed NLP per continuation stage, in order
   /// (their iterations and seconds are included in solution.ipopt_iterations and seconds).
   std::vector<MpccHomotopyStep> continuation_steps;
@@ -305,6 +555,7 @@ TimeFreezingOcpResult<S> solve_and_read(const Problem& problem, const MpccStart&
   read_events<FesdMpcc<S>::ny, FesdMpcc<S>::nsw, S::nu, 2 * S::nq>(out.points, fesd.stages, out.element_lengths,
                                                                   out.frozen_phases, out.switch_points);
   out.reference = recover_reference<S>(out.points, fesd.stages);
+  out.trajectory = recover_trajectory<S>(problem.system(), out.points, fesd.stages);
   return out;
 }
 }  // namespace detail

@@ -130,7 +130,35 @@ class TimeFreezingSystem {
   template <class T>
   VecT<T, nq> generalised_force(const VecT<T, nq>& q, const VecT<T, nq>& v, const VecT<T, nu>& u,
                                 const VecT<T, n_switch>& alpha) const {
-    const T theta = ode_weight<T>(alpha);
+    VecT<T, (nc > 0 ? nc : 1)> closing;
+    for (int i = 0; i < nc; ++i) closing[i] = T(T(1.0 - alpha[3 * i]) * T(1.0 - alpha[3 * i + 1]));
+    return force_from_weights<T>(q, v, u, ode_weight<T>(alpha), closing, alpha);
+  }
+
+  /// The LIFTED form of the step DCS (FesdOptions::lift_step_functions): contact i's closing
+  /// weight beta_i = (1 - alpha_i1)(1 - alpha_i2) = theta_i^+ + theta_i^- is a variable of its own
+  /// (size nc), so that theta_i^free = 1 - beta_i, theta_i^+ = beta_i alpha_i3, theta_i^- =
+  /// beta_i (1 - alpha_i3): every weight is at most bilinear (the unlifted theta_i^+ is trilinear,
+  /// and Theta of nc contacts has degree 2 nc). Equal to ode_weight / generalised_force wherever
+  /// beta_i = (1 - alpha_i1)(1 - alpha_i2). Theta = prod_i (1 - beta_i).
+  template <class T>
+  static T ode_weight_lifted(const VecT<T, (nc > 0 ? nc : 1)>& closing) {
+    T theta(1.0);
+    for (int i = 0; i < nc; ++i) theta = T(theta * T(1.0 - closing[i]));
+    return theta;
+  }
+  /// M(q) v' of the lifted form: only alpha_i3 of alpha (size 3 nc) is read; closing has size nc.
+  template <class T>
+  VecT<T, nq> generalised_force_lifted(const VecT<T, nq>& q, const VecT<T, nq>& v, const VecT<T, nu>& u,
+                                       const VecT<T, (nc > 0 ? nc : 1)>& closing, const VecT<T, n_switch>& alpha) const {
+    return force_from_weights<T>(q, v, u, ode_weight_lifted<T>(closing), closing, alpha);
+  }
+
+ private:
+  // Theta (S u - h) + a_n sum_i beta_i [alpha_i3 (J_n - mu J_t) + (1 - alpha_i3)(J_n + mu J_t)].
+  template <class T>
+  VecT<T, nq> force_from_weights(const VecT<T, nq>& q, const VecT<T, nq>& v, const VecT<T, nu>& u, const T& theta,
+                                 const VecT<T, (nc > 0 ? nc : 1)>& closing, const VecT<T, n_switch>& alpha) const {
     VecT<T, nq> f = -scene_.template bias<T>(q, v);
     if constexpr (nu > 0) f += scene_input_matrix<S, T>(scene_, q) * u;
     f *= theta;
@@ -139,9 +167,8 @@ class TimeFreezingSystem {
       VecT<D, nq> qd;
       for (int k = 0; k < nq; ++k) qd[k] = ad::seed<nq>(q[k], k);
       for (int i = 0; i < nc; ++i) {
-        const T closing = T(T(1.0 - alpha[3 * i]) * T(1.0 - alpha[3 * i + 1]));
-        const T plus = T(closing * alpha[3 * i + 2]);
-        const T minus = T(closing * T(1.0 - alpha[3 * i + 2]));
+        const T plus = T(closing[i] * alpha[3 * i + 2]);
+        const T minus = T(closing[i] * T(1.0 - alpha[3 * i + 2]));
         const VecT<T, nq> jn = scene_.template gap<D>(i, qd).derivatives();
         f += T(a_n_ * T(plus + minus)) * jn;
         if (planar_[i]) {
@@ -153,7 +180,6 @@ class TimeFreezingSystem {
     return f;
   }
 
- private:
   S scene_;
   double a_n_;
   std::array<double, (nc > 0 ? nc : 1)> mu_{};
