@@ -9,6 +9,7 @@
 
 #include <saltus/hybrid/reference/resimulation.hpp>
 #include <saltus/hybrid/simulation/simulator.hpp>
+#include <saltus/sensitivity/jump_gain.hpp>
 #include <saltus/timefreezing/fesd.hpp>
 #include <saltus/timefreezing/mpcc_solver.hpp>
 #include <saltus/timefreezing/simulation.hpp>
@@ -713,6 +714,30 @@ TEST(TimeFreezingSimulation, FrictionalLandingStopsAtTheClosedForm) {
   EXPECT_EQ(traj.events[1].guards(), (std::vector<Guard>{{0, GuardKind::Stop}}));
   EXPECT_NEAR(traj.events[1].t, 1.5, 1e-6);
   EXPECT_EQ(traj.segments.back().mode[0], ContactState::stick());
+  // The recovered reference is analysed as it is: the jump gains of its two events (the impact's
+  // jump map, with the recovered impulse mode, reproduces x+ to jump_map_tolerance 1e-9) against
+  // those of the event-driven simulation of the same motion (the impact's G_z, dt_dz; the stop's).
+  ASSERT_EQ(traj.events[0].transitions.size(), 1u);
+  EXPECT_EQ(traj.events[0].transitions[0].impulse_mode[0], (ImpulseMode{ImpulseRole::Slip, Eigen::Vector2d(1.0, 0.0)}));
+  const PointMass scene = Case::system().scene();
+  const std::vector<JumpGain<PointMass>> recovered = jump_gains(scene, traj);
+  SimulationOptions options;
+  options.integrator.relative_tolerance = 1e-12;
+  options.integrator.absolute_tolerance = 1e-13;
+  Simulator<PointMass> simulator(scene, options);
+  const auto simulated = simulator.run(Vec<4>(Case::q0()[0], Case::q0()[1], Case::v0()[0], Case::v0()[1]), 0.0, 2.0,
+                                       zero_input<PointMass>());
+  const std::vector<JumpGain<PointMass>> exact = jump_gains(scene, simulated);
+  ASSERT_EQ(recovered.size(), 2u);
+  ASSERT_EQ(exact.size(), 2u);
+  for (int k = 0; k < 2; ++k) {
+    const double dz = (recovered[k].G_z - exact[k].G_z).cwiseAbs().maxCoeff();
+    const double dt = (recovered[k].dt_dz - exact[k].dt_dz).cwiseAbs().maxCoeff();
+    std::cout << "event " << k << ": jump gain G_z from the recovered trajectory " << dz << " from the simulated one's, dt_dz "
+              << dt << "\n";
+    EXPECT_LT(dz, 1e-8) << k;  // measured 2.7e-11 (the impact), 0 (the stop)
+    EXPECT_LT(dt, 1e-8) << k;
+  }
 }
 
 // Two contacts: the plank-box's box lowered flat onto the plank under a constant input (both

@@ -231,8 +231,11 @@ struct TrajectoryRecoveryOptions {
 ///   state and x+ its end state, mode_before the previous segment's mode and mode_after the next
 ///   one's; one transition with impact = true and a Touchdown guard for every contact that was
 ///   open before and approaching (gap <= gap_tolerance, J_n v < -velocity_tolerance at x-): both
-///   corners of a flat landing. impulse and impulse_mode are left at their defaults (not
-///   recovered). When the run's clock advanced (FrozenPhase::clock_advance: its last element went
+///   corners of a flat landing. The transition's impulse_mode names the contacts whose closing
+///   weight (1 - alpha_gap)(1 - alpha_vn) reached 1/2 in the run, with the impact solver's roles
+///   (stick: frictionless, or at tangential rest after the impact; slip: along the sign of J_t v
+///   at x+), so that jump_gains() (sensitivity/jump_gain.hpp) can differentiate its jump map; the
+///   impulse itself is not recovered (left zero). When the run's clock advanced (FrozenPhase::clock_advance: its last element went
 ///   on past the end of the impact), x+ is the state that much later and the next segment's first
 ///   piece holds x+ constant over the advance: the trajectory is off by the motion over
 ///   clock_advance there.
@@ -397,9 +400,27 @@ HybridTrajectory<S> recover_trajectory(const TimeFreezingSystem<S>& system,
       std::vector<Guard> guards;
       for (int i = 0; i < nc; ++i)
         if (!current[i].closed() && c[3 * i] <= gap_tol && c[3 * i + 1] < -vel_tol) guards.push_back({i, GuardKind::Touchdown});
+      // Who took an impulse: a contact whose closing weight (1 - alpha_gap)(1 - alpha_vn) reached
+      // 1/2 at a stage point of the run; how: as the impact solver labels it (stick for a
+      // frictionless contact or a tangential rest after the impact, else slip along J_t v+).
+      ImpactMode<nc> impulse;
+      const Vec<nsw> c_plus = switching(plus);
+      for (int i = 0; i < nc; ++i) {
+        double closing = 0.0;
+        for (int g = e; g <= f; ++g)
+          for (int r = 0; r < stages; ++r) {
+            const auto& a = stage_of(g, r).alpha;
+            closing = std::max(closing, (1.0 - a[3 * i]) * (1.0 - a[3 * i + 1]));
+          }
+        if (closing < 0.5) continue;
+        const double vt = c_plus[3 * i + 2];
+        if (!frictional(i) || std::abs(vt) <= vel_tol) impulse[i].role = ImpulseRole::Stick;
+        else impulse[i] = ImpulseMode{ImpulseRole::Slip, Eigen::Vector2d(vt > 0.0 ? 1.0 : -1.0, 0.0)};
+      }
       if (!seg_has_mode) seg.mode = current;
       close_segment(t);
       add_event(t, state(minus), state(plus), current, after, std::move(guards), true);
+      traj.events.back().transitions.back().impulse_mode = impulse;
       current = after;
       seg.mode = after;
       seg_has_mode = true;
