@@ -242,6 +242,11 @@ struct TrajectoryRecoveryOptions {
 /// - Mode changes without impact: x- = x+ = the boundary state; guards per contact: Touchdown
 ///   (open -> closed without a frozen run: a touchdown at zero normal velocity), Release (closed ->
 ///   open), Stop (slip -> stick), SlipOnset (stick -> slip, or a reversal of the slip direction).
+///   A touchdown at J_n v(x-) < 0 that is not a frozen run is an impact the discretisation
+///   absorbed into a flowing element (the clock ran through it: an unconverged or too coarse
+///   solution, e.g. the plank-box flat landing's at complementarity 8.4e-7, bench/README.md); it is
+///   listed as what the solution shows, a mode change with x+ = x-, and its jump gain is not
+///   that of an impact.
 /// - The input law u(t) is recover_reference's (ImportedReference::input: linear between the
 ///   samples, right-continuous at control-interval boundaries), whatever x and the mode.
 /// Throws InvalidArgument as recover_reference does, and for tolerances that are not > 0.
@@ -329,16 +334,16 @@ HybridTrajectory<S> recover_trajectory(const TimeFreezingSystem<S>& system,
       if (!(p.h > 0.0)) p.h = 1.0;  // a zero-length piece: only its value at t0 is ever read
       return p;
     }
-    // Interpolation in theta = (t - t0) / h at the n nodes: the Vandermonde system, n <= 4.
-    Eigen::Matrix4d v = Eigen::Matrix4d::Identity();
-    Eigen::Matrix<double, 4, nx> rhs = Eigen::Matrix<double, 4, nx>::Zero();
+    // Interpolation in theta = (t - t0) / h at the n nodes: the Vandermonde system, n <= 4 (not a
+    // hot path: once per element of a recovered solution).
+    Eigen::MatrixXd v(n, n), rhs(n, nx);
     for (int a = 0; a < n; ++a) {
       const double th = (t[static_cast<std::size_t>(a)] - p.t0) / p.h;
       double pw = 1.0;
       for (int b = 0; b < n; ++b, pw *= th) v(a, b) = pw;
       rhs.row(a) = x[static_cast<std::size_t>(a)].transpose();
     }
-    const Eigen::Matrix<double, 4, nx> coef = v.topLeftCorner(n, n).fullPivLu().solve(rhs.topRows(n)).eval().topRows(n);
+    const Eigen::MatrixXd coef = v.fullPivLu().solve(rhs);
     p.degree = stages;
     for (int b = 0; b < n; ++b) p.c.col(b) = coef.row(b).transpose();
     return p;
