@@ -331,15 +331,15 @@ int main(int argc, char** argv) {
       for (const char* c = argv[++i]; *c;) {
         char* end = nullptr;
         const long n = std::strtol(c, &end, 10);
-        if (end == c || n < 1 || n > 64) {
-          std::fprintf(stderr, "--finite-elements: a comma-separated list of counts in [1, 64]\n");
+        if (end == c || n < 1 || n > 128) {
+          std::fprintf(stderr, "--finite-elements: a comma-separated list of counts in [1, 128]\n");
           return 2;
         }
         element_counts.push_back(static_cast<int>(n));
         c = *end == ',' ? end + 1 : end;
       }
       if (element_counts.empty()) {
-        std::fprintf(stderr, "--finite-elements: a comma-separated list of counts in [1, 64]\n");
+        std::fprintf(stderr, "--finite-elements: a comma-separated list of counts in [1, 128]\n");
         return 2;
       }
     } else {

@@ -60,6 +60,10 @@ std::vector<Variant> variants() {
        "the default's first 4 smoothing steps (1e-2 .. 1e-5), then Scholtes with the contact-side selection 1e-2 from "
        "1e-6",
        0.0, 4, 1e-6, false, 0.0, MpccSolverOptions::Relaxation::Scholtes, 1e-2},
+      {"smoothing-then-side",
+       "the default's first 3 smoothing steps (1e-2 .. 1e-4), then the same smoothing with the contact-side "
+       "selection 1e-2 from 1e-5 (alpha_gap is free in the touchdown element: the impact ran the clock)",
+       0.0, 3, 1e-5, false, 0.0, MpccSolverOptions::Relaxation::Smoothing, 1e-2},
   };
 }
 
