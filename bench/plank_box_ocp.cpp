@@ -8,6 +8,9 @@
 // (smoothing from sigma_0 = 1e-2, kappa = 0.1, 10 steps of at most 1500 Ipopt iterations); one
 // progress line per Ipopt solve on stderr. Columns as bench/hopper_ocp.cpp's; `flat` is the largest
 // |theta - phi| over the stage points [rad]. --max-steps and --ipopt: ocp_bench_support.hpp.
+// The JSON's "landing": the first event of the recovered trajectory (recover_trajectory) with a
+// touchdown guard: {t, impact (false: the discretisation absorbed the impact into a flowing
+// element), guards (2: both corners at once), box_vz_before [m/s]}; null without one.
 #include "scenes/plank_box_landing.hpp"
 
 #include <saltus/timefreezing/simulation.hpp>
@@ -111,6 +114,19 @@ int main(int argc, char** argv) {
       r = solve_time_freezing_ocp(Ocp::system(), ocp, Ocp::q0(), Ocp::v0(), grid, s);
     }
     const Ocp::Feasibility f = Ocp::feasibility(r.points);
+    // The landing as the recovered trajectory reads it (recover_trajectory): one impact whose
+    // guards are both corners' touchdowns, or a touchdown the discretisation absorbed into a
+    // flowing element (impact false: the clock ran through it).
+    nlohmann::ordered_json landing = nullptr;
+    const HybridTrajectory<scenes::PlankBox> traj = recover_trajectory(Ocp::system(), r.points, grid.stages);
+    for (const auto& ev : traj.events) {
+      bool touchdown = false;
+      for (const Guard& g : ev.guards()) touchdown = touchdown || g.kind == GuardKind::Touchdown;
+      if (!touchdown) continue;
+      landing = {{"t", ev.t}, {"impact", ev.impact()}, {"guards", ev.guards().size()},
+                 {"box_vz_before", ev.x_minus[5]}};
+      break;
+    }
     const std::string status = r.solution.steps.empty() ? "" : r.solution.steps.back().ipopt_status;
     std::vector<int> per_step;
     for (const MpccHomotopyStep& st : r.solution.steps) per_step.push_back(st.ipopt_iterations);
@@ -120,7 +136,7 @@ int main(int argc, char** argv) {
                       {"iterations_per_solve", per_step}, {"complementarity", r.solution.complementarity},
                       {"flatness", f.path_violation}, {"target_error", f.target_error},
                       {"objective", r.solution.objective}, {"status", status}, {"message", r.solution.message},
-                      {"worst_pair", r.solution.worst_pair}, {"seconds", r.solution.seconds}});
+                      {"worst_pair", r.solution.worst_pair}, {"landing", landing}, {"seconds", r.solution.seconds}});
     else
       std::printf("%-24s %4s %5zu %6d %9.2e %9.2e %9.2e %11.4e %-28s %8.1f\n", v.name, r.converged() ? "yes" : "no",
                   per_step.size(), r.solution.ipopt_iterations, r.solution.complementarity, f.path_violation,

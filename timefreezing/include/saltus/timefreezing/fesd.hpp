@@ -152,9 +152,9 @@ struct FesdOptions {
   /// pss_lift_step_functions): each contact's closing weight beta_i = (1 - alpha_i1)(1 - alpha_i2)
   /// becomes a variable per stage point with the row beta_i - (1 - alpha_i1)(1 - alpha_i2) = 0
   /// ("step lifting"), and the stage dynamics use beta: bilinear weights instead of trilinear ones
-  /// (Theta of nc contacts: degree nc in beta instead of 2 nc in alpha). nc more variables and rows per stage point; beta has no bounds (the
-  /// row fixes it in [0, 1]; bounds would duplicate alpha's active bounds). Same solutions as the
-  /// plain form. Measured (bench/README.md, "Lifted step functions"): simulations -5 % .. +14 %
+  /// (Theta of nc contacts: degree nc in beta instead of 2 nc in alpha). nc more variables and
+  /// rows per stage point; beta has no bounds (the row fixes it in [0, 1]; bounds would duplicate
+  /// alpha's active bounds). Same solutions as the plain form. Measured (bench/README.md, "Lifted step functions"): simulations -5 % .. +14 %
   /// Ipopt iterations with the same solutions; the hopper's homotopy stops at complementarity 8.7e-4
   /// (plain 2.4e-4), the plank-box's at 2.4e-4 (plain 8.4e-7). Hence off by default (NOSNOC: on).
   bool lift_step_functions = false;

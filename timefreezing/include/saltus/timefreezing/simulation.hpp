@@ -235,10 +235,11 @@ struct TrajectoryRecoveryOptions {
 ///   weight (1 - alpha_gap)(1 - alpha_vn) reached 1/2 in the run, with the impact solver's roles
 ///   (stick: frictionless, or at tangential rest after the impact; slip: along the sign of J_t v
 ///   at x+), so that jump_gains() (sensitivity/jump_gain.hpp) can differentiate its jump map; the
-///   impulse itself is not recovered (left zero). When the run's clock advanced (FrozenPhase::clock_advance: its last element went
-///   on past the end of the impact), x+ is the state that much later and the next segment's first
-///   piece holds x+ constant over the advance: the trajectory is off by the motion over
-///   clock_advance there.
+///   impulse itself is not recovered (left zero). A run without an approaching open contact has no
+///   guard (Transition::guards empty). When the run's clock advanced (FrozenPhase::clock_advance:
+///   its last element went on past the end of the impact), x+ is the state that much later and
+///   the next segment's first piece holds x+ constant over the advance: the trajectory is off by
+///   the motion over clock_advance there.
 /// - Mode changes without impact: x- = x+ = the boundary state; guards per contact: Touchdown
 ///   (open -> closed without a frozen run: a touchdown at zero normal velocity), Release (closed ->
 ///   open), Stop (slip -> stick), SlipOnset (stick -> slip, or a reversal of the slip direction).
