@@ -913,6 +913,20 @@ TEST(TimeFreezingRecovery, TrajectoryOfALandingASlideAStopAndALiftOff) {
   TrajectoryRecoveryOptions bad;
   bad.gap_tolerance = 0.0;
   EXPECT_THROW(recover_trajectory(system, points, 2, bad), InvalidArgument);
+  bad = TrajectoryRecoveryOptions{};
+  bad.frozen_tolerance = std::numeric_limits<double>::infinity();
+  EXPECT_THROW(recover_trajectory(system, points, 2, bad), InvalidArgument);
+  // A wrong n_s (found by a user's trial: 4 read past the stage arrays, 1 and 3 gave another
+  // motion silently): the points' recorded stages do not match it.
+  for (int wrong : {1, 3, 4, 5}) {
+    try {
+      recover_trajectory(system, points, wrong);
+      ADD_FAILURE() << "n_s = " << wrong << " was accepted for n_s = 2 points";
+    } catch (const InvalidArgument& e) {
+      const std::string what = e.what();
+      EXPECT_TRUE(what.find("stage") != std::string::npos || what.find("n_s") != std::string::npos) << what;
+    }
+  }
 }
 
 TEST(TimeFreezingOcp, PointMassReachesTheTargetOnTheTable) {

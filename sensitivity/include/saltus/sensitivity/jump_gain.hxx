@@ -107,10 +107,11 @@ auto JumpGainSolver<S>::compute(const Event<S>& event, const InputLaw<S>& law, c
         throw ContactProblemFailure(detail::concat(
             "jump gain: transition ", k, " of the event at t = ", event.t, " (impulse roles ", roles,
             "): the differentiated jump map gives a post-impact state ", residual,
-            " from the impact solver's (tolerance ", options_.jump_map_tolerance, " relative): its derivative is not that "
-            "of the simulated jump, so no first-order gain is computed (seen where four coplanar contacts slip "
-            "together: redundant contacts whose split of the normal impulse, and with it of the friction impulse, "
-            "the jump map and the impact solver settle differently)"));
+            " from the transition's x+ (tolerance ", options_.jump_map_tolerance, " relative): its derivative is not that "
+            "of the trajectory's jump, so no first-order gain is computed. Seen where redundant contacts slip together "
+            "(four coplanar corners: the jump map and the impact solver split the impulse differently), and for "
+            "trajectories made elsewhere (a recovered or imported reference) whose x+ is not the impact law's "
+            "post-impact state, e.g. an unconverged time-freezing solution"));
       }
     } else {
       Dg_.setIdentity();

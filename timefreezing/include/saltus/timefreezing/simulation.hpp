@@ -54,7 +54,9 @@ struct TimeFreezingSimulation {
   std::vector<double> element_lengths;        ///< h of every element, in order
   std::vector<FrozenPhase<nx>> frozen_phases;
   std::vector<SwitchPoint> switch_points;
-  HybridTrajectory<S> trajectory;  ///< in physical time, recovered directly (recover_trajectory)
+  /// In physical time, recovered directly (recover_trajectory); also when not converged(), then
+  /// only a reading of the unconverged points, not a motion of the scene.
+  HybridTrajectory<S> trajectory;
   MpccSolution solution;  ///< the homotopy's result: converged, complementarity, steps, times
   bool converged() const { return solution.converged; }
   /// The state (q, v, t, L) at the end of the horizon.
@@ -144,7 +146,8 @@ void read_events(const std::vector<FesdPoint<ny, nsw, nu>>& pts, int stages, std
 /// right-continuous interpolation of ImportedReference::input reproduces the piecewise-constant
 /// control exactly. Polish the result (hybrid/reference/resimulation.hpp: polish) to re-simulate
 /// it with the event-driven simulator and to obtain the HybridTrajectory that the sensitivity
-/// analysis takes. Throws InvalidArgument if points has no stage point or stages < 1.
+/// analysis takes. Throws InvalidArgument if points has no stage point, stages is not 1, 2 or 3, or
+/// a point's recorded stage (FesdPoint::stage) does not match its position for that n_s.
 template <Scene S, int ny, int nsw, int nu>
 ImportedReference<S> recover_reference(const std::vector<FesdPoint<ny, nsw, nu>>& points, int stages,
                                        double frozen_tolerance = 1e-7) {
@@ -153,6 +156,12 @@ ImportedReference<S> recover_reference(const std::vector<FesdPoint<ny, nsw, nu>>
                      (points.size() - 1) % static_cast<std::size_t>(stages) == 0,
                  "recover_reference: expected the initial point and n_s points per element, got ", points.size(),
                  " points for n_s = ", stages);
+  SALTUS_REQUIRE(stages <= 3, "recover_reference: n_s must be 1, 2 or 3 (Radau IIA), got ", stages);
+  // The points record their stage: a wrong n_s would pair stages of different elements.
+  for (std::size_t k = 1; k < points.size(); ++k)
+    SALTUS_REQUIRE(points[k].stage == static_cast<int>((k - 1) % static_cast<std::size_t>(stages)),
+                   "recover_reference: point ", k, " is stage ", points[k].stage, " of its element, but n_s = ", stages,
+                   " makes it stage ", (k - 1) % static_cast<std::size_t>(stages));
   ImportedReference<S> ref;
   // Every sample's segment is written out: a frozen run that starts on a control-interval
   // boundary has two pre-event samples at the event time (x- and its repeat with the next
@@ -250,7 +259,11 @@ struct TrajectoryRecoveryOptions {
 ///   that of an impact.
 /// - The input law u(t) is recover_reference's (ImportedReference::input: linear between the
 ///   samples, right-continuous at control-interval boundaries), whatever x and the mode.
-/// Throws InvalidArgument as recover_reference does, and for tolerances that are not > 0.
+/// The trajectory is a reading of the points whether or not their homotopy converged: the one of
+/// an unconverged solution (complementarity above tolerance) is not a motion of the scene (events
+/// off, states below the surface) and its status still says Completed; check converged() first.
+/// Throws InvalidArgument as recover_reference does (n_s outside 1..3, points whose recorded stage
+/// does not match n_s), and for tolerances that are not finite and > 0.
 template <Scene S, int ny, int nsw, int nu>
 HybridTrajectory<S> recover_trajectory(const TimeFreezingSystem<S>& system,
                                        const std::vector<FesdPoint<ny, nsw, nu>>& points, int stages,
@@ -260,9 +273,11 @@ HybridTrajectory<S> recover_trajectory(const TimeFreezingSystem<S>& system,
   using ModeT = Mode<nc>;
   using State = VecT<double, nx>;
   static_assert(ny == nx + 2 && nsw == 3 * nc, "recover_trajectory: points of another scene");
-  SALTUS_REQUIRE(options.gap_tolerance > 0.0 && options.velocity_tolerance > 0.0 && options.frozen_tolerance > 0.0,
-                 "recover_trajectory: the tolerances must be > 0, got gap ", options.gap_tolerance, ", velocity ",
-                 options.velocity_tolerance, ", frozen ", options.frozen_tolerance);
+  auto positive = [](double v) { return std::isfinite(v) && v > 0.0; };
+  SALTUS_REQUIRE(positive(options.gap_tolerance) && positive(options.velocity_tolerance) &&
+                     positive(options.frozen_tolerance),
+                 "recover_trajectory: the tolerances must be finite and > 0, got gap ", options.gap_tolerance,
+                 ", velocity ", options.velocity_tolerance, ", frozen ", options.frozen_tolerance);
   const ImportedReference<S> samples = recover_reference<S>(points, stages, options.frozen_tolerance);
   const int elements = static_cast<int>((points.size() - 1) / static_cast<std::size_t>(stages));
   auto start_of = [&](int e) -> const Point& { return points[static_cast<std::size_t>(e == 0 ? 0 : e * stages)]; };
@@ -563,7 +578,9 @@ struct TimeFreezingOcpResult {
   std::vector<FrozenPhase<nx>> frozen_phases;  ///< the impacts
   std::vector<SwitchPoint> switch_points;      ///< touchdowns, lift-offs, slip-stick
   ImportedReference<S> reference;              ///< recovered in physical time (recover_reference)
-  HybridTrajectory<S> trajectory;              ///< recovered in physical time (recover_trajectory)
+  /// Recovered in physical time (recover_trajectory); when not converged(), only a reading of the
+  /// unconverged points, not a motion of the scene.
+  HybridTrajectory<S> trajectory;
   /// solve_time_freezing_ocp_by_continuation: one relaxed NLP per continuation stage, in order
   /// (their iterations and seconds are included in solution.ipopt_iterations and seconds).
   std::vector<MpccHomotopyStep> continuation_steps;
