@@ -93,6 +93,10 @@ std::vector<Variant> variants() {
        "the default's continuation and first 4 steps (sigma 1 .. 1e-3), then the same smoothing with the contact-side "
        "selection 1e-2 from sigma = 1e-4",
        R::Smoothing, false, true, 20, false, 4, 1e-4, 0.0, 2, R::Smoothing, 1e-2},
+      {"smoothing-then-side-same-sigma",
+       "as smoothing-then-side, but the selection is switched on at the last solved sigma (1e-3): that NLP is solved "
+       "again with the term, then the homotopy goes on",
+       R::Smoothing, false, true, 20, false, 4, 1e-3, 0.0, 2, R::Smoothing, 1e-2},
   };
 }
 
