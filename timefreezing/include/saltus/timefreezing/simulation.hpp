@@ -253,10 +253,13 @@ struct TrajectoryRecoveryOptions {
 ///   (open -> closed without a frozen run: a touchdown at zero normal velocity), Release (closed ->
 ///   open), Stop (slip -> stick), SlipOnset (stick -> slip, or a reversal of the slip direction).
 ///   A touchdown at J_n v(x-) < 0 that is not a frozen run is an impact the discretisation
-///   absorbed into a flowing element (the clock ran through it: an unconverged or too coarse
-///   solution, e.g. the plank-box flat landing's at complementarity 8.4e-7, bench/README.md); it is
-///   listed as what the solution shows, a mode change with x+ = x-, and its jump gain is not
-///   that of an impact.
+///   absorbed into a flowing element: the clock ran through it. That is the rule, not the
+///   exception, under FesdOptions::velocity_switch_detection = false (the flagship OCPs' setting):
+///   the end of an impact is a switch of J_n v, which the grid then does not locate, so an impact
+///   shorter than its element ends inside it (the plank-box flat landing: J_n v = -1.04 m/s
+///   against a_n = 50 lasts about 1.04 / 50 = 0.02 of numerical time at speed of time 1, less at
+///   s > 1, in elements of h0 = 0.05; so read at complementarity 8.4e-7 and 7.5e-7). Such an event is listed as what the solution shows, a mode change with
+///   x+ = x-, and its jump gain is not that of an impact.
 /// - The input law u(t) is recover_reference's (ImportedReference::input: linear between the
 ///   samples, right-continuous at control-interval boundaries), whatever x and the mode.
 /// The trajectory is a reading of the points whether or not their homotopy converged: the one of
