@@ -9,8 +9,9 @@
 // progress line per Ipopt solve on stderr. Columns as bench/hopper_ocp.cpp's; `flat` is the largest
 // |theta - phi| over the stage points [rad]. --max-steps and --ipopt: ocp_bench_support.hpp.
 // The JSON's "landing": the first event of the recovered trajectory (recover_trajectory) with a
-// touchdown guard: {t, impact (false: the discretisation absorbed the impact into a flowing
-// element), guards (2: both corners at once), box_vz_before [m/s]}; null without one.
+// touchdown guard: {t, impact (false: a touchdown at zero normal velocity; an impact absorbed
+// into a flowing element is read as an impact, recover_trajectory's docstring), guards (2: both
+// corners at once), box_vz_before [m/s]}; null without one.
 #include "scenes/plank_box_landing.hpp"
 
 #include <saltus/timefreezing/simulation.hpp>
@@ -115,8 +116,7 @@ int main(int argc, char** argv) {
     }
     const Ocp::Feasibility f = Ocp::feasibility(r.points);
     // The landing as the recovered trajectory reads it (recover_trajectory): one impact whose
-    // guards are both corners' touchdowns, or a touchdown the discretisation absorbed into a
-    // flowing element (impact false: the clock ran through it).
+    // guards are both corners' touchdowns, or two, or a touchdown without impact.
     nlohmann::ordered_json landing = nullptr;
     const HybridTrajectory<scenes::PlankBox> traj = recover_trajectory(Ocp::system(), r.points, grid.stages);
     for (const auto& ev : traj.events) {

@@ -844,6 +844,52 @@ TEST(TimeFreezingRecovery, FrozenRunOnAControlIntervalBoundary) {
   EXPECT_EQ(ref.x[3][3], 0.0);  // x+: the impact ended
 }
 
+// An impact absorbed into a flowing element (recover_trajectory's docstring; the flagships'
+// velocity_switch_detection = false): the element after the touchdown runs the clock (0.1 -> 0.12
+// at its first stage) while the normal velocity goes from -1 to 0. Read as an impact at t = 0.1
+// with x+ at that stage, held over the advance, then the slide.
+TEST(TimeFreezingRecovery, AnImpactAbsorbedIntoAFlowingElementIsAnImpactEvent) {
+  scenes::PointMassParameters pm;
+  pm.friction = Friction::Planar;
+  pm.mu = 0.3;
+  const TimeFreezingSystem<PointMass> system(PointMass(pm), 10.0);
+  using Point = FesdPoint<6, 3, 2>;
+  std::vector<Point> points;
+  auto add = [&](int element, int stage, double tau, double t, Vec<2> q, Vec<2> v) {
+    Point p;
+    p.element = element;
+    p.stage = stage;
+    p.tau = tau;
+    p.y << q, v, t, 0.0;
+    p.alpha.setConstant(1.0);
+    p.ode_weight = 1.0;
+    p.u = Vec<2>::Zero();
+    points.push_back(p);
+  };
+  add(-1, -1, 0.0, 0.0, Vec<2>(0.0, 0.1), Vec<2>(1.0, -1.0));
+  add(0, 0, 0.05, 0.05, Vec<2>(0.05, 0.05), Vec<2>(1.0, -1.0));
+  add(0, 1, 0.10, 0.10, Vec<2>(0.10, 0.0), Vec<2>(1.0, -1.0));
+  add(1, 0, 0.15, 0.12, Vec<2>(0.11, 0.0), Vec<2>(0.7, 0.0));  // closed, slip+: the impact is over
+  add(1, 1, 0.20, 0.17, Vec<2>(0.14, 0.0), Vec<2>(0.55, 0.0));
+  add(2, 0, 0.25, 0.22, Vec<2>(0.17, 0.0), Vec<2>(0.4, 0.0));
+  add(2, 1, 0.30, 0.27, Vec<2>(0.19, 0.0), Vec<2>(0.25, 0.0));
+  const HybridTrajectory<PointMass> traj = recover_trajectory(system, points, 2);
+  ASSERT_EQ(traj.events.size(), 1u);
+  const Event<PointMass>& impact = traj.events[0];
+  EXPECT_TRUE(impact.impact());
+  EXPECT_EQ(impact.t, 0.1);
+  EXPECT_EQ(impact.guards(), (std::vector<Guard>{{0, GuardKind::Touchdown}}));
+  EXPECT_EQ(impact.x_minus, points[2].y.head<4>());
+  EXPECT_EQ(impact.x_plus, points[3].y.head<4>());
+  EXPECT_EQ(impact.mode_after[0], ContactState::slip_planar(1));
+  EXPECT_EQ(impact.transitions[0].impulse_mode[0], (ImpulseMode{ImpulseRole::Slip, Eigen::Vector2d(1.0, 0.0)}));
+  ASSERT_EQ(traj.segments.size(), 2u);
+  EXPECT_EQ(traj.segments[1].t_begin, 0.1);
+  EXPECT_EQ(traj.state(1, 0.11), impact.x_plus);  // held over the clock's advance 0.1 .. 0.12
+  EXPECT_LT((traj.state(1, 0.17) - points[4].y.head<4>()).cwiseAbs().maxCoeff(), 1e-14);
+  EXPECT_LT((traj.state(1, 0.27) - points[6].y.head<4>()).cwiseAbs().maxCoeff(), 1e-14);
+}
+
 // recover_trajectory on a hand-made solution (n_s = 2, a point mass with friction mu = 0.3):
 // flight onto the table, a frozen run (the impact: v from (1, -1) to (0.7, 0)), a slide, a stop,
 // a lift-off. Expected: three events (impact with a touchdown guard, stop, release), four segments

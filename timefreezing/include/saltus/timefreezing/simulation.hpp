@@ -252,14 +252,18 @@ struct TrajectoryRecoveryOptions {
 /// - Mode changes without impact: x- = x+ = the boundary state; guards per contact: Touchdown
 ///   (open -> closed without a frozen run: a touchdown at zero normal velocity), Release (closed ->
 ///   open), Stop (slip -> stick), SlipOnset (stick -> slip, or a reversal of the slip direction).
-///   A touchdown at J_n v(x-) < 0 that is not a frozen run is an impact the discretisation
-///   absorbed into a flowing element: the clock ran through it. That is the rule, not the
-///   exception, under FesdOptions::velocity_switch_detection = false (the flagship OCPs' setting):
-///   the end of an impact is a switch of J_n v, which the grid then does not locate, so an impact
-///   shorter than its element ends inside it (the plank-box flat landing: J_n v = -1.04 m/s
-///   against a_n = 50 lasts about 1.04 / 50 = 0.02 of numerical time at speed of time 1, less at
-///   s > 1, in elements of h0 = 0.05; so read at complementarity 8.4e-7 and 7.5e-7). Such an event is listed as what the solution shows, a mode change with
-///   x+ = x-, and its jump gain is not that of an impact.
+/// - Absorbed impacts: a touchdown at J_n v(x-) < -velocity_tolerance that is not a frozen run is
+///   an impact the discretisation absorbed into a flowing element (the clock ran through it).
+///   That is the rule, not the exception, under FesdOptions::velocity_switch_detection = false
+///   (the flagship OCPs' setting): the end of an impact is a switch of J_n v, which the grid then
+///   does not locate, so an impact shorter than its element ends inside it (the plank-box flat
+///   landing: J_n v = -1.04 m/s against a_n = 50 lasts about 1.04 / 50 = 0.02 of numerical time at
+///   speed of time 1, less at s > 1, in elements of h0 = 0.05). It is read as an impact event at
+///   the element's start: x- there, x+ the state at the element's first stage point from which on
+///   every struck contact is closed, held over the clock advance to it (as for a frozen run's
+///   advance), guards Touchdown for the struck contacts (and the mode changes of the others),
+///   impulse_mode for the struck contacts. x+ is then off by the motion over that advance, and a
+///   jump gain of it is refused unless x+ is the impact law's post-impact state to 1e-9.
 /// - The input law u(t) is recover_reference's (ImportedReference::input: linear between the
 ///   samples, right-continuous at control-interval boundaries), whatever x and the mode.
 /// The trajectory is a reading of the points whether or not their homotopy converged: the one of
@@ -329,19 +333,20 @@ HybridTrajectory<S> recover_trajectory(const TimeFreezingSystem<S>& system,
   };
   auto frozen = [&](int e) { return detail::element_frozen(points, stages, e, options.frozen_tolerance); };
   // The piece of flowing element e in physical time.
-  auto piece_of = [&](int e) {
+  // The piece of element e through its points from `first` on (-1: the element's start point,
+  // r >= 0: stage r) to its end.
+  auto piece_of = [&](int e, int first = -1) {
     PolynomialPiece<nx> p;
-    const int n = stages + 1;
+    const int n = stages - first;  // the number of nodes, 2 .. n_s + 1 (1 when first is the end)
     std::array<double, 4> t{};
     std::array<State, 4> x;
-    t[0] = clock(start_of(e));
-    x[0] = state(start_of(e));
-    for (int r = 0; r < stages; ++r) {
-      t[static_cast<std::size_t>(r + 1)] = clock(stage_of(e, r));
-      x[static_cast<std::size_t>(r + 1)] = state(stage_of(e, r));
+    for (int a = 0; a < n; ++a) {
+      const Point& node = first + a < 0 ? start_of(e) : stage_of(e, first + a);
+      t[static_cast<std::size_t>(a)] = clock(node);
+      x[static_cast<std::size_t>(a)] = state(node);
     }
     p.t0 = p.t_ref = t[0];
-    p.t1 = t[static_cast<std::size_t>(stages)];
+    p.t1 = t[static_cast<std::size_t>(n - 1)];
     p.h = p.t1 - p.t0;
     bool increasing = p.h > 0.0;
     for (int r = 1; r < n && increasing; ++r)
@@ -349,7 +354,7 @@ HybridTrajectory<S> recover_trajectory(const TimeFreezingSystem<S>& system,
     if (!increasing) {
       p.degree = 1;
       p.c.col(0) = x[0];
-      p.c.col(1) = x[static_cast<std::size_t>(stages)] - x[0];
+      p.c.col(1) = x[static_cast<std::size_t>(n - 1)] - x[0];
       if (!(p.h > 0.0)) p.h = 1.0;  // a zero-length piece: only its value at t0 is ever read
       return p;
     }
@@ -363,7 +368,7 @@ HybridTrajectory<S> recover_trajectory(const TimeFreezingSystem<S>& system,
       rhs.row(a) = x[static_cast<std::size_t>(a)].transpose();
     }
     const Eigen::MatrixXd coef = v.fullPivLu().solve(rhs);
-    p.degree = stages;
+    p.degree = n - 1;
     for (int b = 0; b < n; ++b) p.c.col(b) = coef.row(b).transpose();
     return p;
   };
@@ -411,6 +416,18 @@ HybridTrajectory<S> recover_trajectory(const TimeFreezingSystem<S>& system,
     }
     return guards;
   };
+  // Where the clock advanced past an impact's time t before its x+ (at `plus`): x+ held constant
+  // over [t, clock(plus)] (see the docstring).
+  auto hold_over_advance = [&](double t, const Point& plus) {
+    if (!(clock(plus) > t)) return;
+    PolynomialPiece<nx> hold;
+    hold.t0 = hold.t_ref = t;
+    hold.t1 = clock(plus);
+    hold.h = hold.t1 - t;
+    hold.degree = 0;
+    hold.c.col(0) = state(plus);
+    seg.x.append(hold);
+  };
   ModeT current = mode_at(points[0]);
   for (int e = 0; e < elements;) {
     if (frozen(e)) {
@@ -448,16 +465,7 @@ HybridTrajectory<S> recover_trajectory(const TimeFreezingSystem<S>& system,
       current = after;
       seg.mode = after;
       seg_has_mode = true;
-      const double advance = clock(plus) - t;
-      if (advance > 0.0) {  // the run's clock advanced: hold x+ over it (see the docstring)
-        PolynomialPiece<nx> hold;
-        hold.t0 = hold.t_ref = t;
-        hold.t1 = clock(plus);
-        hold.h = advance;
-        hold.degree = 0;
-        hold.c.col(0) = state(plus);
-        seg.x.append(hold);
-      }
+      hold_over_advance(t, plus);
       e = f + 1;
       continue;
     }
@@ -467,6 +475,42 @@ HybridTrajectory<S> recover_trajectory(const TimeFreezingSystem<S>& system,
       seg_has_mode = true;
     } else if (!(m == seg.mode)) {
       const double t = clock(start_of(e));
+      // An impact absorbed into this flowing element (docstring): contacts open before, closed in
+      // this element's mode and approaching at its start. Read as an impact at the element's start
+      // with x+ at its first stage point where they are all closed, held over the clock advance.
+      const Vec<nsw> c = switching(start_of(e));
+      std::vector<int> struck;
+      for (int i = 0; i < nc; ++i)
+        if (!current[i].closed() && m[i].closed() && c[3 * i + 1] < -vel_tol) struck.push_back(i);
+      if (!struck.empty()) {
+        int first_closed = stages - 1;
+        for (int r = stages - 1; r >= 0; --r) {
+          const Vec<nsw> cr = switching(stage_of(e, r));
+          bool closed = true;
+          for (int i : struck) closed = closed && contact_class(cr, i) != 0;
+          if (closed) first_closed = r;
+          else break;
+        }
+        const Point& plus = stage_of(e, first_closed);
+        std::vector<Guard> guards = changes(current, m);
+        ImpactMode<nc> impulse;
+        const Vec<nsw> c_plus = switching(plus);
+        for (int i : struck) {
+          const double vt = c_plus[3 * i + 2];
+          if (!frictional(i) || std::abs(vt) <= vel_tol) impulse[i].role = ImpulseRole::Stick;
+          else impulse[i] = ImpulseMode{ImpulseRole::Slip, Eigen::Vector2d(vt > 0.0 ? 1.0 : -1.0, 0.0)};
+        }
+        close_segment(t);
+        add_event(t, state(start_of(e)), state(plus), current, m, std::move(guards), true);
+        traj.events.back().transitions.back().impulse_mode = impulse;
+        seg.mode = m;
+        seg_has_mode = true;
+        current = m;
+        hold_over_advance(t, plus);
+        if (first_closed < stages - 1) seg.x.append(piece_of(e, first_closed));
+        ++e;
+        continue;
+      }
       close_segment(t);
       add_event(t, state(start_of(e)), state(start_of(e)), current, m, changes(current, m), false);
       seg.mode = m;
