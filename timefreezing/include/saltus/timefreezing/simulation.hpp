@@ -483,8 +483,10 @@ HybridTrajectory<S> recover_trajectory(const TimeFreezingSystem<S>& system,
       for (int i = 0; i < nc; ++i)
         if (!current[i].closed() && m[i].closed() && c[3 * i + 1] < -vel_tol) struck.push_back(i);
       if (!struck.empty()) {
-        int first_closed = stages - 1;
-        for (int r = stages - 1; r >= 0; --r) {
+        // From the stage that decided the element's mode (closed for them) back to the earliest
+        // stage of a closed run.
+        int first_closed = stages >= 2 ? stages - 2 : 0;
+        for (int r = first_closed; r >= 0; --r) {
           const Vec<nsw> cr = switching(stage_of(e, r));
           bool closed = true;
           for (int i : struck) closed = closed && contact_class(cr, i) != 0;
