@@ -844,6 +844,22 @@ TEST(TimeFreezingRecovery, FrozenRunOnAControlIntervalBoundary) {
   EXPECT_EQ(ref.x[3][3], 0.0);  // x+: the impact ended
 }
 
+// A hand-made point of a point-mass solution for recover_trajectory: (q, v, t, L = 0), every step
+// function and Theta at `weight`, input (t, 0).
+FesdPoint<6, 3, 2> recovery_point(int element, int stage, double tau, double t, const Vec<2>& q, const Vec<2>& v,
+                                  double weight = 1.0) {
+  FesdPoint<6, 3, 2> p;
+  p.interval = 0;
+  p.element = element;
+  p.stage = stage;
+  p.tau = tau;
+  p.y << q, v, t, 0.0;
+  p.alpha.setConstant(weight);
+  p.ode_weight = weight;
+  p.u = Vec<2>(t, 0.0);
+  return p;
+}
+
 // An impact absorbed into a flowing element (recover_trajectory's docstring; the flagships'
 // velocity_switch_detection = false): the element after the touchdown runs the clock (0.1 -> 0.12
 // at its first stage) while the normal velocity goes from -1 to 0. Read as an impact at t = 0.1
@@ -853,18 +869,9 @@ TEST(TimeFreezingRecovery, AnImpactAbsorbedIntoAFlowingElementIsAnImpactEvent) {
   pm.friction = Friction::Planar;
   pm.mu = 0.3;
   const TimeFreezingSystem<PointMass> system(PointMass(pm), 10.0);
-  using Point = FesdPoint<6, 3, 2>;
-  std::vector<Point> points;
+  std::vector<FesdPoint<6, 3, 2>> points;
   auto add = [&](int element, int stage, double tau, double t, Vec<2> q, Vec<2> v) {
-    Point p;
-    p.element = element;
-    p.stage = stage;
-    p.tau = tau;
-    p.y << q, v, t, 0.0;
-    p.alpha.setConstant(1.0);
-    p.ode_weight = 1.0;
-    p.u = Vec<2>::Zero();
-    points.push_back(p);
+    points.push_back(recovery_point(element, stage, tau, t, q, v));
   };
   add(-1, -1, 0.0, 0.0, Vec<2>(0.0, 0.1), Vec<2>(1.0, -1.0));
   add(0, 0, 0.05, 0.05, Vec<2>(0.05, 0.05), Vec<2>(1.0, -1.0));
@@ -899,19 +906,9 @@ TEST(TimeFreezingRecovery, TrajectoryOfALandingASlideAStopAndALiftOff) {
   pm.friction = Friction::Planar;
   pm.mu = 0.3;
   const TimeFreezingSystem<PointMass> system(PointMass(pm), 10.0);
-  using Point = FesdPoint<6, 3, 2>;
-  std::vector<Point> points;
+  std::vector<FesdPoint<6, 3, 2>> points;
   auto add = [&](int element, int stage, double tau, double t, Vec<2> q, Vec<2> v, double weight) {
-    Point p;
-    p.interval = 0;
-    p.element = element;
-    p.stage = stage;
-    p.tau = tau;
-    p.y << q, v, t, 0.0;
-    p.alpha.setConstant(weight);
-    p.ode_weight = weight;
-    p.u = Vec<2>(t, 0.0);
-    points.push_back(p);
+    points.push_back(recovery_point(element, stage, tau, t, q, v, weight));
   };
   // x(t) = t, z(t) = 0.1 - t in flight: linear, so the pieces reproduce it exactly.
   add(-1, -1, 0.0, 0.0, Vec<2>(0.0, 0.1), Vec<2>(1.0, -1.0), 1.0);

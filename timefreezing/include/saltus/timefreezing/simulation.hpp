@@ -332,6 +332,14 @@ HybridTrajectory<S> recover_trajectory(const TimeFreezingSystem<S>& system,
     return m;
   };
   auto frozen = [&](int e) { return detail::element_frozen(points, stages, e, options.frozen_tolerance); };
+  // How contact i took an impulse, as the impact solver labels it: stick for a frictionless contact
+  // or a tangential rest after the impact, else slip along J_t v+ (c_plus: the switching
+  // functions at x+).
+  auto impulse_role = [&](int i, const Vec<nsw>& c_plus) {
+    const double vt = c_plus[3 * i + 2];
+    if (!frictional(i) || std::abs(vt) <= vel_tol) return ImpulseMode{ImpulseRole::Stick, Eigen::Vector2d::Zero()};
+    return ImpulseMode{ImpulseRole::Slip, Eigen::Vector2d(vt > 0.0 ? 1.0 : -1.0, 0.0)};
+  };
   // The piece of flowing element e in physical time.
   // The piece of element e through its points from `first` on (-1: the element's start point,
   // r >= 0: stage r) to its end.
@@ -442,8 +450,7 @@ HybridTrajectory<S> recover_trajectory(const TimeFreezingSystem<S>& system,
       for (int i = 0; i < nc; ++i)
         if (!current[i].closed() && c[3 * i] <= gap_tol && c[3 * i + 1] < -vel_tol) guards.push_back({i, GuardKind::Touchdown});
       // Who took an impulse: a contact whose closing weight (1 - alpha_gap)(1 - alpha_vn) reached
-      // 1/2 at a stage point of the run; how: as the impact solver labels it (stick for a
-      // frictionless contact or a tangential rest after the impact, else slip along J_t v+).
+      // 1/2 at a stage point of the run; how: impulse_role.
       ImpactMode<nc> impulse;
       const Vec<nsw> c_plus = switching(plus);
       for (int i = 0; i < nc; ++i) {
@@ -453,10 +460,7 @@ HybridTrajectory<S> recover_trajectory(const TimeFreezingSystem<S>& system,
             const auto& a = stage_of(g, r).alpha;
             closing = std::max(closing, (1.0 - a[3 * i]) * (1.0 - a[3 * i + 1]));
           }
-        if (closing < 0.5) continue;
-        const double vt = c_plus[3 * i + 2];
-        if (!frictional(i) || std::abs(vt) <= vel_tol) impulse[i].role = ImpulseRole::Stick;
-        else impulse[i] = ImpulseMode{ImpulseRole::Slip, Eigen::Vector2d(vt > 0.0 ? 1.0 : -1.0, 0.0)};
+        if (closing >= 0.5) impulse[i] = impulse_role(i, c_plus);
       }
       if (!seg_has_mode) seg.mode = current;
       close_segment(t);
@@ -497,11 +501,7 @@ HybridTrajectory<S> recover_trajectory(const TimeFreezingSystem<S>& system,
         std::vector<Guard> guards = changes(current, m);
         ImpactMode<nc> impulse;
         const Vec<nsw> c_plus = switching(plus);
-        for (int i : struck) {
-          const double vt = c_plus[3 * i + 2];
-          if (!frictional(i) || std::abs(vt) <= vel_tol) impulse[i].role = ImpulseRole::Stick;
-          else impulse[i] = ImpulseMode{ImpulseRole::Slip, Eigen::Vector2d(vt > 0.0 ? 1.0 : -1.0, 0.0)};
-        }
+        for (int i : struck) impulse[i] = impulse_role(i, c_plus);
         close_segment(t);
         add_event(t, state(start_of(e)), state(plus), current, m, std::move(guards), true);
         traj.events.back().transitions.back().impulse_mode = impulse;
