@@ -3,7 +3,7 @@
 //
 //   fesd_accuracy [--json] [--budget SECONDS] [--scheme fesd|fesd-exact|fixed] [--stages N]
 //                 [--finite-elements N1,N2,...] [--refine TARGET] [--contact-side WEIGHT] [--lift]
-//                 [--landing-only]
+//                 [--landing-only] [--ipopt NAME=VALUE]... [--kappa K] [--sigma0 S] [--progress]
 //
 // --finite-elements replaces the default N_fe = 1, 2, 4, 8 (the budget rule drops the last one).
 // --refine sets MpccSolverOptions::complementarity_refinement (in (0, 1e-9)) for the guiding
@@ -11,7 +11,9 @@
 // --contact-side sets FesdOptions::contact_side_weight (>= 0; scheme "fesd+side" when > 0) for both
 // examples (default: 0 for the guiding example, the landing's own 1e-2); --landing-only runs the
 // frictional landing alone. --lift solves both with the lifted step functions
-// (FesdOptions::lift_step_functions; scheme suffix "+lift").
+// (FesdOptions::lift_step_functions; scheme suffix "+lift"). --ipopt passes an Ipopt option to
+// every solve of both examples (as in hopper_ocp), --kappa and --sigma0 set the homotopy's
+// MpccSolverOptions::kappa and sigma_0, --progress prints one line per Ipopt solve on stderr.
 // SALTUS_BENCH_TRACE=1 prints, per configuration, the error of every element boundary's state
 // against the closed form y(tau) (exact_state below): where along the horizon the error arises.
 //
@@ -88,6 +90,7 @@
 // it, a table. One progress line per configuration goes to stderr either way. Exit status 0
 // unless a simulation threw.
 #include "scenes/point_mass.hpp"
+#include "ocp_bench_support.hpp"
 #include "scenes/time_freezing_examples.hpp"
 
 #include <saltus/timefreezing/fesd.hpp>
@@ -102,6 +105,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <exception>
+#include <iostream>
 #include <limits>
 #include <string>
 #include <vector>
@@ -110,6 +114,7 @@ namespace {
 
 using namespace saltus;
 using namespace saltus::timefreezing;
+using saltus::bench::parse_ipopt_option;
 using scenes::PointMass;
 
 constexpr double g = 9.81;
@@ -180,6 +185,17 @@ double refinement = 0.0;
 double contact_side = -1.0;
 /// FesdOptions::lift_step_functions of both examples' runs (--lift).
 bool lift = false;
+/// Solver overrides of both examples' runs: --ipopt NAME=VALUE (repeatable), --kappa K, --sigma0 S,
+/// --progress (one line per Ipopt solve on stderr).
+std::vector<timefreezing::IpoptOption> ipopt_overrides;
+double kappa_override = 0.0, sigma0_override = 0.0;
+bool progress = false;
+void apply_solver_flags(timefreezing::MpccSolverOptions& solver) {
+  solver.ipopt_options.insert(solver.ipopt_options.end(), ipopt_overrides.begin(), ipopt_overrides.end());
+  if (kappa_override > 0.0) solver.kappa = kappa_override;
+  if (sigma0_override > 0.0) solver.sigma_0 = sigma0_override;
+  if (progress) solver.progress = &std::cerr;
+}
 /// The scheme's name with the options that change it.
 std::string scheme_label(const std::string& scheme) {
   return scheme + (contact_side > 0.0 ? "+side" : "") + (refinement > 0.0 ? "+refine" : "") + (lift ? "+lift" : "");
@@ -203,6 +219,7 @@ Row run_guiding(const std::string& scheme, int stages, int finite_elements) {
   const auto start = std::chrono::steady_clock::now();
   MpccSolverOptions solver;
   solver.complementarity_refinement = refinement;
+  apply_solver_flags(solver);
   const auto sim = simulate_time_freezing(system, Vec<2>(0, 1), Vec<2>(0, 0), o, Example3Input{}, solver);
   r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   r.elements = static_cast<int>(sim.element_lengths.size());
@@ -263,7 +280,9 @@ Landing run_landing() {
   timefreezing::FesdOptions grid = Case::grid();
   if (contact_side >= 0.0) grid.contact_side_weight = contact_side;
   grid.lift_step_functions = lift;
-  const auto sim = simulate_time_freezing(Case::system(), Case::q0(), Case::v0(), grid);
+  MpccSolverOptions solver;
+  apply_solver_flags(solver);
+  const auto sim = simulate_time_freezing(Case::system(), Case::q0(), Case::v0(), grid, timefreezing::NoObjective{}, solver);
   l.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   l.stop_error = std::abs(sim.final_state()[0] - Case::stop);
   l.converged = sim.converged();
@@ -322,6 +341,15 @@ int main(int argc, char** argv) {
       refinement = parse_number(argv[++i]);
     } else if (std::strcmp(argv[i], "--lift") == 0) {
       lift = true;
+    } else if (std::strcmp(argv[i], "--ipopt") == 0 && i + 1 < argc && parse_ipopt_option(argv[i + 1])) {
+      ipopt_overrides.push_back(*parse_ipopt_option(argv[++i]));
+    } else if (std::strcmp(argv[i], "--kappa") == 0 && i + 1 < argc && parse_number(argv[i + 1]) > 0.0 &&
+               parse_number(argv[i + 1]) < 1.0) {
+      kappa_override = parse_number(argv[++i]);
+    } else if (std::strcmp(argv[i], "--sigma0") == 0 && i + 1 < argc && parse_number(argv[i + 1]) > 0.0) {
+      sigma0_override = parse_number(argv[++i]);
+    } else if (std::strcmp(argv[i], "--progress") == 0) {
+      progress = true;
     } else if (std::strcmp(argv[i], "--landing-only") == 0) {
       landing_only = true;
     } else if (std::strcmp(argv[i], "--contact-side") == 0 && i + 1 < argc && parse_number(argv[i + 1]) >= 0.0) {
@@ -345,7 +373,8 @@ int main(int argc, char** argv) {
     } else {
       std::fprintf(stderr,
                    "usage: %s [--json] [--budget SECONDS] [--scheme fesd|fesd-exact|fixed] [--stages 1|2|3] "
-                   "[--finite-elements N1,N2,...] [--refine TARGET] [--contact-side WEIGHT] [--lift] [--landing-only]\n",
+                   "[--finite-elements N1,N2,...] [--refine TARGET] [--contact-side WEIGHT] [--lift] [--landing-only] "
+                   "[--ipopt NAME=VALUE]... [--kappa K] [--sigma0 S] [--progress]\n",
                    argv[0]);
       return 2;
     }

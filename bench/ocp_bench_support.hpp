@@ -10,6 +10,7 @@
 // file_print_level=5`.
 #pragma once
 
+#include <saltus/timefreezing/fesd.hpp>
 #include <saltus/timefreezing/mpcc_solver.hpp>
 
 #include <algorithm>
@@ -41,6 +42,20 @@ struct OcpBenchArgs {
   }
 };
 
+/// "NAME=VALUE" as an Ipopt option: an integer or a number when VALUE parses as one, else a
+/// string; nullopt when there is no name or no value.
+inline std::optional<timefreezing::IpoptOption> parse_ipopt_option(const std::string& arg) {
+  const std::size_t eq = arg.find('=');
+  if (eq == std::string::npos || eq == 0 || eq + 1 == arg.size()) return std::nullopt;
+  const std::string name = arg.substr(0, eq), value = arg.substr(eq + 1);
+  char* end = nullptr;
+  const long as_int = std::strtol(value.c_str(), &end, 10);
+  if (*end == '\0') return timefreezing::IpoptOption{name, static_cast<int>(as_int)};
+  const double as_double = std::strtod(value.c_str(), &end);
+  if (*end == '\0') return timefreezing::IpoptOption{name, as_double};
+  return timefreezing::IpoptOption{name, value};
+}
+
 /// The parsed command line, or nullopt after printing the usage line (bad or unknown argument).
 inline std::optional<OcpBenchArgs> parse_ocp_bench_args(int argc, char** argv, const char* program) {
   OcpBenchArgs a;
@@ -58,19 +73,9 @@ inline std::optional<OcpBenchArgs> parse_ocp_bench_args(int argc, char** argv, c
       if (*end != '\0' || k < 1 || k > 1000) return usage();
       a.max_steps = static_cast<int>(k);
     } else if (std::strcmp(argv[i], "--ipopt") == 0 && i + 1 < argc) {
-      const std::string arg = argv[++i];
-      const std::size_t eq = arg.find('=');
-      if (eq == std::string::npos || eq == 0 || eq + 1 == arg.size()) return usage();
-      const std::string name = arg.substr(0, eq), value = arg.substr(eq + 1);
-      char* end = nullptr;
-      const long as_int = std::strtol(value.c_str(), &end, 10);
-      if (*end == '\0') {
-        a.ipopt_options.push_back({name, static_cast<int>(as_int)});
-        continue;
-      }
-      const double as_double = std::strtod(value.c_str(), &end);
-      if (*end == '\0') a.ipopt_options.push_back({name, as_double});
-      else a.ipopt_options.push_back({name, value});
+      std::optional<timefreezing::IpoptOption> option = parse_ipopt_option(argv[++i]);
+      if (!option) return usage();
+      a.ipopt_options.push_back(std::move(*option));
     } else
       return usage();
   }

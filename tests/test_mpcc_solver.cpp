@@ -712,11 +712,27 @@ TEST(MpccSolver, BadOptionsAreRefusedByName) {
   o = {};
   o.polish_single_flip_max_biactive = -1;
   refused(o, "polish_single_flip_max_biactive");
+  o = {};
+  o.mumps_mem_percent = -1;
+  refused(o, "mumps_mem_percent");
   // A valid extra option is accepted.
   o = {};
   o.ipopt_options.push_back({"acceptable_iter", 10});
   o.ipopt_options.push_back({"mumps_pivtol", 1e-6});
   EXPECT_TRUE(solve_mpcc(problem, o).converged);
+}
+
+// MpccSolverOptions::mumps_mem_percent sizes MUMPS' workspace (Ipopt enlarges it and factorises
+// again when it is too small): it changes the time, not the iterates.
+TEST(MpccSolver, MumpsWorkspaceChangesTimeNotIterates) {
+  SmallMpcc problem;
+  MpccSolverOptions large;
+  large.mumps_mem_percent = 1000;  // Ipopt's own default
+  MpccSolverOptions small;  // 100
+  const MpccSolution a = solve_mpcc(problem, large), b = solve_mpcc(problem, small);
+  ASSERT_TRUE(a.converged && b.converged);
+  EXPECT_EQ(a.ipopt_iterations, b.ipopt_iterations);
+  EXPECT_EQ((a.x - b.x).cwiseAbs().maxCoeff(), 0.0);
 }
 
 /// SmallMpcc whose objective turns NaN once `poisoned` is set (by PoisonOnNewline below, at the

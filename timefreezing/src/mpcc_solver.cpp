@@ -246,6 +246,7 @@ MpccSolution solve_from(const Mpcc& problem, const MpccStart& start, bool with_m
   session.set_number("warm_start_slack_bound_push", options.warm_start_bound_push);
   session.set_number("warm_start_slack_bound_frac", std::min(options.warm_start_bound_push, 0.5));
   session.set_number("warm_start_mult_bound_push", options.warm_start_mult_bound_push);
+  session.set_integer("mumps_mem_percent", options.mumps_mem_percent);
   for (const IpoptOption& option : options.ipopt_options) session.set(option);
   session.initialize();
 
@@ -598,6 +599,7 @@ void MpccSolverOptions::validate() const {
                  "MpccSolverOptions::bound_relax_factor must be >= 0 and finite, got ", bound_relax_factor);
   SALTUS_REQUIRE(warm_start_bound_push > 0.0 && std::isfinite(warm_start_bound_push),
                  "MpccSolverOptions::warm_start_bound_push must be > 0 and finite, got ", warm_start_bound_push);
+  SALTUS_REQUIRE(mumps_mem_percent >= 0, "MpccSolverOptions::mumps_mem_percent must be >= 0, got ", mumps_mem_percent);
   SALTUS_REQUIRE(warm_start_mult_bound_push > 0.0 && std::isfinite(warm_start_mult_bound_push),
                  "MpccSolverOptions::warm_start_mult_bound_push must be > 0 and finite, got ",
                  warm_start_mult_bound_push);
