@@ -89,6 +89,10 @@ std::vector<Variant> variants() {
        "the default's continuation and first 4 steps (sigma 1 .. 1e-3), then Scholtes with the contact-side selection "
        "1e-2 from sigma = 1e-4",
        R::Smoothing, false, true, 20, false, 4, 1e-4, 0.0, 2, R::Scholtes, 1e-2},
+      {"smoothing-then-scholtes",
+       "the default's continuation and first 4 steps (sigma 1 .. 1e-3), then Scholtes inequalities on every pair "
+       "(the velocity pairs no longer smoothed: a sticking foot need not creep) from sigma = 1e-4",
+       R::Smoothing, false, true, 20, false, 4, 1e-4, 0.0, 2, R::Scholtes, 0.0},
       {"smoothing-then-side",
        "the default's continuation and first 4 steps (sigma 1 .. 1e-3), then the same smoothing with the contact-side "
        "selection 1e-2 from sigma = 1e-4",

@@ -64,6 +64,10 @@ std::vector<Variant> variants() {
        "the default's first 4 smoothing steps (1e-2 .. 1e-5), then Scholtes with the contact-side selection 1e-2 from "
        "1e-6",
        0.0, 4, 1e-6, false, 0.0, MpccSolverOptions::Relaxation::Scholtes, 1e-2},
+      {"smoothing-then-scholtes",
+       "the default's first 4 smoothing steps (1e-2 .. 1e-5), then Scholtes inequalities on every pair (the velocity "
+       "pairs no longer smoothed: a sticking corner need not creep) from 1e-6",
+       0.0, 4, 1e-6, false, 0.0, MpccSolverOptions::Relaxation::Scholtes, 0.0},
       {"smoothing-then-side",
        "the default's first 3 smoothing steps (1e-2 .. 1e-4), then the same smoothing with the contact-side "
        "selection 1e-2 from 1e-5 (alpha_gap is free in the touchdown element: the impact ran the clock)",

@@ -722,19 +722,6 @@ TEST(MpccSolver, BadOptionsAreRefusedByName) {
   EXPECT_TRUE(solve_mpcc(problem, o).converged);
 }
 
-// MpccSolverOptions::mumps_mem_percent sizes MUMPS' workspace (Ipopt enlarges it and factorises
-// again when it is too small): it changes the time, not the iterates.
-TEST(MpccSolver, MumpsWorkspaceChangesTimeNotIterates) {
-  SmallMpcc problem;
-  MpccSolverOptions large;
-  large.mumps_mem_percent = 1000;  // Ipopt's own default
-  MpccSolverOptions small;  // 100
-  const MpccSolution a = solve_mpcc(problem, large), b = solve_mpcc(problem, small);
-  ASSERT_TRUE(a.converged && b.converged);
-  EXPECT_EQ(a.ipopt_iterations, b.ipopt_iterations);
-  EXPECT_EQ((a.x - b.x).cwiseAbs().maxCoeff(), 0.0);
-}
-
 /// SmallMpcc whose objective turns NaN once `poisoned` is set (by PoisonOnNewline below, at the
 /// first progress line): every step after the first then fails with Invalid_Number_Detected.
 class PoisonedAfterFirstStep : public Wrapper {

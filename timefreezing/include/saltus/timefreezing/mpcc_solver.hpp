@@ -201,16 +201,15 @@ struct MpccSolverOptions {
   /// 1e-6 keeps a margin from zero for the multipliers Ipopt divides by).
   double warm_start_mult_bound_push = 1e-6;
   /// Ipopt's `mumps_mem_percent` (>= 0): the extra MUMPS workspace, in percent of its estimate,
-  /// allocated for every factorisation. Ipopt's default 1000 (eleven times the estimate) costs
-  /// page faults on every factorisation of the small FESD systems; when MUMPS reports the
-  /// workspace too small, Ipopt raises this and factorises again, so a smaller value changes
-  /// time, not results. Measured (bench/README.md, "Where a simulation's time goes"; one run at a
-  /// time, `fesd_accuracy ... --ipopt mumps_mem_percent=...`): the frictional landing 6.1-6.2 s
-  /// with 1000, 4.6 s with 100 (the same 2,302 iterations); Example 3, n_s = 3, 56 / 112 elements
-  /// (side + refine): 5.9 / 13.0 s against 4.3 / 8.5 s, the same iterates; the hopper OCP's first
-  /// step (3600 variables): 11.1 against 11.4 s, the same iterates. 20 changed the iterates (MUMPS
-  /// ran out of workspace and factorised again).
-  int mumps_mem_percent = 100;
+  /// allocated for every factorisation (Ipopt raises it and factorises again when MUMPS reports it
+  /// too small). Ipopt's default 1000 is kept. Measured (bench/README.md, "Where a simulation's
+  /// time goes"; `fesd_accuracy ... --ipopt mumps_mem_percent=100`): 100 makes the small FESD
+  /// solves 25-35 % faster (the frictional landing 6.1 -> 4.6 s, Example 3 with n_s = 3 at 112
+  /// elements 13.0 -> 8.5 s, the same iterates: fewer page faults), but on ill-conditioned
+  /// homotopies the iterates differ (Example 3, n_s = 2, 1,120 elements: final error 1.07e-7 and
+  /// the lift-off read 6e-3 late, against 7.65e-9 and 7.8e-6 with 1000; the plank-box OCP's fourth
+  /// step: 1,123 iterations against 500), so it is not the default.
+  int mumps_mem_percent = 1000;
 
   // ---- Polishing by a branch NLP (top of this file)
   /// Try the branch NLP after the successful steps with residual <= polish_below and after the
