@@ -4,6 +4,7 @@
 //   fesd_accuracy [--json] [--budget SECONDS] [--scheme fesd|fesd-exact|fixed] [--stages N]
 //                 [--finite-elements N1,N2,...] [--refine TARGET] [--contact-side WEIGHT] [--lift]
 //                 [--landing-only] [--ipopt NAME=VALUE]... [--kappa K] [--sigma0 S] [--progress]
+//                 [--tangential-cross]
 //
 // --finite-elements replaces the default N_fe = 1, 2, 4, 8 (the budget rule drops the last one).
 // --refine sets MpccSolverOptions::complementarity_refinement (in (0, 1e-9)) for the guiding
@@ -14,6 +15,8 @@
 // (FesdOptions::lift_step_functions; scheme suffix "+lift"). --ipopt passes an Ipopt option to
 // every solve of both examples (as in hopper_ocp), --kappa and --sigma0 set the homotopy's
 // MpccSolverOptions::kappa and sigma_0, --progress prints one line per Ipopt solve on stderr.
+// --tangential-cross solves both with velocity_switch_detection = false and
+// tangential_switch_detection = true (scheme suffix "+tcross").
 // SALTUS_BENCH_TRACE=1 prints, per configuration, the error of every element boundary's state
 // against the closed form y(tau) (exact_state below): where along the horizon the error arises.
 //
@@ -185,6 +188,9 @@ double refinement = 0.0;
 double contact_side = -1.0;
 /// FesdOptions::lift_step_functions of both examples' runs (--lift).
 bool lift = false;
+/// --tangential-cross: velocity_switch_detection = false with tangential_switch_detection (the
+/// normal velocities' pairs stage-wise, the tangential ones cross-complementary) in both examples.
+bool tangential_cross = false;
 /// Solver overrides of both examples' runs: --ipopt NAME=VALUE (repeatable), --kappa K, --sigma0 S,
 /// --progress (one line per Ipopt solve on stderr).
 std::vector<timefreezing::IpoptOption> ipopt_overrides;
@@ -198,7 +204,8 @@ void apply_solver_flags(timefreezing::MpccSolverOptions& solver) {
 }
 /// The scheme's name with the options that change it.
 std::string scheme_label(const std::string& scheme) {
-  return scheme + (contact_side > 0.0 ? "+side" : "") + (refinement > 0.0 ? "+refine" : "") + (lift ? "+lift" : "");
+  return scheme + (contact_side > 0.0 ? "+side" : "") + (refinement > 0.0 ? "+refine" : "") + (lift ? "+lift" : "") +
+         (tangential_cross ? "+tcross" : "");
 }
 
 Row run_guiding(const std::string& scheme, int stages, int finite_elements) {
@@ -215,6 +222,10 @@ Row run_guiding(const std::string& scheme, int stages, int finite_elements) {
   o.switch_detection = scheme != "fixed";
   if (contact_side >= 0.0) o.contact_side_weight = contact_side;
   o.lift_step_functions = lift;
+  if (tangential_cross) {
+    o.velocity_switch_detection = false;
+    o.tangential_switch_detection = true;
+  }
   if (scheme == "fesd-exact") o.step_equilibration = StepEquilibration::Exact;
   const auto start = std::chrono::steady_clock::now();
   MpccSolverOptions solver;
@@ -280,6 +291,10 @@ Landing run_landing() {
   timefreezing::FesdOptions grid = Case::grid();
   if (contact_side >= 0.0) grid.contact_side_weight = contact_side;
   grid.lift_step_functions = lift;
+  if (tangential_cross) {
+    grid.velocity_switch_detection = false;
+    grid.tangential_switch_detection = true;
+  }
   MpccSolverOptions solver;
   apply_solver_flags(solver);
   const auto sim = simulate_time_freezing(Case::system(), Case::q0(), Case::v0(), grid, timefreezing::NoObjective{}, solver);
@@ -348,6 +363,8 @@ int main(int argc, char** argv) {
       kappa_override = parse_number(argv[++i]);
     } else if (std::strcmp(argv[i], "--sigma0") == 0 && i + 1 < argc && parse_number(argv[i + 1]) > 0.0) {
       sigma0_override = parse_number(argv[++i]);
+    } else if (std::strcmp(argv[i], "--tangential-cross") == 0) {
+      tangential_cross = true;
     } else if (std::strcmp(argv[i], "--progress") == 0) {
       progress = true;
     } else if (std::strcmp(argv[i], "--landing-only") == 0) {
@@ -374,7 +391,7 @@ int main(int argc, char** argv) {
       std::fprintf(stderr,
                    "usage: %s [--json] [--budget SECONDS] [--scheme fesd|fesd-exact|fixed] [--stages 1|2|3] "
                    "[--finite-elements N1,N2,...] [--refine TARGET] [--contact-side WEIGHT] [--lift] [--landing-only] "
-                   "[--ipopt NAME=VALUE]... [--kappa K] [--sigma0 S] [--progress]\n",
+                   "[--ipopt NAME=VALUE]... [--kappa K] [--sigma0 S] [--progress] [--tangential-cross]\n",
                    argv[0]);
       return 2;
     }

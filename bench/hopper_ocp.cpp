@@ -60,6 +60,7 @@ struct Variant {
   /// > 0: a continuation on a_n at sigma_0 (with_an_continuation): the hole continuation runs with
   /// this a_n, then one relaxed NLP per larger a_n of 50, 100, then the homotopy with a_n = 200.
   double first_auxiliary_acceleration = 0.0;
+  bool tangential_switch_detection = false;  ///< FesdOptions::tangential_switch_detection
 };
 
 std::vector<Variant> variants() {
@@ -101,6 +102,10 @@ std::vector<Variant> variants() {
        "as smoothing-then-side, but the selection is switched on at the last solved sigma (1e-3): that NLP is solved "
        "again with the term, then the homotopy goes on",
        R::Smoothing, false, true, 20, false, 4, 1e-3, 0.0, 2, R::Smoothing, 1e-2},
+      {"tangential-cross",
+       "the default with cross-complementarity on the tangential velocity too (FesdOptions::"
+       "tangential_switch_detection: a sticking foot is J_t v = 0 exactly, no creep)",
+       R::Smoothing, false, true, 20, false, 0, 0.0, 0.0, 2, R::Penalty, 0.0, 0.0, true},
   };
 }
 
@@ -172,6 +177,7 @@ int main(int argc, char** argv) {
     FesdOptions grid = Ocp::grid(v.control_intervals, 3, v.stages);
     grid.velocity_switch_detection = v.velocity_switch_detection;
     grid.contact_side_weight = v.contact_side_weight;
+    grid.tangential_switch_detection = v.tangential_switch_detection;
     args->apply(grid);
     auto r = v.first_auxiliary_acceleration > 0.0 ? with_an_continuation(v.first_auxiliary_acceleration, ocp, grid, s)
              : v.hop_guess ? solve_time_freezing_ocp_from_guess(Ocp::system(), ocp, Ocp::q0(), Ocp::v0(), grid,

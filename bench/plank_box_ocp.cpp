@@ -45,6 +45,7 @@ struct Variant {
   double contact_side_weight = 0.0;  ///< FesdOptions::contact_side_weight
   MpccSolverOptions::Relaxation then = MpccSolverOptions::Relaxation::Penalty;
   double then_side_weight = 0.0;
+  bool tangential_switch_detection = false;  ///< FesdOptions::tangential_switch_detection
 };
 
 std::vector<Variant> variants() {
@@ -72,6 +73,10 @@ std::vector<Variant> variants() {
        "the default's first 3 smoothing steps (1e-2 .. 1e-4), then the same smoothing with the contact-side "
        "selection 1e-2 from 1e-5 (alpha_gap is free in the touchdown element: the impact ran the clock)",
        0.0, 3, 1e-5, false, 0.0, MpccSolverOptions::Relaxation::Smoothing, 1e-2},
+      {"tangential-cross",
+       "the default with cross-complementarity on the tangential velocities too (FesdOptions::"
+       "tangential_switch_detection: a stick is J_t v = 0 exactly, no creep)",
+       0.0, 0, 0.0, false, 0.0, MpccSolverOptions::Relaxation::Penalty, 0.0, true},
   };
 }
 
@@ -96,6 +101,7 @@ int main(int argc, char** argv) {
     s.progress = &std::cerr;
     FesdOptions grid = Ocp::grid();
     grid.contact_side_weight = v.contact_side_weight;
+    grid.tangential_switch_detection = v.tangential_switch_detection;
     args->apply(s);
     args->apply(grid);
     TimeFreezingOcpResult<scenes::PlankBox> r;

@@ -328,6 +328,26 @@ TEST(Fesd, MarksTheStageWisePairsSmoothable) {
   EXPECT_EQ(smoothable(o), 2 * 2 * stage_points);  // J_n v and J_t v, two pairs each
   o.smooth_tangential_pairs = false;
   EXPECT_EQ(smoothable(o), 2 * stage_points);  // J_n v only
+  // tangential_switch_detection: J_t v's pairs become cross-complementarity pairs (one per
+  // multiplier and point: the previous element's end when there is one, then the stages), never
+  // smoothed; J_n v keeps its stage-wise ones.
+  o.smooth_tangential_pairs = true;
+  o.tangential_switch_detection = true;
+  EXPECT_EQ(smoothable(o), 2 * stage_points);
+  const FesdMpcc<PointMass> tangential(system, NoObjective{}, Vec<2>(0.1, 0.5), Vec<2>(1.0, -0.5), o);
+  int cross_tangential = 0, stagewise_normal = 0;
+  for (const ComplementarityPair& pair : tangential.complementarity_pairs()) {
+    const bool is_cross = pair.name.find("sum") != std::string::npos;
+    if (pair.name.find("[2]") != std::string::npos) {
+      EXPECT_TRUE(is_cross) << pair.name;
+      EXPECT_FALSE(pair.smoothable) << pair.name;
+      ++cross_tangential;
+    }
+    if (pair.name.find("[1]") != std::string::npos && !is_cross) ++stagewise_normal;
+  }
+  const int elements = o.control_intervals * o.finite_elements;  // 4; the first has no previous end
+  EXPECT_EQ(cross_tangential, 2 * (stage_points + elements - 1));
+  EXPECT_EQ(stagewise_normal, 2 * stage_points);
   o.velocity_switch_detection = true;
   EXPECT_EQ(smoothable(o), 0);  // every function has cross-complementarity
 }

@@ -138,6 +138,17 @@ struct FesdOptions {
   /// stage-wise pairs are the ones MpccSolverOptions::Relaxation::Smoothing smooths: with this
   /// option true (and switch_detection true) Smoothing has nothing to smooth.
   bool velocity_switch_detection = true;
+  /// With switch_detection and velocity_switch_detection = false: the tangential velocities J_t v
+  /// get the cross-complementarity all the same (the normal ones keep the stage-wise pairs). Why:
+  /// a stick is then J_t v = 0 exactly at every stage point with alpha_3 free and both multipliers
+  /// zero, where the smoothed stage-wise pair makes a sticking contact creep at a speed of order
+  /// sigma (smooth_tangential_pairs); and slip-stick transitions sit on element boundaries. Cost:
+  /// a sign change of J_t v in flight must sit on a boundary too (as velocity_switch_detection's
+  /// docstring says for both velocities). No effect when velocity_switch_detection is true.
+  /// Measured (bench/README.md, variant `tangential-cross`): the plank-box OCP's homotopy fails
+  /// at sigma = 1e-3 (the default's at 1e-6); NOSNOC's frictional landing with the normal pairs
+  /// stage-wise: stop error 7.8e-6 (full velocity switch detection: 6.2e-12). Hence off.
+  bool tangential_switch_detection = false;
   /// Mark the tangential velocity's stage-wise pairs smoothable (Relaxation::Smoothing holds them
   /// on lambda alpha = sigma). false: they keep the inequality relaxation. Why: in stick the
   /// friction force is a_n mu (1 - 2 alpha_3) times the closing weight; smoothed, alpha_3 != 1/2
@@ -844,7 +855,8 @@ class FesdMpcc final : public Mpcc {
   /// Does switching function m have cross-complementarity (so its switches sit on boundaries)?
   /// The other active ones get the stage-wise pairs (build_pairs).
   bool cross_complementary(int m) const {
-    return switching_active(m) && options_.switch_detection && (options_.velocity_switch_detection || m % 3 == 0);
+    return switching_active(m) && options_.switch_detection &&
+           (options_.velocity_switch_detection || m % 3 == 0 || (m % 3 == 2 && options_.tangential_switch_detection));
   }
 
   // ---- exact step equilibration (file comment) ------------------------------------------------
