@@ -599,10 +599,10 @@ void MpccSolverOptions::validate() const {
                  "MpccSolverOptions::bound_relax_factor must be >= 0 and finite, got ", bound_relax_factor);
   SALTUS_REQUIRE(warm_start_bound_push > 0.0 && std::isfinite(warm_start_bound_push),
                  "MpccSolverOptions::warm_start_bound_push must be > 0 and finite, got ", warm_start_bound_push);
-  SALTUS_REQUIRE(mumps_mem_percent >= 0, "MpccSolverOptions::mumps_mem_percent must be >= 0, got ", mumps_mem_percent);
   SALTUS_REQUIRE(warm_start_mult_bound_push > 0.0 && std::isfinite(warm_start_mult_bound_push),
                  "MpccSolverOptions::warm_start_mult_bound_push must be > 0 and finite, got ",
                  warm_start_mult_bound_push);
+  SALTUS_REQUIRE(mumps_mem_percent >= 0, "MpccSolverOptions::mumps_mem_percent must be >= 0, got ", mumps_mem_percent);
   SALTUS_REQUIRE(polish_single_flips >= 0, "MpccSolverOptions::polish_single_flips must be >= 0, got ",
                  polish_single_flips);
   SALTUS_REQUIRE(polish_single_flip_max_biactive >= 0,

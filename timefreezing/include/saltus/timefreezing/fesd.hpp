@@ -146,7 +146,8 @@ struct FesdOptions {
   /// a sign change of J_t v in flight must sit on a boundary too (as velocity_switch_detection's
   /// docstring says for both velocities). No effect when velocity_switch_detection is true.
   /// Measured (bench/README.md, variant `tangential-cross`): the plank-box OCP's homotopy fails
-  /// at sigma = 1e-3 (the default's at 1e-6); NOSNOC's frictional landing with the normal pairs
+  /// at sigma = 1e-3 (the default's at 1e-6), the hopper's stalls at 2.0e-3 (the default's at
+  /// 2.4e-4); NOSNOC's frictional landing with the normal pairs
   /// stage-wise: stop error 7.8e-6 (full velocity switch detection: 6.2e-12). Hence off.
   bool tangential_switch_detection = false;
   /// Mark the tangential velocity's stage-wise pairs smoothable (Relaxation::Smoothing holds them
