@@ -9,6 +9,7 @@
 
 #include <saltus/hybrid/reference/resimulation.hpp>
 #include <saltus/hybrid/simulation/simulator.hpp>
+#include <saltus/hybrid/vocabulary/trajectory_report.hpp>
 #include <saltus/sensitivity/jump_gain.hpp>
 #include <saltus/timefreezing/fesd.hpp>
 #include <saltus/timefreezing/mpcc_solver.hpp>
@@ -19,6 +20,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <iostream>
 #include <limits>
 #include <sstream>
@@ -972,6 +974,19 @@ TEST(TimeFreezingRecovery, TrajectoryOfALandingASlideAStopAndALiftOff) {
   EXPECT_EQ(traj.final_state(), points.back().y.head<4>());
   // The input: recover_reference's samples (u = (t, 0) at every point, linear in between).
   EXPECT_NEAR(traj.input(0.125, Vec<4>::Zero(), Mode<1>{})[0], 0.125, 1e-14);
+  // print_events: the events, and no integrator statistics for a trajectory nothing integrated
+  // (a user's trial: it read "0 steps, 0 rhs evaluations").
+  {
+    std::FILE* out = std::tmpfile();
+    ASSERT_NE(out, nullptr);
+    print_events(system.scene(), traj, out);
+    std::rewind(out);
+    std::string printed;
+    for (int c = std::fgetc(out); c != EOF; c = std::fgetc(out)) printed += static_cast<char>(c);
+    std::fclose(out);
+    EXPECT_NE(printed.find("3 events, not integrated"), std::string::npos) << printed;
+    EXPECT_EQ(printed.find("0 steps"), std::string::npos) << printed;
+  }
   // Bad tolerances are refused by name.
   TrajectoryRecoveryOptions bad;
   bad.gap_tolerance = 0.0;

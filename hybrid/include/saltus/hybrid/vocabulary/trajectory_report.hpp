@@ -26,7 +26,8 @@ inline std::filesystem::path report_directory() {
 /// Prints one line per event to `out`: "t = <s>  <contact> <guard kind>, ...  <mode before> ->
 /// <mode after>" (contacts by their scene names, modes as describe() writes them), then the
 /// status, the number of events, the integrator's steps and right-hand-side evaluations and the
-/// wall time.
+/// wall time; a trajectory no integrator produced (statistics all zero: e.g. one recovered from
+/// a time-freezing solution, timefreezing/simulation.hpp) says so instead of "0 steps".
 template <Scene S>
 void print_events(const S& scene, const HybridTrajectory<S>& traj, std::FILE* out = stdout) {
   for (const auto& ev : traj.events) {
@@ -36,9 +37,14 @@ void print_events(const S& scene, const HybridTrajectory<S>& traj, std::FILE* ou
     std::fprintf(out, "  t = %.12f  %-28s %s -> %s\n", ev.t, guards.c_str(), describe(scene, ev.mode_before).c_str(),
                  describe(scene, ev.mode_after).c_str());
   }
+  const auto& st = traj.statistics;
+  if (st.steps == 0 && st.rejected_steps == 0 && st.rhs_evaluations == 0 && st.wall_seconds == 0.0) {
+    std::fprintf(out, "  status %s, %zu events, not integrated (no integrator statistics)\n", to_string(traj.status),
+                 traj.events.size());
+    return;
+  }
   std::fprintf(out, "  status %s, %zu events, %ld steps, %ld rhs evaluations, %.3f ms\n", to_string(traj.status),
-               traj.events.size(), traj.statistics.steps, traj.statistics.rhs_evaluations,
-               1e3 * traj.statistics.wall_seconds);
+               traj.events.size(), st.steps, st.rhs_evaluations, 1e3 * st.wall_seconds);
 }
 
 /// Writes <directory>/<name>.json (write_json: segments and events) and <directory>/<name>.csv
