@@ -61,6 +61,8 @@ struct Variant {
   /// this a_n, then one relaxed NLP per larger a_n of 50, 100, then the homotopy with a_n = 200.
   double first_auxiliary_acceleration = 0.0;
   bool tangential_switch_detection = false;  ///< FesdOptions::tangential_switch_detection
+  /// MpccSolverOptions::polish_fallback on, with polish_max_iter = 500
+  bool polish_fallback = false;
 };
 
 std::vector<Variant> variants() {
@@ -106,6 +108,10 @@ std::vector<Variant> variants() {
        "the default with cross-complementarity on the tangential velocity too (FesdOptions::"
        "tangential_switch_detection: a sticking foot is J_t v = 0 exactly, no creep)",
        R::Smoothing, false, true, 20, false, 0, 0.0, 0.0, 2, R::Penalty, 0.0, 0.0, true},
+      {"polish-fallback",
+       "the default with the polish's fallback (MpccSolverOptions::polish_fallback: the biactive pairs flipped, all, "
+       "then one at a time) and 500 iterations per polish attempt",
+       R::Smoothing, false, true, 20, false, 0, 0.0, 0.0, 2, R::Penalty, 0.0, 0.0, false, true},
   };
 }
 
@@ -169,6 +175,10 @@ int main(int argc, char** argv) {
     MpccSolverOptions s = Ocp::solver();
     s.relaxation = v.relaxation;
     s.progress = &std::cerr;
+    if (v.polish_fallback) {
+      s.polish_fallback = true;
+      s.polish_max_iter = 500;
+    }
     args->apply(s);
     if (v.smoothing_steps > 0) {
       s.max_homotopy_steps = v.smoothing_steps;

@@ -46,6 +46,8 @@ struct Variant {
   MpccSolverOptions::Relaxation then = MpccSolverOptions::Relaxation::Penalty;
   double then_side_weight = 0.0;
   bool tangential_switch_detection = false;  ///< FesdOptions::tangential_switch_detection
+  /// MpccSolverOptions::polish_fallback on, with polish_max_iter = 500
+  bool polish_fallback = false;
 };
 
 std::vector<Variant> variants() {
@@ -77,6 +79,10 @@ std::vector<Variant> variants() {
        "the default with cross-complementarity on the tangential velocities too (FesdOptions::"
        "tangential_switch_detection: a stick is J_t v = 0 exactly, no creep)",
        0.0, 0, 0.0, false, 0.0, MpccSolverOptions::Relaxation::Penalty, 0.0, true},
+      {"polish-fallback",
+       "the default with the polish's fallback (MpccSolverOptions::polish_fallback: the biactive pairs flipped, all, "
+       "then one at a time) and 500 iterations per polish attempt",
+       0.0, 0, 0.0, false, 0.0, MpccSolverOptions::Relaxation::Penalty, 0.0, false, true},
   };
 }
 
@@ -99,6 +105,10 @@ int main(int argc, char** argv) {
     MpccSolverOptions s = Ocp::solver();
     if (v.scholtes) s.relaxation = MpccSolverOptions::Relaxation::Scholtes;
     s.progress = &std::cerr;
+    if (v.polish_fallback) {
+      s.polish_fallback = true;
+      s.polish_max_iter = 500;
+    }
     FesdOptions grid = Ocp::grid();
     grid.contact_side_weight = v.contact_side_weight;
     grid.tangential_switch_detection = v.tangential_switch_detection;
