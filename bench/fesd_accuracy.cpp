@@ -1,7 +1,7 @@
 // Accuracy of the FESD discretisation of the time-freezing system (timefreezing/) against closed
 // forms, and the same Radau IIA scheme on a fixed grid, as the grid is refined.
 //
-//   fesd_accuracy [--json] [--budget SECONDS] [--scheme fesd|fesd-exact|fixed] [--stages N]
+//   fesd_accuracy [--json] [--budget SECONDS] [--scheme fesd|fesd-exact|fixed] [--stages 1|2|3]
 //                 [--finite-elements N1,N2,...] [--refine TARGET] [--contact-side WEIGHT] [--lift]
 //                 [--landing-only] [--ipopt NAME=VALUE]... [--kappa K] [--sigma0 S] [--progress]
 //                 [--tangential-cross]
@@ -13,8 +13,9 @@
 // examples (default: 0 for the guiding example, the landing's own 1e-2); --landing-only runs the
 // frictional landing alone. --lift solves both with the lifted step functions
 // (FesdOptions::lift_step_functions; scheme suffix "+lift"). --ipopt passes an Ipopt option to
-// every solve of both examples (as in hopper_ocp), --kappa and --sigma0 set the homotopy's
-// MpccSolverOptions::kappa and sigma_0, --progress prints one line per Ipopt solve on stderr.
+// every solve of both examples (as in hopper_ocp), --kappa K (in (0, 1)) and --sigma0 S (> 0) set
+// the homotopy's MpccSolverOptions::kappa and sigma_0 (any of the three adds "+opts" to the scheme),
+// --progress prints one line per Ipopt solve on stderr.
 // --tangential-cross solves both with velocity_switch_detection = false and
 // tangential_switch_detection = true (scheme suffix "+tcross").
 // SALTUS_BENCH_TRACE=1 prints, per configuration, the error of every element boundary's state
@@ -202,10 +203,21 @@ void apply_solver_flags(timefreezing::MpccSolverOptions& solver) {
   if (sigma0_override > 0.0) solver.sigma_0 = sigma0_override;
   if (progress) solver.progress = &std::cerr;
 }
+/// "+opts" when --ipopt, --kappa or --sigma0 changed the solver.
+std::string solver_suffix() {
+  return ipopt_overrides.empty() && kappa_override == 0.0 && sigma0_override == 0.0 ? "" : "+opts";
+}
 /// The scheme's name with the options that change it.
 std::string scheme_label(const std::string& scheme) {
   return scheme + (contact_side > 0.0 ? "+side" : "") + (refinement > 0.0 ? "+refine" : "") + (lift ? "+lift" : "") +
-         (tangential_cross ? "+tcross" : "");
+         (tangential_cross ? "+tcross" : "") + solver_suffix();
+}
+/// The frictional landing's scheme: FESD with its own contact-side selection unless
+/// --contact-side overrides it.
+std::string landing_label() {
+  const double side = contact_side >= 0.0 ? contact_side : scenes::FrictionalLanding::grid().contact_side_weight;
+  return std::string("fesd") + (side > 0.0 ? "+side" : "") + (lift ? "+lift" : "") + (tangential_cross ? "+tcross" : "") +
+         solver_suffix();
 }
 
 Row run_guiding(const std::string& scheme, int stages, int finite_elements) {
@@ -388,6 +400,7 @@ int main(int argc, char** argv) {
         return 2;
       }
     } else {
+      std::fprintf(stderr, "fesd_accuracy: \"%s\" is unknown, or its value is missing or out of range\n", argv[i]);
       std::fprintf(stderr,
                    "usage: %s [--json] [--budget SECONDS] [--scheme fesd|fesd-exact|fixed] [--stages 1|2|3] "
                    "[--finite-elements N1,N2,...] [--refine TARGET] [--contact-side WEIGHT] [--lift] [--landing-only] "
@@ -459,7 +472,7 @@ int main(int argc, char** argv) {
     try {
       landing = run_landing();
       std::fprintf(stderr, "[landing %s n_s=2 N_fe=5] stop err %s, %s, compl %s, %d iterations, %.1f s\n",
-                   lift ? "fesd+lift" : "fesd", cell(landing.stop_error).c_str(), landing.converged ? "converged" : "NOT converged",
+                   landing_label().c_str(), cell(landing.stop_error).c_str(), landing.converged ? "converged" : "NOT converged",
                    cell(landing.complementarity).c_str(), landing.iterations, landing.seconds);
     } catch (const std::exception& e) {
       landing.error = e.what();
@@ -498,7 +511,7 @@ int main(int argc, char** argv) {
     for (const Dropped& d : dropped)
       dropped_list.push_back(
           {{"scheme", d.scheme}, {"n_s", d.stages}, {"finite_elements", d.finite_elements}, {"reason", d.reason}});
-    nlohmann::ordered_json land = {{"scheme", lift ? "fesd+lift" : "fesd"},
+    nlohmann::ordered_json land = {{"scheme", landing_label()},
                                    {"stop_error", number(landing.stop_error)},
                                    {"converged", landing.converged},
                                    {"complementarity", number(landing.complementarity)},
@@ -513,6 +526,7 @@ int main(int argc, char** argv) {
     return failed ? 1 : 0;
   }
 
+  if (!landing_only) {
   std::printf("Guiding example (time-freezing paper, Example 3): 14 control intervals over tau in [0, 3.5]\n");
   std::printf("%-6s %4s %5s %9s %13s %14s %13s %11s %5s %9s %7s %9s\n", "scheme", "n_s", "N_fe", "elements",
               "touchdown err", "frozen-end err", "lift-off err", "final err", "conv", "compl", "iters", "seconds");
@@ -538,8 +552,10 @@ int main(int argc, char** argv) {
     std::printf("%-6s %4d %12s %8s\n", o.scheme.c_str(), o.stages, span,
                 std::isfinite(o.order) ? std::to_string(o.order).substr(0, 5).c_str() : "-");
   }
+  }
   if (!with_landing) return failed ? 1 : 0;
-  std::printf("\nFrictional landing (g = 10, mu = 0.2, a_n = 20, 20 x 0.125, N_fe = 5, n_s = 2, FESD)\n");
+  std::printf("\nFrictional landing (g = 10, mu = 0.2, a_n = 20, 20 x 0.125, N_fe = 5, n_s = 2, %s)\n",
+              landing_label().c_str());
   if (!landing.error.empty())
     std::printf("threw: %s\n", landing.error.c_str());
   else

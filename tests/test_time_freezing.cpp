@@ -547,8 +547,18 @@ TEST(TimeFreezingSimulation, GuidingExampleMatchesItsClosedForms) {
 #else
   constexpr bool whole_horizon = true;
 #endif
-  const auto sim = simulate_time_freezing(system, Vec<2>(0, 1), Vec<2>(0, 0), o, scenes::Example3{});
+  // The progress lines: each control interval's MPCC announced before its homotopy's lines.
+  std::ostringstream progress;
+  MpccSolverOptions solver;
+  solver.progress = &progress;
+  const auto sim = simulate_time_freezing(system, Vec<2>(0, 1), Vec<2>(0, 0), o, scenes::Example3{}, solver);
   ASSERT_TRUE(sim.converged()) << sim.solution.message;
+  const std::string lines = progress.str();
+  EXPECT_EQ(lines.rfind("simulate_time_freezing: control interval 1 of " + std::to_string(o.control_intervals) + "\n", 0),
+            0u)
+      << lines.substr(0, 200);
+  EXPECT_NE(lines.find("control interval " + std::to_string(o.control_intervals) + " of "), std::string::npos);
+  EXPECT_NE(lines.find("mpcc step   0"), std::string::npos);
   const double t_impact = std::sqrt(2.0 / g_ex3);
   // The recovered trajectory (recover_trajectory): the impact at t = sqrt(2/g) from flight into
   // the closed (frictionless) contact, x+ at rest vertically; the free fall before it exactly

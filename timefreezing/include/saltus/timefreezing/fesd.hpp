@@ -145,10 +145,12 @@ struct FesdOptions {
   /// sigma (smooth_tangential_pairs); and slip-stick transitions sit on element boundaries. Cost:
   /// a sign change of J_t v in flight must sit on a boundary too (as velocity_switch_detection's
   /// docstring says for both velocities). No effect when velocity_switch_detection is true.
-  /// Measured (bench/README.md, variant `tangential-cross`): the plank-box OCP's homotopy fails
-  /// at sigma = 1e-3 (the default's at 1e-6), the hopper's stalls at 2.0e-3 (the default's at
-  /// 2.4e-4); NOSNOC's frictional landing with the normal pairs
-  /// stage-wise: stop error 7.8e-6 (full velocity switch detection: 6.2e-12). Hence off.
+  /// Measured (bench/README.md, variant `tangential-cross`), against the same problems with
+  /// velocity_switch_detection = false and this option off: the plank-box OCP's homotopy fails at
+  /// sigma = 1e-3 (without it: 1e-6), the hopper's stalls at 2.0e-3 (without it: 2.4e-4). NOSNOC's
+  /// frictional landing with it: stop error 7.8e-6, against 6.2e-12 with velocity_switch_detection
+  /// = true (the landing without either was not measured). Hence off; no measured case where it
+  /// helps. It is there to test the creep hypothesis above, which these runs did not support.
   bool tangential_switch_detection = false;
   /// Mark the tangential velocity's stage-wise pairs smoothable (Relaxation::Smoothing holds them
   /// on lambda alpha = sigma). false: they keep the inequality relaxation. Why: in stick the

@@ -205,10 +205,12 @@ struct MpccSolverOptions {
   /// too small). Ipopt's default 1000 is kept. Measured (bench/README.md, "Where a simulation's
   /// time goes"; `fesd_accuracy ... --ipopt mumps_mem_percent=100`): 100 makes the small FESD
   /// solves 25-35 % faster (the frictional landing 6.1 -> 4.6 s, Example 3 with n_s = 3 at 112
-  /// elements 13.0 -> 8.5 s, the same iteration counts and errors: fewer page faults), but on ill-conditioned
-  /// homotopies the iterates differ (Example 3, n_s = 2, 1,120 elements: final error 1.07e-7 and
-  /// the lift-off read 6e-3 late, against 7.65e-9 and 7.8e-6 with 1000; the plank-box OCP's fourth
-  /// step: 1,123 iterations against 500), so it is not the default.
+  /// elements 13.0 -> 8.5 s, the same iteration counts and errors; with 1000 a profile shows page
+  /// faults in MUMPS' workspace), but on ill-conditioned homotopies the iterates differ (Example 3,
+  /// n_s = 2, 1,120 elements: final error 1.07e-7 and the lift-off read 6e-3 late, against 7.65e-9
+  /// and 7.8e-6 with 1000; the plank-box OCP's fourth step: 1,123 iterations against 500; 20
+  /// changes them even on the landing), so it is not the default. An entry "mumps_mem_percent" in
+  /// ipopt_options overrides this field (they are applied last).
   int mumps_mem_percent = 1000;
 
   // ---- Polishing by a branch NLP (top of this file)

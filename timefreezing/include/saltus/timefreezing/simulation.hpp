@@ -15,6 +15,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <ostream>
 #include <string>
 #include <utility>
 #include <vector>
@@ -546,6 +547,8 @@ enum class SimulationSplit {
 /// PerControlInterval (the default) solves N small MPCCs in sequence; the cross-complementarity
 /// across their boundaries is then not imposed (the first element of each interval has no
 /// previous end point), as in NOSNOC's integrator.
+/// With solver.progress set, a line "simulate_time_freezing: control interval k of N" precedes each
+/// interval's homotopy lines (PerControlInterval).
 /// Returns the result whether or not every homotopy converged: converged() is true only when all
 /// did; solution holds the totals (iterations, seconds; complementarity the largest; steps all).
 /// Throws InvalidArgument for bad options or initial states, as FesdMpcc and solve_mpcc do.
@@ -575,6 +578,9 @@ TimeFreezingSimulation<S> simulate_time_freezing(const TimeFreezingSystem<S>& sy
   double tau0 = 0.0, cost0 = 0.0;
   out.solution.converged = true;
   for (int k = 0; k < pieces; ++k) {
+    // Which MPCC the progress lines that follow belong to (each restarts at step 0).
+    if (solver.progress && pieces > 1)
+      *solver.progress << "simulate_time_freezing: control interval " << k + 1 << " of " << pieces << "\n";
     const FesdMpcc<S, InputLaw> problem(system, law, q, v, piece);
     MpccSolution sol = solve_mpcc(problem, solver);
     auto pts = problem.points(sol.x);
