@@ -528,15 +528,15 @@ int main(int argc, char** argv) {
 
   if (!landing_only) {
   std::printf("Guiding example (time-freezing paper, Example 3): 14 control intervals over tau in [0, 3.5]\n");
-  std::printf("%-6s %4s %5s %9s %13s %14s %13s %11s %5s %9s %7s %9s\n", "scheme", "n_s", "N_fe", "elements",
+  std::printf("%-24s %4s %5s %9s %13s %14s %13s %11s %5s %9s %7s %9s\n", "scheme", "n_s", "N_fe", "elements",
               "touchdown err", "frozen-end err", "lift-off err", "final err", "conv", "compl", "iters", "seconds");
   for (const Row& r : rows) {
     if (!r.error.empty()) {
-      std::printf("%-6s %4d %5d  threw: %s\n", r.scheme.c_str(), r.stages, r.finite_elements, r.error.c_str());
+      std::printf("%-24s %4d %5d  threw: %s\n", r.scheme.c_str(), r.stages, r.finite_elements, r.error.c_str());
       continue;
     }
     const std::string lift = (r.lift_off_estimated ? "~" : "") + cell(r.lift_off);
-    std::printf("%-6s %4d %5d %9d %13s %14s %13s %11s %5s %9s %7d %9.1f\n", r.scheme.c_str(), r.stages,
+    std::printf("%-24s %4d %5d %9d %13s %14s %13s %11s %5s %9s %7d %9.1f\n", r.scheme.c_str(), r.stages,
                 r.finite_elements, r.elements, cell(r.touchdown).c_str(), cell(r.frozen_end).c_str(), lift.c_str(),
                 cell(r.final_error).c_str(), r.converged ? "yes" : "NO", cell(r.complementarity).c_str(), r.iterations,
                 r.seconds);
@@ -545,11 +545,11 @@ int main(int argc, char** argv) {
     std::printf("dropped: %s n_s = %d N_fe = %d (%s)\n", d.scheme.c_str(), d.stages, d.finite_elements,
                 d.reason.c_str());
   std::printf("\nObserved order of the final error, log(e2/e1) / log(h2/h1) (expected: fesd 2 n_s - 1, fixed 1)\n");
-  std::printf("%-6s %4s %12s %8s\n", "scheme", "n_s", "N_fe", "order");
+  std::printf("%-24s %4s %12s %8s\n", "scheme", "n_s", "N_fe", "order");
   for (const Order& o : orders) {
     char span[32];
     std::snprintf(span, sizeof span, "%d -> %d", o.from, o.to);
-    std::printf("%-6s %4d %12s %8s\n", o.scheme.c_str(), o.stages, span,
+    std::printf("%-24s %4d %12s %8s\n", o.scheme.c_str(), o.stages, span,
                 std::isfinite(o.order) ? std::to_string(o.order).substr(0, 5).c_str() : "-");
   }
   }
