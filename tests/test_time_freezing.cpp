@@ -892,15 +892,21 @@ FesdPoint<6, 3, 2> recovery_point(int element, int stage, double tau, double t, 
   return p;
 }
 
+/// The scene of the recovery tests' hand-made points: the point mass with friction mu = 0.3,
+/// a_n = 10.
+TimeFreezingSystem<PointMass> recovery_system() {
+  scenes::PointMassParameters pm;
+  pm.friction = Friction::Planar;
+  pm.mu = 0.3;
+  return TimeFreezingSystem<PointMass>(PointMass(pm), 10.0);
+}
+
 // An impact absorbed into a flowing element (recover_trajectory's docstring; the flagships'
 // velocity_switch_detection = false): the element after the touchdown runs the clock (0.1 -> 0.12
 // at its first stage) while the normal velocity goes from -1 to 0. Read as an impact at t = 0.1
 // with x+ at that stage, held over the advance, then the slide.
 TEST(TimeFreezingRecovery, AnImpactAbsorbedIntoAFlowingElementIsAnImpactEvent) {
-  scenes::PointMassParameters pm;
-  pm.friction = Friction::Planar;
-  pm.mu = 0.3;
-  const TimeFreezingSystem<PointMass> system(PointMass(pm), 10.0);
+  const TimeFreezingSystem<PointMass> system = recovery_system();
   std::vector<FesdPoint<6, 3, 2>> points;
   auto add = [&](int element, int stage, double tau, double t, Vec<2> q, Vec<2> v) {
     points.push_back(recovery_point(element, stage, tau, t, q, v));
@@ -934,10 +940,7 @@ TEST(TimeFreezingRecovery, AnImpactAbsorbedIntoAFlowingElementIsAnImpactEvent) {
 // a lift-off. Expected: three events (impact with a touchdown guard, stop, release), four segments
 // with the modes open, slip+, stick, open, and dense output through the points.
 TEST(TimeFreezingRecovery, TrajectoryOfALandingASlideAStopAndALiftOff) {
-  scenes::PointMassParameters pm;
-  pm.friction = Friction::Planar;
-  pm.mu = 0.3;
-  const TimeFreezingSystem<PointMass> system(PointMass(pm), 10.0);
+  const TimeFreezingSystem<PointMass> system = recovery_system();
   std::vector<FesdPoint<6, 3, 2>> points;
   auto add = [&](int element, int stage, double tau, double t, Vec<2> q, Vec<2> v, double weight) {
     points.push_back(recovery_point(element, stage, tau, t, q, v, weight));

@@ -341,9 +341,8 @@ HybridTrajectory<S> recover_trajectory(const TimeFreezingSystem<S>& system,
     if (!frictional(i) || std::abs(vt) <= vel_tol) return ImpulseMode{ImpulseRole::Stick, Eigen::Vector2d::Zero()};
     return ImpulseMode{ImpulseRole::Slip, Eigen::Vector2d(vt > 0.0 ? 1.0 : -1.0, 0.0)};
   };
-  // The piece of flowing element e in physical time.
-  // The piece of element e through its points from `first` on (-1: the element's start point,
-  // r >= 0: stage r) to its end.
+  // The piece of element e in physical time, through its points from `first` on (-1: the
+  // element's start point, r >= 0: stage r) to its end.
   auto piece_of = [&](int e, int first = -1) {
     PolynomialPiece<nx> p;
     const int n = stages - first;  // the number of nodes, 2 .. n_s + 1 (1 when first is the end)
