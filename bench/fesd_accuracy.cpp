@@ -19,7 +19,9 @@
 // --tangential-cross solves both with velocity_switch_detection = false and
 // tangential_switch_detection = true (scheme suffix "+tcross").
 // SALTUS_BENCH_TRACE=1 prints, per configuration, the error of every element boundary's state
-// against the closed form y(tau) (exact_state below): where along the horizon the error arises.
+// against the closed form y(tau) (exact_state below): where along the horizon the error arises;
+// and for the element that starts there its length, its stage points' ODE weight Theta and step
+// functions alpha (gap, J_n v).
 //
 // --scheme and --stages restrict the guiding example to one scheme or one n_s (e.g. to rerun a
 // dropped configuration with a larger --budget); the frictional landing runs only without them.
@@ -255,8 +257,20 @@ Row run_guiding(const std::string& scheme, int stages, int finite_elements) {
     for (std::size_t e = 0; e <= sim.element_lengths.size(); ++e) {
       const auto& p = sim.points[e * static_cast<std::size_t>(stages)];
       const Vec<5> err = p.y.template head<5>() - exact_state(p.tau);
-      std::fprintf(stderr, "  tau %.6f  t %.9f  error q1 %+.2e q2 %+.2e v1 %+.2e v2 %+.2e t %+.2e\n", p.tau, p.y[4],
+      std::fprintf(stderr, "  tau %.9f  t %.9f  error q1 %+.2e q2 %+.2e v1 %+.2e v2 %+.2e t %+.2e", p.tau, p.y[4],
                    err[0], err[1], err[2], err[3], err[4]);
+      // The element that starts here: its stage points' ODE weight Theta and step functions
+      // (gap, J_n v).
+      if (e < sim.element_lengths.size()) {
+        std::fprintf(stderr, "  | h %.2e Theta", sim.element_lengths[e]);
+        for (int r = 0; r < stages; ++r) std::fprintf(stderr, " %.9f", sim.points[1 + e * stages + r].ode_weight);
+        std::fprintf(stderr, " alpha_gap,vn");
+        for (int r = 0; r < stages; ++r) {
+          const auto& a = sim.points[1 + e * stages + r].alpha;
+          std::fprintf(stderr, " %.3g,%.3g", a[0], a[1]);
+        }
+      }
+      std::fprintf(stderr, "\n");
     }
   }
 

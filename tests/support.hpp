@@ -19,8 +19,30 @@
 #include <random>
 #include <sstream>
 #include <string>
+#include <vector>
 
 namespace saltus::testing {
+
+/// The eps values of a remainder-slope check (the validation protocol's eps^2 test): all of them
+/// in the release stage. Under the sanitizers (tests/CMakeLists.txt defines
+/// SALTUS_TESTS_UNDER_SANITIZERS; the nonlinear runs there are 5-20 times slower) only the first
+/// and the last: every run takes the same code paths, and the slope between the two ends of the
+/// range is still checked. The release stage keeps the fit over every value.
+inline std::vector<double> slope_eps(const std::vector<double>& eps) {
+#if defined(SALTUS_TESTS_UNDER_SANITIZERS)
+  if (eps.size() > 2) return {eps.front(), eps.back()};
+#endif
+  return eps;
+}
+
+/// Monte Carlo run counts: a quarter under the sanitizers (see slope_eps), at least 2.
+inline int monte_carlo_runs(int runs) {
+#if defined(SALTUS_TESTS_UNDER_SANITIZERS)
+  return runs / 4 > 2 ? runs / 4 : 2;
+#else
+  return runs;
+#endif
+}
 
 /// ||a - b||_inf <= abs_tol + rel_tol * ||b||_inf, reporting both matrices otherwise.
 template <class A, class B>

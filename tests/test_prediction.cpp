@@ -155,7 +155,7 @@ TEST(Prediction, HopperPushOffUnderFeedbackInClosedLoop) {
   const auto& ev = ref.trajectory.events;
   const std::vector<double> samples = {0.5 * (ev[0].t + ev[1].t), 0.5 * (ev[1].t + ev[2].t), ev[2].t + 0.02};
   const auto v = [](double t) { return Vec<2>(0.3 * std::sin(10 * t), -0.2).eval(); };
-  const std::vector<double> eps = {1e-1, 3e-2, 1e-2, 3e-3, 1e-3};
+  const std::vector<double> eps = slope_eps({1e-1, 3e-2, 1e-2, 3e-3, 1e-3});
   // Extensions of 20 ms cover the perturbed event shifts (|eps dt| < 1 ms here). Longer ones
   // backwards in time grow like exp(kd / I t) (the damping runs backwards) and stop early.
   LinearisationOptions closed_loop = tight_linearisation();
@@ -167,7 +167,7 @@ TEST(Prediction, HopperPushOffUnderFeedbackInClosedLoop) {
   // so the absolute perturbation runs from 3e-2 to 3e-6): the remainder stays above the
   // integration floor (~1e-12) down to the smallest eps, and the slope is fitted on all points.
   const Vec<8> z0_large = 3000.0 * references::hopper_push_off_perturbation();
-  const auto full_range = prediction_remainder(lin, ref.options, z0_large, v, samples, default_prediction_eps());
+  const auto full_range = prediction_remainder(lin, ref.options, z0_large, v, samples, slope_eps(default_prediction_eps()));
   expect_slope(full_range, 1.9);
   EXPECT_GT(*std::min_element(full_range.remainder.begin(), full_range.remainder.end()), 1e-11)
       << "a point at the noise floor: the fit over 1e-2..1e-6 would not be on all points";
@@ -186,7 +186,8 @@ TEST(Prediction, PlankBoxPerturbedStateAndInput) {
   const auto ref = references::plank_box();
   const LinearisedSystem<scenes::PlankBox> lin(ref.scene, ref.trajectory, tight_linearisation());
   const auto fit = prediction_remainder(lin, ref.options, references::plank_box_perturbation(),
-                                             [](double t) { return Vec<3>(0.1, 0.2 * t, 0.0).eval(); }, {0.1, 0.5, 1.0});
+                                             [](double t) { return Vec<3>(0.1, 0.2 * t, 0.0).eval(); }, {0.1, 0.5, 1.0},
+                                        slope_eps(default_prediction_eps()));
   expect_slope(fit, 1.9);
 }
 

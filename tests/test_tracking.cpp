@@ -19,6 +19,8 @@
 using namespace saltus;
 using scenes::PlankBox;
 using scenes::PointMass;
+using saltus::testing::monte_carlo_runs;
+using saltus::testing::slope_eps;
 
 namespace {
 
@@ -57,7 +59,7 @@ ClosedLoopRun<S> run_closed_loop(const references::Reference<S>& ref, const Refe
 template <Scene S>
 RemainderFit closed_loop_remainder(const references::Reference<S>& ref, const ReferenceSpreadingController<S>& controller,
                                    const ClosedLoopLinearisation<S>& cl, const Vec<2 * S::nq>& d, double T,
-                                   const std::vector<double>& eps_values = default_prediction_eps()) {
+                                   const std::vector<double>& eps_values = slope_eps(default_prediction_eps())) {
   const Vec<2 * S::nq> z = cl.propagate(d, T);
   const Vec<2 * S::nq> x0 = ref.trajectory.state(0, ref.trajectory.segments.front().t_begin);
   RemainderFit fit;
@@ -230,7 +232,7 @@ TEST(Tracking, ClosedLoopPredictionHasSlopeTwoOnTheHopper) {
   const ClosedLoopLinearisation<Hopper> cl(ol, design.gains);
   const RemainderFit fit = closed_loop_remainder(ref, controller, cl,
                                                  Vec<8>(1000.0 * references::hopper_push_off_perturbation()), T,
-                                                 {1e-3, 1e-4, 1e-5});
+                                                 slope_eps({1e-3, 1e-4, 1e-5}));
   report("LQR", fit);
   EXPECT_TRUE(fit.structure_matched);
   EXPECT_GE(fit.slope, 1.9);
@@ -342,7 +344,7 @@ TEST(Tracking, PlankBoxThroughTheSimultaneousLandingInBothCones) {
   std::printf("plank-box LQR: verdict %s, a(T) in [%.4g, %.4g]\n", to_string(s.verdict), s.lower_bound, s.upper_bound);
   EXPECT_EQ(s.verdict, StabilityVerdict::Stable);
   MonteCarloOptions<PlankBox> mc;
-  mc.runs = 16;
+  mc.runs = monte_carlo_runs(16);
   mc.threads = 2;
   mc.scale << 1, 1, 1, 0, 1, 1, 1, 0;
   mc.output_weight = box;
