@@ -623,13 +623,14 @@ TEST(TimeFreezingSimulation, GuidingExampleMatchesItsClosedForms) {
   EXPECT_NEAR(lift_off->time, 1.5, 1e-3);
   ASSERT_FALSE(sim.frozen_phases.empty());
   EXPECT_NEAR(sim.frozen_phases.front().time, t_impact, 1e-9);
-  // The trajectory's second and last event: the lift-off (Release), read from the states with
-  // recover_trajectory's tolerance 1e-4 m/s on J_n v = g (t - 1.5)^2, i.e. about 3e-3 s late.
+  // The trajectory's second and last event: the lift-off (Release), read where the contact's
+  // closing weight vanishes (TrajectoryRecoveryOptions::closing_weight_tolerance). Measured 4.1e-7
+  // late; read from the states alone (tolerance 1e-4 m/s on J_n v = g (t - 1.5)^2) it was 2.7e-3.
   for (const Event<PointMass>& e : traj.events)
     std::printf("recovered event at t %.9f: %s\n", e.t, e.impact() ? "impact" : "mode change");
   ASSERT_EQ(traj.events.size(), 2u);
   EXPECT_EQ(traj.events[1].guards(), (std::vector<Guard>{{0, GuardKind::Release}}));
-  EXPECT_NEAR(traj.events[1].t, 1.5, 1e-2);
+  EXPECT_NEAR(traj.events[1].t, 1.5, 2e-6);
   EXPECT_EQ(traj.segments.back().mode[0], ContactState::open());
 }
 
@@ -877,9 +878,11 @@ TEST(TimeFreezingRecovery, FrozenRunOnAControlIntervalBoundary) {
 }
 
 // A hand-made point of a point-mass solution for recover_trajectory: (q, v, t, L = 0), every step
-// function and Theta at `weight`, input (t, 0).
+// function and Theta at `weight`, input (t, 0). With closing > 0 the point is in a sliding mode on
+// the contact (a stance): alpha_gap = 0, alpha_vn = 1 - closing, so that the closing weight
+// (1 - alpha_gap)(1 - alpha_vn) is `closing` and Theta = 1 - closing.
 FesdPoint<6, 3, 2> recovery_point(int element, int stage, double tau, double t, const Vec<2>& q, const Vec<2>& v,
-                                  double weight = 1.0) {
+                                  double weight = 1.0, double closing = 0.0) {
   FesdPoint<6, 3, 2> p;
   p.interval = 0;
   p.element = element;
@@ -888,6 +891,11 @@ FesdPoint<6, 3, 2> recovery_point(int element, int stage, double tau, double t, 
   p.y << q, v, t, 0.0;
   p.alpha.setConstant(weight);
   p.ode_weight = weight;
+  if (closing > 0.0) {
+    p.alpha[0] = 0.0;
+    p.alpha[1] = 1.0 - closing;
+    p.ode_weight = 1.0 - closing;
+  }
   p.u = Vec<2>(t, 0.0);
   return p;
 }
@@ -901,6 +909,42 @@ TimeFreezingSystem<PointMass> recovery_system() {
   return TimeFreezingSystem<PointMass>(PointMass(pm), 10.0);
 }
 
+// A tangential lift-off (as Example 3's at t = 1.5: J_n v = g (t - 1.5)^2 leaves zero with zero
+// slope): after it the state stays inside the closed tolerances (gap 0, J_n v = 1e-6 m/s below
+// 1e-4) for a while, but the closing weight is zero: no force. The release is read where the
+// weight vanishes (t = 0.2), not where the normal velocity passes its tolerance (t = 0.3).
+TEST(TimeFreezingRecovery, ATangentialLiftOffIsReadWhereTheClosingWeightVanishes) {
+  const TimeFreezingSystem<PointMass> system = recovery_system();
+  std::vector<FesdPoint<6, 3, 2>> points;
+  auto add = [&](int element, int stage, double t, Vec<2> q, Vec<2> v, double closing) {
+    points.push_back(recovery_point(element, stage, t, t, q, v, 1.0, closing));
+  };
+  add(-1, -1, 0.0, Vec<2>(0.0, 0.0), Vec<2>(0.5, 0.0), 0.5);
+  add(0, 0, 0.05, Vec<2>(0.025, 0.0), Vec<2>(0.5, 0.0), 0.4);  // slip+ under a closing weight
+  add(0, 1, 0.10, Vec<2>(0.05, 0.0), Vec<2>(0.5, 0.0), 0.3);
+  add(1, 0, 0.15, Vec<2>(0.075, 0.0), Vec<2>(0.5, 0.0), 0.2);
+  // The weight reaches zero up to what the homotopy leaves (3e-6 measured, the tolerance's
+  // docstring).
+  add(1, 1, 0.20, Vec<2>(0.10, 0.0), Vec<2>(0.5, 0.0), 3e-6);
+  add(2, 0, 0.25, Vec<2>(0.125, 0.0), Vec<2>(0.5, 1e-6), 3e-6);  // closed by the state alone
+  add(2, 1, 0.30, Vec<2>(0.15, 0.0), Vec<2>(0.5, 1e-5), 3e-6);
+  add(3, 0, 0.35, Vec<2>(0.175, 1e-6), Vec<2>(0.5, 1e-3), 3e-6);  // open by the state too
+  add(3, 1, 0.40, Vec<2>(0.20, 1e-5), Vec<2>(0.5, 1e-3), 3e-6);
+  const HybridTrajectory<PointMass> traj = recover_trajectory(system, points, 2);
+  ASSERT_EQ(traj.events.size(), 1u);
+  EXPECT_EQ(traj.events[0].t, 0.2);
+  EXPECT_FALSE(traj.events[0].impact());
+  EXPECT_EQ(traj.events[0].guards(), (std::vector<Guard>{{0, GuardKind::Release}}));
+  EXPECT_EQ(traj.segments[0].mode[0], ContactState::slip_planar(1));
+  EXPECT_EQ(traj.segments[1].mode[0], ContactState::open());
+  // With a tolerance below the leftover weight the state decides: the release comes an element late.
+  TrajectoryRecoveryOptions state_only;
+  state_only.closing_weight_tolerance = 1e-9;
+  const HybridTrajectory<PointMass> late = recover_trajectory(system, points, 2, state_only);
+  ASSERT_EQ(late.events.size(), 1u);
+  EXPECT_EQ(late.events[0].t, 0.3);
+}
+
 // An impact absorbed into a flowing element (recover_trajectory's docstring; the flagships'
 // velocity_switch_detection = false): the element after the touchdown runs the clock (0.1 -> 0.12
 // at its first stage) while the normal velocity goes from -1 to 0. Read as an impact at t = 0.1
@@ -908,16 +952,16 @@ TimeFreezingSystem<PointMass> recovery_system() {
 TEST(TimeFreezingRecovery, AnImpactAbsorbedIntoAFlowingElementIsAnImpactEvent) {
   const TimeFreezingSystem<PointMass> system = recovery_system();
   std::vector<FesdPoint<6, 3, 2>> points;
-  auto add = [&](int element, int stage, double tau, double t, Vec<2> q, Vec<2> v) {
-    points.push_back(recovery_point(element, stage, tau, t, q, v));
+  auto add = [&](int element, int stage, double tau, double t, Vec<2> q, Vec<2> v, double closing = 0.0) {
+    points.push_back(recovery_point(element, stage, tau, t, q, v, 1.0, closing));
   };
   add(-1, -1, 0.0, 0.0, Vec<2>(0.0, 0.1), Vec<2>(1.0, -1.0));
   add(0, 0, 0.05, 0.05, Vec<2>(0.05, 0.05), Vec<2>(1.0, -1.0));
   add(0, 1, 0.10, 0.10, Vec<2>(0.10, 0.0), Vec<2>(1.0, -1.0));
-  add(1, 0, 0.15, 0.12, Vec<2>(0.11, 0.0), Vec<2>(0.7, 0.0));  // closed, slip+: the impact is over
-  add(1, 1, 0.20, 0.17, Vec<2>(0.14, 0.0), Vec<2>(0.55, 0.0));
-  add(2, 0, 0.25, 0.22, Vec<2>(0.17, 0.0), Vec<2>(0.4, 0.0));
-  add(2, 1, 0.30, 0.27, Vec<2>(0.19, 0.0), Vec<2>(0.25, 0.0));
+  add(1, 0, 0.15, 0.12, Vec<2>(0.11, 0.0), Vec<2>(0.7, 0.0), 0.5);  // closed, slip+: the impact is over
+  add(1, 1, 0.20, 0.17, Vec<2>(0.14, 0.0), Vec<2>(0.55, 0.0), 0.5);
+  add(2, 0, 0.25, 0.22, Vec<2>(0.17, 0.0), Vec<2>(0.4, 0.0), 0.5);
+  add(2, 1, 0.30, 0.27, Vec<2>(0.19, 0.0), Vec<2>(0.25, 0.0), 0.5);
   const HybridTrajectory<PointMass> traj = recover_trajectory(system, points, 2);
   ASSERT_EQ(traj.events.size(), 1u);
   const Event<PointMass>& impact = traj.events[0];
@@ -942,8 +986,9 @@ TEST(TimeFreezingRecovery, AnImpactAbsorbedIntoAFlowingElementIsAnImpactEvent) {
 TEST(TimeFreezingRecovery, TrajectoryOfALandingASlideAStopAndALiftOff) {
   const TimeFreezingSystem<PointMass> system = recovery_system();
   std::vector<FesdPoint<6, 3, 2>> points;
-  auto add = [&](int element, int stage, double tau, double t, Vec<2> q, Vec<2> v, double weight) {
-    points.push_back(recovery_point(element, stage, tau, t, q, v, weight));
+  auto add = [&](int element, int stage, double tau, double t, Vec<2> q, Vec<2> v, double weight,
+                 double closing = 0.0) {
+    points.push_back(recovery_point(element, stage, tau, t, q, v, weight, closing));
   };
   // x(t) = t, z(t) = 0.1 - t in flight: linear, so the pieces reproduce it exactly.
   add(-1, -1, 0.0, 0.0, Vec<2>(0.0, 0.1), Vec<2>(1.0, -1.0), 1.0);
@@ -951,10 +996,10 @@ TEST(TimeFreezingRecovery, TrajectoryOfALandingASlideAStopAndALiftOff) {
   add(0, 1, 0.10, 0.10, Vec<2>(0.10, 0.0), Vec<2>(1.0, -1.0), 1.0);
   add(1, 0, 0.15, 0.10, Vec<2>(0.10, 0.0), Vec<2>(0.85, -0.5), 0.0);  // frozen
   add(1, 1, 0.20, 0.10, Vec<2>(0.10, 0.0), Vec<2>(0.7, 0.0), 0.0);
-  add(2, 0, 0.25, 0.15, Vec<2>(0.13, 0.0), Vec<2>(0.55, 0.0), 1.0);    // slip+
-  add(2, 1, 0.30, 0.20, Vec<2>(0.16, 0.0), Vec<2>(0.4, 0.0), 1.0);
-  add(3, 0, 0.35, 0.25, Vec<2>(0.18, 0.0), Vec<2>(0.0, 0.0), 1.0);     // stick
-  add(3, 1, 0.40, 0.30, Vec<2>(0.18, 0.0), Vec<2>(0.0, 0.0), 1.0);
+  add(2, 0, 0.25, 0.15, Vec<2>(0.13, 0.0), Vec<2>(0.55, 0.0), 1.0, 0.5);    // slip+
+  add(2, 1, 0.30, 0.20, Vec<2>(0.16, 0.0), Vec<2>(0.4, 0.0), 1.0, 0.5);
+  add(3, 0, 0.35, 0.25, Vec<2>(0.18, 0.0), Vec<2>(0.0, 0.0), 1.0, 0.5);     // stick
+  add(3, 1, 0.40, 0.30, Vec<2>(0.18, 0.0), Vec<2>(0.0, 0.0), 1.0, 0.5);
   add(4, 0, 0.45, 0.35, Vec<2>(0.18, 0.01), Vec<2>(0.0, 0.2), 1.0);    // open
   add(4, 1, 0.50, 0.40, Vec<2>(0.18, 0.02), Vec<2>(0.0, 0.2), 1.0);
   const HybridTrajectory<PointMass> traj = recover_trajectory(system, points, 2);
@@ -1007,6 +1052,11 @@ TEST(TimeFreezingRecovery, TrajectoryOfALandingASlideAStopAndALiftOff) {
   bad = TrajectoryRecoveryOptions{};
   bad.frozen_tolerance = std::numeric_limits<double>::infinity();
   EXPECT_THROW(recover_trajectory(system, points, 2, bad), InvalidArgument);
+  for (const double w : {0.0, 1.0, std::numeric_limits<double>::quiet_NaN()}) {
+    bad = TrajectoryRecoveryOptions{};
+    bad.closing_weight_tolerance = w;
+    EXPECT_THROW(recover_trajectory(system, points, 2, bad), InvalidArgument) << w;
+  }
   // A wrong n_s (found by a user's trial: 4 read past the stage arrays, 1 and 3 gave another
   // motion silently): the points' recorded stages do not match it.
   for (int wrong : {1, 3, 4, 5}) {

@@ -217,6 +217,15 @@ struct TrajectoryRecoveryOptions {
   double velocity_tolerance = 1e-4;
   /// Elements whose clock advances by at most frozen_tolerance * h are frozen (as recover_reference).
   double frozen_tolerance = 1e-7;
+  /// In a flowing element, a contact that the state calls closed (above) is read as open when its
+  /// closing weight w = (1 - alpha_gap)(1 - alpha_vn) at the deciding stage point is below
+  /// closing_weight_tolerance (dimensionless, in (0, 1)): the auxiliary dynamics then carry no
+  /// force, as after a tangential lift-off, where the state stays within the tolerances above
+  /// (J_n v = g (t - 1.5)^2 in the guiding example, Example 3) while the weight falls through zero
+  /// transversally (w = 1 - 1 / (2 (2 - t)) there). Sized above the weights that a converged
+  /// homotopy leaves in the degenerate elements next to such a switch (measured: up to 3e-6 at a
+  /// complementarity of 1e-14, Example 3 at n_s = 2 with 1,120 elements).
+  double closing_weight_tolerance = 1e-4;
 };
 
 /// Recovers the physical-time HybridTrajectory of a discrete time-freezing solution (time-freezing
@@ -227,8 +236,8 @@ struct TrajectoryRecoveryOptions {
 ///
 /// - Modes: per flowing element and contact, from the switching functions at the element's last
 ///   interior stage point (c_r < 1: Radau's end point is the next element's start and lies on the
-///   switching surface when a switch is there; n_s = 1 has only the end point), with the
-///   tolerances of TrajectoryRecoveryOptions. A frictionless contact (or mu = 0) that is closed is
+///   switching surface when a switch is there; n_s = 1 has only the end point) and the contact's
+///   closing weight there, with the tolerances of TrajectoryRecoveryOptions. A frictionless contact (or mu = 0) that is closed is
 ///   ContactState::slip(0), as the simulator stores it. A switch inside an element (the grid did
 ///   not locate it, e.g. a slip-stick with velocity_switch_detection = false) appears at the
 ///   element boundary next to it.
@@ -286,6 +295,8 @@ HybridTrajectory<S> recover_trajectory(const TimeFreezingSystem<S>& system,
                      positive(options.frozen_tolerance),
                  "recover_trajectory: the tolerances must be finite and > 0, got gap ", options.gap_tolerance,
                  ", velocity ", options.velocity_tolerance, ", frozen ", options.frozen_tolerance);
+  SALTUS_REQUIRE(positive(options.closing_weight_tolerance) && options.closing_weight_tolerance < 1.0,
+                 "recover_trajectory: closing_weight_tolerance must be in (0, 1), got ", options.closing_weight_tolerance);
   const ImportedReference<S> samples = recover_reference<S>(points, stages, options.frozen_tolerance);
   const int elements = static_cast<int>((points.size() - 1) / static_cast<std::size_t>(stages));
   auto start_of = [&](int e) -> const Point& { return points[static_cast<std::size_t>(e == 0 ? 0 : e * stages)]; };
@@ -315,15 +326,18 @@ HybridTrajectory<S> recover_trajectory(const TimeFreezingSystem<S>& system,
       default: return ContactState::open();
     }
   };
-  // The element's mode from its interior stage points (all but the end point, which is the next
-  // element's start and sits on the switching surface when the switch is there); n_s = 1 has only
-  // the end point. If they disagree (a switch inside the element) the last interior one decides.
+  // The element's mode from its last interior stage point (the end point is the next element's
+  // start and sits on the switching surface when the switch is there; n_s = 1 has only the end
+  // point): a switch inside the element is read at its end. A contact closed by its state but
+  // without closing weight there carries no force and is open (closing_weight_tolerance).
   auto mode_of_element = [&](int e) {
     ModeT m;
-    const int interior = stages >= 2 ? stages - 1 : 1;
-    std::array<Vec<nsw>, 3> c;  // n_s <= 3
-    for (int r = 0; r < interior; ++r) c[static_cast<std::size_t>(r)] = switching(stage_of(e, r));
-    for (int i = 0; i < nc; ++i) m[i] = to_state(contact_class(c[static_cast<std::size_t>(interior - 1)], i));
+    const Point& p = stage_of(e, stages >= 2 ? stages - 2 : 0);
+    const Vec<nsw> c = switching(p);
+    for (int i = 0; i < nc; ++i) {
+      const double weight = (1.0 - p.alpha[3 * i]) * (1.0 - p.alpha[3 * i + 1]);
+      m[i] = to_state(weight < options.closing_weight_tolerance ? 0 : contact_class(c, i));
+    }
     return m;
   };
   auto mode_at = [&](const Point& p) {
