@@ -186,7 +186,7 @@ TEST(Prediction, PlankBoxPerturbedStateAndInput) {
   const auto ref = references::plank_box();
   const LinearisedSystem<scenes::PlankBox> lin(ref.scene, ref.trajectory, tight_linearisation());
   const auto fit = prediction_remainder(lin, ref.options, references::plank_box_perturbation(),
-                                             [](double t) { return Vec<3>(0.1, 0.2 * t, 0.0).eval(); }, {0.1, 0.5, 1.0},
+                                        [](double t) { return Vec<3>(0.1, 0.2 * t, 0.0).eval(); }, {0.1, 0.5, 1.0},
                                         slope_eps(default_prediction_eps()));
   expect_slope(fit, 1.9);
 }

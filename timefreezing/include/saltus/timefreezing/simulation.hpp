@@ -237,10 +237,10 @@ struct TrajectoryRecoveryOptions {
 /// - Modes: per flowing element and contact, from the switching functions at the element's last
 ///   interior stage point (c_r < 1: Radau's end point is the next element's start and lies on the
 ///   switching surface when a switch is there; n_s = 1 has only the end point) and the contact's
-///   closing weight there, with the tolerances of TrajectoryRecoveryOptions. A frictionless contact (or mu = 0) that is closed is
-///   ContactState::slip(0), as the simulator stores it. A switch inside an element (the grid did
-///   not locate it, e.g. a slip-stick with velocity_switch_detection = false) appears at the
-///   element boundary next to it.
+///   closing weight there, with the tolerances of TrajectoryRecoveryOptions. A frictionless
+///   contact (or mu = 0) that is closed is ContactState::slip(0), as the simulator stores it. A
+///   switch inside an element (the grid did not locate it, e.g. a slip-stick with
+///   velocity_switch_detection = false) appears at the element boundary next to it.
 /// - Segments: one per run of flowing elements with the same mode. Dense output: per element the
 ///   polynomial through its start point and its n_s stage points, in physical time (degree n_s;
 ///   exact where the clock runs at a constant rate: Theta = 1). Where the stage clocks are not
