@@ -8,7 +8,9 @@
 // minimising the integral of u'u, |u_i| <= 20 (FESD, N = 10, N_fe = 3, n_s = 2; penalty homotopy,
 // Ipopt tol 1e-8), re-simulates its recovered reference with the event-driven simulator and
 // prints {"converged", "complementarity", "objective", "homotopy_steps", "ipopt_iterations",
-// "solve_seconds", "resim_max_error", "impacts"} (progress lines on stderr).
+// "solve_seconds", "resim_max_error", "resim_events", "impacts", "touchdowns"} (progress lines on
+// stderr): resim_events counts the events of the re-simulation, impacts the frozen runs, touchdowns
+// the gap's switch points into contact.
 #include <saltus/hybrid/reference/resimulation.hpp>
 #include <saltus/hybrid/vocabulary/trajectory_report.hpp>
 #include <saltus/timefreezing/simulation.hpp>
@@ -40,8 +42,9 @@ int time_freezing_ocp() {
   j["homotopy_steps"] = r.solution.steps.size();
   j["ipopt_iterations"] = r.solution.ipopt_iterations;
   j["solve_seconds"] = r.solution.seconds;
-  // The re-simulation of the recovered reference (known limit: an impact that falls inside a
-  // finite element is not a frozen run and is not recovered; simulation.hpp).
+  // The re-simulation of the recovered reference (known limit of recover_reference: an impact that
+  // falls inside a finite element is not a frozen run and is not an event of r.reference;
+  // recover_trajectory, r.trajectory, reads it as an impact event; simulation.hpp).
   try {
     const PolishResult<scenes::PointMass> resim = polish(mass, r.reference);
     j["resim_max_error"] = resim.state_distance;

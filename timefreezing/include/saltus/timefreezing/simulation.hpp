@@ -218,13 +218,18 @@ struct TrajectoryRecoveryOptions {
   /// Elements whose clock advances by at most frozen_tolerance * h are frozen (as recover_reference).
   double frozen_tolerance = 1e-7;
   /// In a flowing element, a contact that the state calls closed (above) is read as open when its
-  /// closing weight w = (1 - alpha_gap)(1 - alpha_vn) at the deciding stage point is below
-  /// closing_weight_tolerance (dimensionless, in (0, 1)): the auxiliary dynamics then carry no
+  /// closing weight w = (1 - alpha_gap)(1 - alpha_vn) (alpha_gap, alpha_vn: the step functions of
+  /// its gap and J_n v switching functions, FesdPoint::alpha[3 i], [3 i + 1]) at the element's
+  /// last interior stage point (recover_trajectory: "Modes") is below closing_weight_tolerance
+  /// (dimensionless, in (0, 1)): the auxiliary dynamics then carry no
   /// force, as after a tangential lift-off, where the state stays within the tolerances above
   /// (J_n v = g (t - 1.5)^2 in the guiding example, Example 3) while the weight falls through zero
   /// transversally (w = 1 - 1 / (2 (2 - t)) there). Sized above the weights that a converged
   /// homotopy leaves in the degenerate elements next to such a switch (measured: up to 3e-6 at a
-  /// complementarity of 1e-14, Example 3 at n_s = 2 with 1,120 elements).
+  /// complementarity of 1e-14, Example 3 at n_s = 2 with 1,120 elements). Points outside flowing
+  /// elements (the first point, and x+ of a frozen run at the end of the horizon) and the search
+  /// for x+ of an absorbed impact are read by the state alone: their step functions say nothing
+  /// about a force (the first point's are a placeholder, 0.5).
   double closing_weight_tolerance = 1e-4;
 };
 
@@ -280,7 +285,8 @@ struct TrajectoryRecoveryOptions {
 /// an unconverged solution (complementarity above tolerance) is not a motion of the scene (events
 /// off, states below the surface) and its status still says Completed; check converged() first.
 /// Throws InvalidArgument as recover_reference does (n_s outside 1..3, points whose recorded stage
-/// does not match n_s), and for tolerances that are not finite and > 0.
+/// does not match n_s), for tolerances that are not finite and > 0, and for a
+/// closing_weight_tolerance outside (0, 1).
 template <Scene S, int ny, int nsw, int nu>
 HybridTrajectory<S> recover_trajectory(const TimeFreezingSystem<S>& system,
                                        const std::vector<FesdPoint<ny, nsw, nu>>& points, int stages,
