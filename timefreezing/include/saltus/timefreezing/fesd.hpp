@@ -760,8 +760,8 @@ class FesdMpcc final : public Mpcc {
   // beta_i = (1 - alpha_i1)(1 - alpha_i2) at stage (k, j, r) of x (lifted only).
   void set_closing_weights(Eigen::Ref<Eigen::VectorXd> x, int k, int j, int r) const {
     if (!options_.lift_step_functions) return;
-    const int a = alpha_index(k, j, r);
-    for (int i = 0; i < nc; ++i) x[closing_index(k, j, r) + i] = (1.0 - x[a + 3 * i]) * (1.0 - x[a + 3 * i + 1]);
+    const auto alpha = x.template segment<nsw>(alpha_index(k, j, r));
+    for (int i = 0; i < nc; ++i) x[closing_index(k, j, r) + i] = System::template closing_weight<double>(alpha, i);
   }
   Eigen::Matrix<double, 2 * nq, 1> mass_local(const Eigen::Ref<const Eigen::VectorXd>& x, int k, int j, int r) const {
     Eigen::Matrix<double, 2 * nq, 1> w;

@@ -220,11 +220,11 @@ struct TrajectoryRecoveryOptions {
   /// In a flowing element, a contact that the state calls closed (above) is read as open when its
   /// closing weight w = (1 - alpha_gap)(1 - alpha_vn) (alpha_gap, alpha_vn: the step functions of
   /// its gap and J_n v switching functions, FesdPoint::alpha[3 i], [3 i + 1]) at the element's
-  /// last interior stage point (recover_trajectory: "Modes") is below closing_weight_tolerance
-  /// (dimensionless, in (0, 1)): the auxiliary dynamics then carry no
-  /// force, as after a tangential lift-off, where the state stays within the tolerances above
-  /// (J_n v = g (t - 1.5)^2 in the guiding example, Example 3) while the weight falls through zero
-  /// transversally (w = 1 - 1 / (2 (2 - t)) there). Sized above the weights that a converged
+  /// last interior stage point (recover_trajectory: "Modes"; TimeFreezingSystem::closing_weight)
+  /// is below closing_weight_tolerance (dimensionless, in (0, 1)): the auxiliary dynamics then
+  /// carry no force, as after a tangential lift-off, where the state stays within the tolerances
+  /// above (J_n v = g (t - 1.5)^2 in the guiding example, Example 3) while the weight falls
+  /// through zero transversally (w = 1 - 1 / (2 (2 - t)) there). Sized above the weights that a converged
   /// homotopy leaves in the degenerate elements next to such a switch (measured: up to 3e-6 at a
   /// complementarity of 1e-14, Example 3 at n_s = 2 with 1,120 elements). Points outside flowing
   /// elements (the first point, and x+ of a frozen run at the end of the horizon) and the search
@@ -341,7 +341,7 @@ HybridTrajectory<S> recover_trajectory(const TimeFreezingSystem<S>& system,
     const Point& p = stage_of(e, stages >= 2 ? stages - 2 : 0);
     const Vec<nsw> c = switching(p);
     for (int i = 0; i < nc; ++i) {
-      const double weight = (1.0 - p.alpha[3 * i]) * (1.0 - p.alpha[3 * i + 1]);
+      const double weight = TimeFreezingSystem<S>::template closing_weight<double>(p.alpha, i);
       m[i] = to_state(weight < options.closing_weight_tolerance ? 0 : contact_class(c, i));
     }
     return m;
@@ -478,7 +478,7 @@ HybridTrajectory<S> recover_trajectory(const TimeFreezingSystem<S>& system,
         for (int g = e; g <= f; ++g)
           for (int r = 0; r < stages; ++r) {
             const auto& a = stage_of(g, r).alpha;
-            closing = std::max(closing, (1.0 - a[3 * i]) * (1.0 - a[3 * i + 1]));
+            closing = std::max(closing, TimeFreezingSystem<S>::template closing_weight<double>(a, i));
           }
         if (closing >= 0.5) impulse[i] = impulse_role(i, c_plus);
       }

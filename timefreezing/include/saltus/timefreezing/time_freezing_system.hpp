@@ -113,6 +113,13 @@ class TimeFreezingSystem {
     return c;
   }
 
+  /// Contact i's closing weight beta_i = (1 - alpha_i1)(1 - alpha_i2) = theta_i^+ + theta_i^-:
+  /// the auxiliary dynamics' share of the contact (alpha of size 3 nc, 0 <= i < nc).
+  template <class T, class Alpha>
+  static T closing_weight(const Alpha& alpha, int i) {
+    return T(T(1.0 - alpha[3 * i]) * T(1.0 - alpha[3 * i + 1]));
+  }
+
   /// Theta_i^free of each contact and Theta = prod_i theta_i^free (file comment).
   template <class T>
   static T ode_weight(const VecT<T, n_switch>& alpha) {
@@ -131,7 +138,7 @@ class TimeFreezingSystem {
   VecT<T, nq> generalised_force(const VecT<T, nq>& q, const VecT<T, nq>& v, const VecT<T, nu>& u,
                                 const VecT<T, n_switch>& alpha) const {
     VecT<T, (nc > 0 ? nc : 1)> closing;
-    for (int i = 0; i < nc; ++i) closing[i] = T(T(1.0 - alpha[3 * i]) * T(1.0 - alpha[3 * i + 1]));
+    for (int i = 0; i < nc; ++i) closing[i] = closing_weight<T>(alpha, i);
     return force_from_weights<T>(q, v, u, ode_weight<T>(alpha), closing, alpha);
   }
 
