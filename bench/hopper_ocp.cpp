@@ -49,8 +49,9 @@ struct Variant {
   int control_intervals = 20;
   bool hop_guess = false;  ///< start from Ocp::hop_guess (the second initialisation) instead
   /// > 0: the default's homotopy runs this many steps (no polish), then `then` continues from its
-  /// primal-dual solution from sigma = then_sigma_0 (Penalty: rho_0 = 1 / then_sigma_0) on the
-  /// grid with contact_side_weight = then_side_weight.
+  /// primal-dual solution from sigma = then_sigma_0 (< 0: the sigma the first homotopy stopped
+  /// at; Penalty: rho_0 = 1 / then_sigma_0) on the grid with contact_side_weight =
+  /// then_side_weight.
   int smoothing_steps = 0;
   double then_sigma_0 = 0.0;
   double contact_side_weight = 0.0;  ///< FesdOptions::contact_side_weight
@@ -63,6 +64,9 @@ struct Variant {
   bool tangential_switch_detection = false;  ///< FesdOptions::tangential_switch_detection
   /// MpccSolverOptions::polish_fallback on, with polish_max_iter = 500
   bool polish_fallback = false;
+  /// With smoothing_steps: the continued homotopy reads the integrated gaps
+  /// (FesdOptions::integrated_gap; the first one reads gap(q)).
+  bool then_integrated_gap = false;
 };
 
 std::vector<Variant> variants() {
@@ -112,6 +116,14 @@ std::vector<Variant> variants() {
        "the default with the polish's fallback (MpccSolverOptions::polish_fallback: the biactive pairs flipped, all, "
        "then one at a time) and 500 iterations per polish attempt",
        R::Smoothing, false, true, 20, false, 0, 0.0, 0.0, 2, R::Penalty, 0.0, 0.0, false, true},
+      {"then-integrated-gap",
+       "the default's continuation and first 4 steps (sigma 1 .. 1e-3) reading gap(q), then the same smoothing from "
+       "sigma = 1e-3 reading the integrated gaps (FesdOptions::integrated_gap), polished as --polish-below says",
+       R::Smoothing, false, true, 20, false, 4, 1e-3, 0.0, 2, R::Smoothing, 0.0, 0.0, false, false, true},
+      {"wall-then-integrated-gap",
+       "the default's whole homotopy (10 steps) reading gap(q), then one smoothing step at the sigma it stopped at "
+       "reading the integrated gaps, polished as --polish-below says (use --polish-below 1)",
+       R::Smoothing, false, true, 20, false, 10, -1.0, 0.0, 2, R::Smoothing, 0.0, 0.0, false, false, true},
   };
 }
 
@@ -198,8 +210,11 @@ int main(int argc, char** argv) {
     if (v.smoothing_steps > 0 && !r.converged()) {  // r ran smoothing_steps steps without polish (above)
       FesdOptions then_grid = grid;
       then_grid.contact_side_weight = v.then_side_weight;
+      if (v.then_integrated_gap) then_grid.integrated_gap = true;
       const FesdMpcc<scenes::Hopper, Ocp> problem(Ocp::system(), ocp, Ocp::q0(), Ocp::v0(), then_grid);
-      r.solution = bench::continue_homotopy(problem, r.solution, s, v.then, v.then_sigma_0,
+      // then_sigma_0 < 0: from where the first homotopy stopped (its complementarity, = sigma).
+      const double sigma_0 = v.then_sigma_0 < 0.0 ? r.solution.complementarity : v.then_sigma_0;
+      r.solution = bench::continue_homotopy(problem, r.solution, s, v.then, sigma_0,
                                             (args->max_steps > 0 ? args->max_steps : 10) - v.smoothing_steps);
       const auto pts = problem.points(r.solution.x);
       r.points.assign(pts.begin(), pts.end());

@@ -1,10 +1,14 @@
 // What the flagship-OCP benchmarks (hopper_ocp, plank_box_ocp) share: their command line and the
 // second homotopy of the variants that change the relaxation on the way ("smoothing, then ...").
 //
-//   NAME [--json] [--only VARIANT] [--max-steps K] [--lift] [--ipopt OPTION=VALUE]...
+//   NAME [--json] [--only VARIANT] [--max-steps K] [--lift] [--integrated-gap] [--velocity-cross] [--polish-below S]
+//        [--polish-max-iter K] [--ipopt OPTION=VALUE]...
 //
 // --max-steps K overrides the homotopy's step budget; --lift solves every variant with the lifted
-// step functions (FesdOptions::lift_step_functions); --ipopt passes an Ipopt option to every solve
+// step functions (FesdOptions::lift_step_functions); --integrated-gap with the gap switching functions
+// read from the integrated gaps (FesdOptions::integrated_gap); --velocity-cross with cross-complementarity on the velocity switching
+// functions too (FesdOptions::velocity_switch_detection); --polish-below and --polish-max-iter set
+// MpccSolverOptions::polish_below and polish_max_iter; --ipopt passes an Ipopt option to every solve
 // (an integer or a number when VALUE parses as one, else a string), e.g. `--ipopt
 // mumps_pivtol=1e-4 --ipopt print_timing_statistics=yes --ipopt output_file=ip.log --ipopt
 // file_print_level=5`.
@@ -29,16 +33,25 @@ struct OcpBenchArgs {
   std::string only;   ///< one variant by name; empty: all
   int max_steps = -1; ///< > 0: MpccSolverOptions::max_homotopy_steps
   bool lift = false;  ///< FesdOptions::lift_step_functions for every variant
+  bool integrated_gap = false;  ///< FesdOptions::integrated_gap for every variant
+  bool velocity_cross = false;  ///< FesdOptions::velocity_switch_detection for every variant
+  double polish_below = -1.0;  ///< >= 0: MpccSolverOptions::polish_below
+  int polish_max_iter = -1;    ///< > 0: MpccSolverOptions::polish_max_iter
   std::vector<timefreezing::IpoptOption> ipopt_options;
 
-  /// The command line's share of a variant's solver options: the step budget and the Ipopt options.
+  /// The command line's share of a variant's solver options: the step budget, the polish and the
+  /// Ipopt options.
   void apply(timefreezing::MpccSolverOptions& s) const {
     if (max_steps > 0) s.max_homotopy_steps = max_steps;
+    if (polish_below >= 0.0) s.polish_below = polish_below;
+    if (polish_max_iter > 0) s.polish_max_iter = polish_max_iter;
     s.ipopt_options.insert(s.ipopt_options.end(), ipopt_options.begin(), ipopt_options.end());
   }
-  /// The command line's share of a variant's grid options: the lifted step functions.
+  /// The command line's share of a variant's grid options: the lifted step functions, the integrated gap, the velocities' switch detection.
   void apply(timefreezing::FesdOptions& grid) const {
     if (lift) grid.lift_step_functions = true;
+    if (integrated_gap) grid.integrated_gap = true;
+    if (velocity_cross) grid.velocity_switch_detection = true;
   }
 };
 
@@ -60,18 +73,32 @@ inline std::optional<timefreezing::IpoptOption> parse_ipopt_option(const std::st
 inline std::optional<OcpBenchArgs> parse_ocp_bench_args(int argc, char** argv, const char* program) {
   OcpBenchArgs a;
   const auto usage = [program] {
-    std::fprintf(stderr, "usage: %s [--json] [--only NAME] [--max-steps K] [--lift] [--ipopt NAME=VALUE]...\n", program);
+    std::fprintf(stderr, "usage: %s [--json] [--only NAME] [--max-steps K] [--lift] [--integrated-gap] [--velocity-cross] [--polish-below S] "
+                 "[--polish-max-iter K] [--ipopt NAME=VALUE]...\n",
+                 program);
     return std::optional<OcpBenchArgs>();
   };
   for (int i = 1; i < argc; ++i) {
     if (std::strcmp(argv[i], "--json") == 0) a.json = true;
     else if (std::strcmp(argv[i], "--only") == 0 && i + 1 < argc) a.only = argv[++i];
     else if (std::strcmp(argv[i], "--lift") == 0) a.lift = true;
+    else if (std::strcmp(argv[i], "--integrated-gap") == 0) a.integrated_gap = true;
+    else if (std::strcmp(argv[i], "--velocity-cross") == 0) a.velocity_cross = true;
     else if (std::strcmp(argv[i], "--max-steps") == 0 && i + 1 < argc) {
       char* end = nullptr;
       const long k = std::strtol(argv[++i], &end, 10);
       if (*end != '\0' || k < 1 || k > 1000) return usage();
       a.max_steps = static_cast<int>(k);
+    } else if (std::strcmp(argv[i], "--polish-below") == 0 && i + 1 < argc) {
+      char* end = nullptr;
+      const double s = std::strtod(argv[++i], &end);
+      if (*end != '\0' || !(s >= 0.0 && s <= 1.0)) return usage();
+      a.polish_below = s;
+    } else if (std::strcmp(argv[i], "--polish-max-iter") == 0 && i + 1 < argc) {
+      char* end = nullptr;
+      const long k = std::strtol(argv[++i], &end, 10);
+      if (*end != '\0' || k < 1 || k > 100000) return usage();
+      a.polish_max_iter = static_cast<int>(k);
     } else if (std::strcmp(argv[i], "--ipopt") == 0 && i + 1 < argc) {
       std::optional<timefreezing::IpoptOption> option = parse_ipopt_option(argv[++i]);
       if (!option) return usage();

@@ -48,6 +48,12 @@ struct Variant {
   bool tangential_switch_detection = false;  ///< FesdOptions::tangential_switch_detection
   /// MpccSolverOptions::polish_fallback on, with polish_max_iter = 500
   bool polish_fallback = false;
+  /// The gap switching functions read gap(q) (FesdOptions::integrated_gap = false; the default
+  /// reads the integrated gaps since 2026-12-01).
+  bool gap_of_q = false;
+  /// The polish of the default before 2026-12-01: only after the homotopy's last step, 100
+  /// iterations (MpccSolverOptions::polish_below = 0, polish_max_iter = 100).
+  bool late_polish = false;
 };
 
 std::vector<Variant> variants() {
@@ -83,6 +89,14 @@ std::vector<Variant> variants() {
        "the default with the polish's fallback (MpccSolverOptions::polish_fallback: the biactive pairs flipped, all, "
        "then one at a time) and 500 iterations per polish attempt",
        0.0, 0, 0.0, false, 0.0, MpccSolverOptions::Relaxation::Penalty, 0.0, false, true},
+      {"gap-of-q", "the default reading gap(q) instead of the integrated gaps (same polish)", 0.0, 0, 0.0, false, 0.0,
+       MpccSolverOptions::Relaxation::Penalty, 0.0, false, false, true},
+      {"before-2026-12-01",
+       "the default of before 2026-12-01: gap(q), the polish only after the last step (100 iterations)", 0.0, 0, 0.0,
+       false, 0.0, MpccSolverOptions::Relaxation::Penalty, 0.0, false, false, true, true},
+      {"integrated-gap-late-polish",
+       "the default with the polish only after the last step (100 iterations): the integrated gaps alone", 0.0, 0,
+       0.0, false, 0.0, MpccSolverOptions::Relaxation::Penalty, 0.0, false, false, false, true},
   };
 }
 
@@ -109,7 +123,12 @@ int main(int argc, char** argv) {
       s.polish_fallback = true;
       s.polish_max_iter = 500;
     }
+    if (v.late_polish) {
+      s.polish_below = 0.0;
+      s.polish_max_iter = 100;
+    }
     FesdOptions grid = Ocp::grid();
+    if (v.gap_of_q) grid.integrated_gap = false;
     grid.contact_side_weight = v.contact_side_weight;
     grid.tangential_switch_detection = v.tangential_switch_detection;
     args->apply(s);

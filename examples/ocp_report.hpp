@@ -11,6 +11,7 @@
 
 #include <cmath>
 #include <string>
+#include <vector>
 
 namespace saltus::examples {
 
@@ -28,9 +29,10 @@ struct OcpFeasibility {
 /// "continuation": [...],
 /// "events": [{kind: "impact" (t, clock_advance) | "gap" | "normal velocity" | "tangential
 /// velocity" (t, alpha_before, alpha_after, switching_function)}], "recovered_events": [{t,
-/// impact, guards: ["touchdown C_L", ...], mode_before, mode_after}] (the HybridTrajectory of
+/// impact, guards: ["touchdown C_L", ...], mode_before, mode_after, x_minus, x_plus}] (the HybridTrajectory of
 /// recover_trajectory: impacts and mode changes in physical time), "resim_max_error",
-/// "resim_event_time_error", "resim_events": [{t, guards}]}.
+/// "resim_max_error_at": {t, state_component} (where the largest distance is attained),
+/// "resim_event_time_error", "resim_events": [{t, guards (their count), x_minus, x_plus}]}.
 template <Scene S>
 nlohmann::ordered_json ocp_report(const S& scene, const timefreezing::TimeFreezingOcpResult<S>& r,
                                   const OcpFeasibility& f) {
@@ -80,7 +82,9 @@ nlohmann::ordered_json ocp_report(const S& scene, const timefreezing::TimeFreezi
                          {"impact", ev.impact()},
                          {"guards", guards},
                          {"mode_before", describe(scene, ev.mode_before)},
-                         {"mode_after", describe(scene, ev.mode_after)}});
+                         {"mode_after", describe(scene, ev.mode_after)},
+                         {"x_minus", std::vector<double>(ev.x_minus.data(), ev.x_minus.data() + ev.x_minus.size())},
+                         {"x_plus", std::vector<double>(ev.x_plus.data(), ev.x_plus.data() + ev.x_plus.size())}});
   }
   j["recovered_events"] = recovered;
   j["resim_max_error"] = nullptr;
@@ -90,9 +94,13 @@ nlohmann::ordered_json ocp_report(const S& scene, const timefreezing::TimeFreezi
     try {
       const PolishResult<S> resim = polish(scene, r.reference);
       j["resim_max_error"] = resim.state_distance;
+      j["resim_max_error_at"] = {{"t", resim.worst_sample_time}, {"state_component", resim.worst_component}};
       if (std::isfinite(resim.event_time_distance)) j["resim_event_time_error"] = resim.event_time_distance;
       for (const auto& ev : resim.trajectory.events)
-        j["resim_events"].push_back({{"t", ev.t}, {"guards", ev.guards().size()}});
+        j["resim_events"].push_back({{"t", ev.t},
+                                     {"guards", ev.guards().size()},
+                                     {"x_minus", std::vector<double>(ev.x_minus.data(), ev.x_minus.data() + ev.x_minus.size())},
+                                     {"x_plus", std::vector<double>(ev.x_plus.data(), ev.x_plus.data() + ev.x_plus.size())}});
     } catch (const Error& e) {
       j["resim_failure"] = e.what();
     }

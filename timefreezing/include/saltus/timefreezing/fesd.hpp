@@ -11,7 +11,7 @@
 //
 // VARIABLES, per control interval k: the speed of time s_k in [1, s_max] (eq. 35g; fixed at 1
 // when s_max = 1), the control u_k (piecewise constant); per element: h_kj; per stage r:
-//     Y (ny = 2 nq + 2: q, v, t, L)   the stage state,
+//     Y (ny = 2 nq + 2 + nc: q, v, t, L, g)   the stage state (g: the integrated gaps),
 //     K (ny)                           the stage derivative,
 //     alpha (3 nc)                     the step functions of the switching functions,
 //     lambda_p, lambda_n (3 nc)        their multipliers,
@@ -22,7 +22,8 @@
 //     K_q - s Theta v = 0,   M(q) K_v - s F(q, v, u, alpha) = 0,   K_t - s Theta = 0,
 //     K_L - s Theta l(x, u) = 0                                  (time_freezing_system.hpp),
 // and the collocation rows Y_r - y_start - h sum_l a_rl K_l = 0 are bilinear. Switching rows
-// (eq. 31): c(q_r, v_r) - lambda_p,r + lambda_n,r = 0. Lifted: beta_i - (1 - alpha_i1)(1 - alpha_i2)
+// (eq. 31): c(q_r, v_r) - lambda_p,r + lambda_n,r = 0 (with FesdOptions::integrated_gap, the gap
+// entries of c read the integrated gaps g_r instead of gap(q_r); below). Lifted: beta_i - (1 - alpha_i1)(1 - alpha_i2)
 // = 0 per contact, and the field reads beta where the plain form multiplies the alphas out.
 //
 // COMPLEMENTARITY (all sides affine). Switch detection (FESD paper, cross-complementarity in
@@ -61,6 +62,27 @@
 // Off by default: measured on one contact it removes the drift and locates the frozen end, on
 // the plank-box's two contacts it costs 6x the Ipopt iterations (FesdOptions::contact_side_weight).
 // Derivatives: gradient rho_c on those entries, no Hessian term.
+//
+// INTEGRATED GAP (FesdOptions::integrated_gap; time_freezing_system.hpp). Derivation of why a
+// moving stance and a gap nonlinear in q do not mix. In a stance the contact's gap pairs leave
+// alpha_gap interior, so complementarity (relaxed to nothing) holds gap(q_r) = 0 at every stage,
+// and the sliding mode on J_n v holds J_n(q_r) v_r = 0 at every stage. With Radau collocation,
+// q_r = q_0 + h sum_l a_rl K_l, K_l = s Theta_l v_l. For n_s = 1 (a = c = 1), Taylor about q_1:
+//     gap(q_1) = gap(q_0) + J_n(q_1) h K - (h^2 / 2) K' grad^2 gap K + O(h^3),
+// so gap(q_0) = 0 and J_n(q_1) v_1 = 0 give gap(q_1) = -(h^2 / 2) K' grad^2 gap K + O(h^3): not
+// zero unless the gap is linear in q (the point mass) or the motion stops (the hopper standing
+// still). For n_s >= 2 the same Taylor argument with Radau IIA's simplifying conditions
+// sum_l a_rl c_l^(k-1) = c_r^k / k (k <= n_s) leaves a residual of the stage order's next power of
+// h, again times the gap's second derivative along the motion. So where that curvature has the
+// sign that lifts the contact, the discrete stance has no solution with both held: gap(q_r) > 0
+// forces alpha_gap = 1, i.e. no contact force at that stage. A relaxed homotopy can hide this
+// while sigma is larger than the residual; then it cannot go on (bench/README.md, the flagships).
+// The integrated gaps g (g' = Theta J_n v, collocated like q) have stage values g_r = g_0 + h sum_l
+// a_rl s Theta_l J_n(q_l) v_l: zero whenever g_0 and the stages' J_n v are, for any gap. The switching
+// function then reads g instead of gap(q); g - gap(q) is the collocation's own error in
+// integrating gap' = J_n q', so it shrinks with the discretisation (q itself is integrated
+// with the same error). Without the option g is still carried (its rows are cheap and keep
+// the layout one), but nothing reads it.
 //
 // EXACT STEP EQUILIBRATION (StepEquilibration::Exact; FESD paper's eta-constraints, NOSNOC's
 // "direct" mode, written here for the step DCS). Where no switch happens at the boundary between
@@ -173,6 +195,18 @@ struct FesdOptions {
   /// (plain 2.4e-4), the plank-box's at 2.4e-4 (plain 8.4e-7). Hence off by default (NOSNOC: on).
   bool lift_step_functions = false;
   double element_length_freedom = 1.0;  ///< gamma_h in [0, 1]: h in [(1-gamma_h) h0, (1+gamma_h) h0]
+  /// The gap switching functions read the integrated gaps g (the state's last nc entries, g' =
+  /// Theta J_n v, g(0) = gap(q0); time_freezing_system.hpp) instead of gap(q) at each stage point.
+  /// Why: in a moving stance, holding gap(q) = 0 and J_n v = 0 at every stage point is
+  /// overdetermined for a gap nonlinear in q (file comment, "INTEGRATED GAP"); the two agree
+  /// exactly for g. For gaps linear in q the discrete problem is the same as with false (Example
+  /// 3's first 16 elements: final states 1.4e-9 apart, Ipopt's tolerance). The recovered
+  /// trajectory (recover_trajectory) still reads the gaps from q, within its gap_tolerance.
+  /// Measured (bench/README.md, "Plank-box flat landing"): the plank-box flagship converges with
+  /// it (and the early polish) where with gap(q) it stalled at complementarity 8.4e-7; the
+  /// hopper's homotopy with it stalls near 5e-3 (with gap(q): near 1e-3 .. 2.4e-4). Hence off by
+  /// default and on in the plank-box flagship's grid.
+  bool integrated_gap = false;
   /// Scales K = {gap [1/m], J_n v [s/m], J_t v [s/m]} of the switching functions, the same for
   /// every contact (function m uses entry m % 3); > 0. The rows
   /// read K c(q, v) - lambda_p + lambda_n = 0. The step functions and the switches do not change,
@@ -289,7 +323,7 @@ template <int ny, int n_switch, int nu>
 struct FesdPoint {
   int interval = 0, element = -1, stage = -1;
   double tau = 0.0;                        ///< numerical time
-  Eigen::Matrix<double, ny, 1> y;          ///< (q, v, t, L)
+  Eigen::Matrix<double, ny, 1> y;          ///< (q, v, t, L, g): time_freezing_system.hpp
   Eigen::Matrix<double, n_switch, 1> alpha;
   double ode_weight = 1.0;                 ///< Theta: 1 while the clock runs, 0 when frozen
   Eigen::Matrix<double, nu, 1> u;          ///< the input applied (after the input law)
@@ -368,6 +402,7 @@ class FesdMpcc final : public Mpcc {
     y0_[System::clock_index] = options.initial_time;
     for (int i = 0; i < nc; ++i) {
       const double gap = system.scene().template gap<double>(i, q0);
+      y0_[System::gap_state_index + i] = gap;
       SALTUS_REQUIRE(gap >= -options.gap_tolerance, "FESD: the initial state penetrates contact '",
                      system.scene().contact(i).name, "' (gap ", gap, " < -", options.gap_tolerance, ")");
     }
@@ -559,8 +594,17 @@ class FesdMpcc final : public Mpcc {
           yd.template head<nq>() = rate * g.template tail<nq>();
           yd.template segment<nq>(nq) = rate * accel;
           yd[System::clock_index] = rate;
+          if constexpr (nc > 0) {
+            const Vec<nq> gq = g.template head<nq>(), gv = g.template tail<nq>();
+            const Vec<nc> vn = system_.template normal_velocities<double>(gq, gv);
+            for (int i = 0; i < nc; ++i) {
+              y[System::gap_state_index + i] = system_.scene().template gap<double>(i, gq);
+              yd[System::gap_state_index + i] = rate * vn[i];
+            }
+          }
           x.template segment<ny>(state_index(k, j, r)) = y;
           x.template segment<ny>(derivative_index(k, j, r)) = yd;
+          // The guess's integrated gaps are gap(q) (set above), so either reading gives the same c.
           Vec<nsw> c =
               system_.template switching_functions<double>(Vec<nq>(g.template head<nq>()), Vec<nq>(g.template tail<nq>()));
           for (int m = 0; m < nsw; ++m) c[m] *= switching_scale(m);
@@ -731,6 +775,10 @@ class FesdMpcc final : public Mpcc {
     else if constexpr (detail::HasRunningCost<Ocp, T, nx, nu>)
       running = ocp_.template running_cost<T>(VecT<T, nx>(z.template head<nx>()), u);
     gz[System::cost_index] = T(theta * running);
+    if constexpr (nc > 0) {
+      const VecT<T, nc> vn = system_.template normal_velocities<T>(q, v);
+      for (int i = 0; i < nc; ++i) gz[System::gap_state_index + i] = T(theta * vn[i]);
+    }
     return gz;
   }
   /// M(q) K_v at w = (q, K_v).
@@ -854,6 +902,8 @@ class FesdMpcc final : public Mpcc {
   int equilibration_count() const { return exact_equilibration() ? options_.finite_elements - 1 : 0; }
   int equilibration_row(int k) const { return interval_row_[k] + 1 + (has_clock_row(k) ? 1 : 0); }
   /// Does switching function m switch at all (a frictionless contact's tangential one does not)?
+  // Switching function m is a gap read from the integrated gap state (FesdOptions::integrated_gap).
+  bool reads_integrated_gap(int m) const { return options_.integrated_gap && m % 3 == 0; }
   bool switching_active(int m) const { return system_.has_friction(m / 3) || m % 3 != 2; }
   /// Does switching function m have cross-complementarity (so its switches sit on boundaries)?
   /// The other active ones get the stage-wise pairs (build_pairs).
@@ -1023,14 +1073,23 @@ class FesdMpcc final : public Mpcc {
                   a.template head<nq>(), a.template segment<nq>(nq));
               for (int m = 0; m < nsw; ++m) {
                 const double k_m = switching_scale(m);
-                if (g) (*g)[srow + m] = k_m * c[m].value() - x[lp + m] + x[ln + m];
-                for (int b = 0; b < nx; ++b) put(srow + m, state_index(k, j, r) + b, k_m * c[m].derivatives()[b]);
+                if (reads_integrated_gap(m)) {
+                  const int gi = state_index(k, j, r) + System::gap_state_index + m / 3;
+                  if (g) (*g)[srow + m] = k_m * x[gi] - x[lp + m] + x[ln + m];
+                  put(srow + m, gi, k_m);
+                } else {
+                  if (g) (*g)[srow + m] = k_m * c[m].value() - x[lp + m] + x[ln + m];
+                  for (int b = 0; b < nx; ++b) put(srow + m, state_index(k, j, r) + b, k_m * c[m].derivatives()[b]);
+                }
                 put(srow + m, lp + m, -1.0);
                 put(srow + m, ln + m, 1.0);
               }
             } else {
               const Vec<nsw> c = system_.template switching_functions<double>(wx.template head<nq>(), wx.template segment<nq>(nq));
-              for (int m = 0; m < nsw; ++m) (*g)[srow + m] = switching_scale(m) * c[m] - x[lp + m] + x[ln + m];
+              for (int m = 0; m < nsw; ++m) {
+                const double cm = reads_integrated_gap(m) ? x[state_index(k, j, r) + System::gap_state_index + m / 3] : c[m];
+                (*g)[srow + m] = switching_scale(m) * cm - x[lp + m] + x[ln + m];
+              }
             }
           }
           // path constraints
@@ -1158,7 +1217,7 @@ class FesdMpcc final : public Mpcc {
                   a.template head<nq>(), a.template segment<nq>(nq));
               for (int m = 0; m < nsw; ++m) {
                 const double w = switching_scale(m) * mu[row + 2 * ny + m];
-                if (w == 0.0) continue;
+                if (w == 0.0 || reads_integrated_gap(m)) continue;  // g enters linearly
                 for (int p = 0; p < nx; ++p) hl.row(p) += w * c[m].derivatives()[p].derivatives().transpose();
               }
             }

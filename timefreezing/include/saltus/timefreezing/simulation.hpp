@@ -60,7 +60,7 @@ struct TimeFreezingSimulation {
   HybridTrajectory<S> trajectory;
   MpccSolution solution;  ///< the homotopy's result: converged, complementarity, steps, times
   bool converged() const { return solution.converged; }
-  /// The state (q, v, t, L) at the end of the horizon.
+  /// The state (q, v, t, L, g) at the end of the horizon.
   const auto& final_state() const { return points.back().y; }
 };
 
@@ -78,7 +78,7 @@ bool element_frozen(const std::vector<FesdPoint<ny, nsw, nu>>& pts, int stages, 
   const auto& end = pts[static_cast<std::size_t>((e + 1) * stages)];
   const double h = end.tau - start.tau;
   if (!(h > 0.0)) return false;
-  constexpr int clock = ny - 2;
+  constexpr int clock = ny - 2 - nsw / 3;  // y = (q, v, t, L, g) with nc = nsw / 3 integrated gaps
   if (end.y[clock] - start.y[clock] <= frozen_tolerance * h) return true;
   return stages >= 2 && pts[static_cast<std::size_t>(1 + e * stages)].ode_weight < 1e-6;
 }
@@ -263,7 +263,12 @@ struct TrajectoryRecoveryOptions {
 ///   guard (Transition::guards empty). When the run's clock advanced (FrozenPhase::clock_advance:
 ///   its last element went on past the end of the impact), x+ is the state that much later and
 ///   the next segment's first piece holds x+ constant over the advance: the trajectory is off by
-///   the motion over clock_advance there.
+///   the motion over clock_advance there. The same when the run ends before the impact does (a
+///   contact with gap <= gap_tolerance still approaching, J_n v < -velocity_tolerance, at the
+///   run's end: the last part of the impact was resolved by the next, flowing element, which
+///   velocity_switch_detection = false allows; the plank-box flagship's landing): x+ is the first
+///   stage point of that element from which on no such contact approaches, held over its clock
+///   advance.
 /// - Mode changes without impact: x- = x+ = the boundary state; guards per contact: Touchdown
 ///   (open -> closed without a frozen run: a touchdown at zero normal velocity), Release (closed ->
 ///   open), Stop (slip -> stick), SlipOnset (stick -> slip, or a reversal of the slip direction).
@@ -295,7 +300,7 @@ HybridTrajectory<S> recover_trajectory(const TimeFreezingSystem<S>& system,
   using Point = FesdPoint<ny, nsw, nu>;
   using ModeT = Mode<nc>;
   using State = VecT<double, nx>;
-  static_assert(ny == nx + 2 && nsw == 3 * nc, "recover_trajectory: points of another scene");
+  static_assert(ny == nx + 2 + nc && nsw == 3 * nc, "recover_trajectory: points of another scene");
   auto positive = [](double v) { return std::isfinite(v) && v > 0.0; };
   SALTUS_REQUIRE(positive(options.gap_tolerance) && positive(options.velocity_tolerance) &&
                      positive(options.frozen_tolerance),
@@ -462,8 +467,29 @@ HybridTrajectory<S> recover_trajectory(const TimeFreezingSystem<S>& system,
       int f = e;
       while (f + 1 < elements && frozen(f + 1)) ++f;
       const Point& minus = start_of(e);
-      const Point& plus = end_of(f);
       const double t = clock(minus);
+      // An impact that the run did not finish (docstring: a contact still approaching at the run's
+      // end, J_n v < -velocity_tolerance, ends inside the next, flowing element): x+ is that
+      // element's first stage point from which on no such contact approaches any more.
+      int tail = -1;  // the stage of element f + 1 that holds x+, or -1: the run's end
+      if (f + 1 < elements) {
+        const Vec<nsw> c_end = switching(end_of(f));
+        std::vector<int> approaching;
+        for (int i = 0; i < nc; ++i)
+          if (c_end[3 * i] <= gap_tol && c_end[3 * i + 1] < -vel_tol) approaching.push_back(i);
+        if (!approaching.empty()) {
+          int first_done = -1;
+          for (int r = stages - 1; r >= 0; --r) {
+            const Vec<nsw> cr = switching(stage_of(f + 1, r));
+            bool done = true;
+            for (int i : approaching) done = done && cr[3 * i + 1] >= -vel_tol;
+            if (done) first_done = r;
+            else break;
+          }
+          tail = first_done;
+        }
+      }
+      const Point& plus = tail >= 0 ? stage_of(f + 1, tail) : end_of(f);
       const ModeT after = f + 1 < elements ? mode_of_element(f + 1) : mode_at(plus);
       const Vec<nsw> c = switching(minus);
       std::vector<Guard> guards;
@@ -491,6 +517,10 @@ HybridTrajectory<S> recover_trajectory(const TimeFreezingSystem<S>& system,
       seg_has_mode = true;
       hold_over_advance(t, plus);
       e = f + 1;
+      if (tail >= 0) {  // the impact's tail: element f + 1 from x+ on
+        if (tail < stages - 1) seg.x.append(piece_of(e, tail));
+        ++e;
+      }
       continue;
     }
     const ModeT m = mode_of_element(e);
@@ -662,6 +692,29 @@ struct TimeFreezingOcpResult {
 };
 
 namespace detail {
+/// The x+ sample of each of recover_reference's events set to the x+ of recover_trajectory's
+/// impact event at the same time, where there is one: recover_reference takes x+ at the end of the
+/// frozen run, recover_trajectory at the end of the impact when the run ended before it
+/// (recover_trajectory's docstring), and the re-simulation (polish()) compares the samples.
+template <Scene S>
+void align_impact_samples(ImportedReference<S>& ref, const HybridTrajectory<S>& traj) {
+  for (std::size_t k = 0; k < ref.event_times.size(); ++k) {
+    const double t = ref.event_times[k];
+    const Event<S>* impact = nullptr;
+    for (const Event<S>& ev : traj.events)
+      if (ev.impact() && std::abs(ev.t - t) <= 1e-12 * (1.0 + std::abs(t))) {
+        impact = &ev;
+        break;
+      }
+    if (impact == nullptr) continue;
+    for (std::size_t j = 0; j < ref.size(); ++j)
+      if (ref.segment_of(j) == static_cast<int>(k) + 1) {
+        if (ref.t[j] == t) ref.x[j] = impact->x_plus;
+        break;
+      }
+  }
+}
+
 /// Solves `problem` from `start` and reads the discrete solution, its events and its reference.
 template <Scene S, class Problem>
 TimeFreezingOcpResult<S> solve_and_read(const Problem& problem, const MpccStart& start, const FesdOptions& fesd,
@@ -674,6 +727,7 @@ TimeFreezingOcpResult<S> solve_and_read(const Problem& problem, const MpccStart&
                                                                   out.frozen_phases, out.switch_points);
   out.reference = recover_reference<S>(out.points, fesd.stages);
   out.trajectory = recover_trajectory<S>(problem.system(), out.points, fesd.stages);
+  align_impact_samples(out.reference, out.trajectory);
   return out;
 }
 }  // namespace detail

@@ -2,9 +2,23 @@
 // and 25, auxiliary dynamics eq. 16 and eq. 24 with a_t = mu a_n, the step-function DCS eqs.
 // 31-32), written for any number of contacts.
 //
-// State y = (q, v, t, L) in R^{2 nq + 2}: configuration, velocity, the clock t (physical time) and
-// the cost quadrature L (the running cost integrated over physical time only, eq. 29: it runs
-// with the clock). Inputs u in R^nu.
+// State y = (q, v, t, L, g) in R^{2 nq + 2 + nc}: configuration, velocity, the clock t (physical
+// time), the cost quadrature L (the running cost integrated over physical time only, eq. 29: it
+// runs with the clock) and the integrated gaps g (one per contact, below). Inputs u in R^nu.
+//
+// INTEGRATED GAPS (this library's addition, not in the paper). g_i' = Theta J_n,i(q) v with
+// g_i(0) = gap_i(q0): since q' = Theta v in every region, g_i = gap_i(q) along every exact
+// solution; a discretisation integrates g with the same collocation as q, so g_i differs from
+// gap_i(q) by the discretisation error only. Why carry it: in a stance the exact solution sits
+// on gap = 0 AND J_n v = 0 (the auxiliary field freezes q, so an impact ends ON the surface, and
+// the Filippov solution then slides along J_n v = 0). A collocation step that holds both at every
+// stage point imposes two conditions where the continuous problem has one; for a gap nonlinear
+// in q they disagree at the order of the step's local error (the gap's second derivative along
+// the motion), so the discrete problem with both exactly zero has no solution in a moving stance
+// (derivation in fesd.hpp, "INTEGRATED GAP"). g's stage values are g_start + h sum_l a_rl Theta_l
+// J_n v_l, which vanish whenever the stage values of J_n v do: the two conditions then agree
+// exactly, as they do for a gap linear in q. FesdOptions::integrated_gap chooses which gap the
+// switching functions read.
 //
 // ONE CONTACT i (eq. 25). Switching functions c_i = (g_i(q), J_n,i(q) v, J_t,i(q) v): gap, normal
 // and tangential velocity (J = the gradients of the scene's gap and tangent position). With the
@@ -63,10 +77,12 @@ class TimeFreezingSystem {
   static constexpr int nu = S::nu;
   static constexpr int nc = S::nc;
   static constexpr int nx = 2 * nq;
-  /// y = (q, v, t, L).
-  static constexpr int ny = 2 * nq + 2;
+  /// y = (q, v, t, L, g).
+  static constexpr int ny = 2 * nq + 2 + nc;
   static constexpr int clock_index = 2 * nq;
   static constexpr int cost_index = 2 * nq + 1;
+  /// Index of contact 0's integrated gap g_0 in y (contact i: gap_state_index + i).
+  static constexpr int gap_state_index = 2 * nq + 2;
   /// Three switching functions per contact: gap, normal velocity, tangential velocity.
   static constexpr int n_switch = 3 * nc;
 
@@ -111,6 +127,19 @@ class TimeFreezingSystem {
       }
     }
     return c;
+  }
+
+  /// J_n,i(q) v of every contact (size nc; units of the gaps per second): the integrated gaps'
+  /// field is Theta times these.
+  template <class T>
+  VecT<T, (nc > 0 ? nc : 1)> normal_velocities(const VecT<T, nq>& q, const VecT<T, nq>& v) const {
+    using D = ad::Dual<T, 1>;
+    VecT<D, nq> qd;
+    for (int k = 0; k < nq; ++k) qd[k] = D(q[k], Eigen::Matrix<T, 1, 1>(v[k]));
+    VecT<T, (nc > 0 ? nc : 1)> out;
+    out.setZero();
+    for (int i = 0; i < nc; ++i) out[i] = scene_.template gap<D>(i, qd).derivatives()[0];
+    return out;
   }
 
   /// Contact i's closing weight beta_i = (1 - alpha_i1)(1 - alpha_i2) = theta_i^+ + theta_i^-:

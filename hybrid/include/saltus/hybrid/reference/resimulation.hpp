@@ -23,6 +23,10 @@ struct PolishResult {
   /// simulated event came 1e-11 s earlier; samples outside every such segment are compared with
   /// the simulated state at their time.
   double state_distance = 0.0;
+  /// Where state_distance is attained: the sample's time [s] and the state component (0 <= i < 2 nq;
+  /// -1 when there is no sample).
+  double worst_sample_time = 0.0;
+  int worst_component = -1;
   /// max |t_imported - t_simulated| over the events, paired in order; infinite if the counts differ.
   double event_time_distance = 0.0;
   std::size_t imported_events = 0, simulated_events = 0;

@@ -52,7 +52,13 @@ PolishResult<S> polish(const S& scene, const ImportedReference<S>& reference, Si
       x_sim = extended.state(s, t);
     else
       x_sim = traj.state_at(t);
-    result.state_distance = std::max(result.state_distance, (reference.x[k] - x_sim).cwiseAbs().maxCoeff());
+    Eigen::Index i = 0;
+    const double d = (reference.x[k] - x_sim).cwiseAbs().maxCoeff(&i);
+    if (d > result.state_distance || result.worst_component < 0) {
+      result.state_distance = std::max(result.state_distance, d);
+      result.worst_sample_time = t;
+      result.worst_component = static_cast<int>(i);
+    }
   }
   return result;
 }
