@@ -1067,6 +1067,49 @@ TEST(TimeFreezingRecovery, AnImpactAbsorbedIntoAFlowingElementIsAnImpactEvent) {
   EXPECT_LT((traj.state(1, 0.27) - points[6].y.head<4>()).cwiseAbs().maxCoeff(), 1e-14);
 }
 
+// A frozen run that ends before its impact does (the plank-box flagship's landing: the corners
+// still approaching at the run's end, the impact finished by the next, flowing element): x+ is read
+// where the impact ends, at that element's first stage point with J_n v >= 0, not at the run's
+// end (mid-impact: v = (0.8, -0.3)); recover_reference's x+ sample is aligned with it.
+TEST(TimeFreezingRecovery, AFrozenRunEndingMidImpactReadsXPlusWhereTheImpactEnds) {
+  const TimeFreezingSystem<PointMass> system = recovery_system();
+  std::vector<FesdPoint<7, 3, 2>> points;
+  auto add = [&](int element, int stage, double tau, double t, Vec<2> q, Vec<2> v, double weight = 1.0,
+                 double closing = 0.0) { points.push_back(recovery_point(element, stage, tau, t, q, v, weight, closing)); };
+  add(-1, -1, 0.0, 0.0, Vec<2>(0.0, 0.1), Vec<2>(1.0, -1.0));
+  add(0, 0, 0.05, 0.05, Vec<2>(0.05, 0.05), Vec<2>(1.0, -1.0));
+  add(0, 1, 0.10, 0.10, Vec<2>(0.10, 0.0), Vec<2>(1.0, -1.0));
+  add(1, 0, 0.12, 0.10, Vec<2>(0.10, 0.0), Vec<2>(0.9, -0.6), 0.0);  // frozen: Theta = 0, the clock stands
+  add(1, 1, 0.14, 0.10, Vec<2>(0.10, 0.0), Vec<2>(0.8, -0.3), 0.0);  // the run's end, still approaching
+  add(2, 0, 0.19, 0.12, Vec<2>(0.11, 0.0), Vec<2>(0.7, 0.0), 1.0, 0.5);  // the impact is over
+  add(2, 1, 0.24, 0.17, Vec<2>(0.14, 0.0), Vec<2>(0.55, 0.0), 1.0, 0.5);
+  add(3, 0, 0.29, 0.22, Vec<2>(0.17, 0.0), Vec<2>(0.4, 0.0), 1.0, 0.5);
+  add(3, 1, 0.34, 0.27, Vec<2>(0.19, 0.0), Vec<2>(0.25, 0.0), 1.0, 0.5);
+  const HybridTrajectory<PointMass> traj = recover_trajectory(system, points, 2);
+  ASSERT_EQ(traj.events.size(), 1u);
+  const Event<PointMass>& impact = traj.events[0];
+  EXPECT_TRUE(impact.impact());
+  EXPECT_EQ(impact.t, 0.1);
+  EXPECT_EQ(impact.guards(), (std::vector<Guard>{{0, GuardKind::Touchdown}}));
+  EXPECT_EQ(impact.x_minus, points[2].y.head<4>());
+  EXPECT_EQ(impact.x_plus, points[5].y.head<4>());
+  EXPECT_EQ(impact.mode_after[0], ContactState::slip_planar(1));
+  ASSERT_EQ(traj.segments.size(), 2u);
+  EXPECT_EQ(traj.state(1, 0.11), impact.x_plus);  // held over the clock's advance 0.1 .. 0.12
+  EXPECT_LT((traj.state(1, 0.17) - points[6].y.head<4>()).cwiseAbs().maxCoeff(), 1e-14);
+  EXPECT_LT((traj.state(1, 0.27) - points[8].y.head<4>()).cwiseAbs().maxCoeff(), 1e-14);
+  // The samples: x+ at the event time is the trajectory's x+ after the alignment.
+  ImportedReference<PointMass> ref = recover_reference<PointMass>(points, 2);
+  ASSERT_EQ(ref.event_times, std::vector<double>{0.1});
+  std::size_t plus = 0;
+  while (plus < ref.size() && ref.segment_of(plus) == 0) ++plus;
+  ASSERT_LT(plus, ref.size());
+  EXPECT_EQ(ref.t[plus], 0.1);
+  EXPECT_EQ(ref.x[plus], points[4].y.head<4>());  // recover_reference alone: the run's end
+  detail::align_impact_samples(ref, traj);
+  EXPECT_EQ(ref.x[plus], impact.x_plus);
+}
+
 // recover_trajectory on a hand-made solution (n_s = 2, a point mass with friction mu = 0.3):
 // flight onto the table, a frozen run (the impact: v from (1, -1) to (0.7, 0)), a slide, a stop,
 // a lift-off. Expected: three events (impact with a touchdown guard, stop, release), four segments
