@@ -1,13 +1,14 @@
 // What the flagship-OCP benchmarks (hopper_ocp, plank_box_ocp) share: their command line and the
 // second homotopy of the variants that change the relaxation on the way ("smoothing, then ...").
 //
-//   NAME [--json] [--only VARIANT] [--max-steps K] [--lift] [--integrated-gap] [--velocity-cross] [--polish-below S]
-//        [--polish-max-iter K] [--ipopt OPTION=VALUE]...
+//   NAME [--json] [--only VARIANT] [--max-steps K] [--lift] [--integrated-gap] [--velocity-cross]
+//        [--polish-below S] [--polish-max-iter K] [--ipopt OPTION=VALUE]...
 //
 // --max-steps K overrides the homotopy's step budget; --lift solves every variant with the lifted
-// step functions (FesdOptions::lift_step_functions); --integrated-gap with the gap switching functions
-// read from the integrated gaps (FesdOptions::integrated_gap); --velocity-cross with cross-complementarity on the velocity switching
-// functions too (FesdOptions::velocity_switch_detection); --polish-below and --polish-max-iter set
+// step functions (FesdOptions::lift_step_functions); --integrated-gap with the gap switching
+// functions read from the integrated gaps (FesdOptions::integrated_gap); --velocity-cross with
+// cross-complementarity on the velocity switching functions too
+// (FesdOptions::velocity_switch_detection); --polish-below and --polish-max-iter set
 // MpccSolverOptions::polish_below and polish_max_iter; --ipopt passes an Ipopt option to every solve
 // (an integer or a number when VALUE parses as one, else a string), e.g. `--ipopt
 // mumps_pivtol=1e-4 --ipopt print_timing_statistics=yes --ipopt output_file=ip.log --ipopt
@@ -47,7 +48,8 @@ struct OcpBenchArgs {
     if (polish_max_iter > 0) s.polish_max_iter = polish_max_iter;
     s.ipopt_options.insert(s.ipopt_options.end(), ipopt_options.begin(), ipopt_options.end());
   }
-  /// The command line's share of a variant's grid options: the lifted step functions, the integrated gap, the velocities' switch detection.
+  /// The command line's share of a variant's grid options: the lifted step functions, the
+  /// integrated gap, the velocities' switch detection.
   void apply(timefreezing::FesdOptions& grid) const {
     if (lift) grid.lift_step_functions = true;
     if (integrated_gap) grid.integrated_gap = true;
@@ -73,8 +75,9 @@ inline std::optional<timefreezing::IpoptOption> parse_ipopt_option(const std::st
 inline std::optional<OcpBenchArgs> parse_ocp_bench_args(int argc, char** argv, const char* program) {
   OcpBenchArgs a;
   const auto usage = [program] {
-    std::fprintf(stderr, "usage: %s [--json] [--only NAME] [--max-steps K] [--lift] [--integrated-gap] [--velocity-cross] [--polish-below S] "
-                 "[--polish-max-iter K] [--ipopt NAME=VALUE]...\n",
+    std::fprintf(stderr,
+                 "usage: %s [--json] [--only NAME] [--max-steps K] [--lift] [--integrated-gap] [--velocity-cross] "
+                 "[--polish-below S] [--polish-max-iter K] [--ipopt NAME=VALUE]...\n",
                  program);
     return std::optional<OcpBenchArgs>();
   };

@@ -1,13 +1,16 @@
 // The plank-box's flagship OCP, the flat landing (scenes/plank_box_landing.hpp), under the
 // formulation variants measured one by one (bench/README.md, "Plank-box flat landing").
 //
-//   plank_box_ocp [--json] [--only NAME] [--max-steps K] [--lift] [--ipopt NAME=VALUE]...
+//   plank_box_ocp [--json] [--only NAME] [--max-steps K] [--lift] [--integrated-gap] [--velocity-cross]
+//                 [--polish-below S] [--polish-max-iter K] [--ipopt NAME=VALUE]...
 //
 // Every variant starts from the contact-implicit initialisation (the start state at every stage
 // point, zero inputs) on the default grid (N = 15, 2 elements, n_s = 2) with the default homotopy
 // (smoothing from sigma_0 = 1e-2, kappa = 0.1, 10 steps of at most 1500 Ipopt iterations); one
 // progress line per Ipopt solve on stderr. Columns as bench/hopper_ocp.cpp's; `flat` is the largest
-// |theta - phi| over the stage points [rad]. --max-steps and --ipopt: ocp_bench_support.hpp.
+// |theta - phi| over the stage points [rad]. The flags: ocp_bench_support.hpp; they are applied
+// after each variant's own settings, so --integrated-gap overrides `gap-of-q` and
+// `before-2026-12-01`, and --polish-below the `*late-polish` variants.
 // The JSON's "landing": the first event of the recovered trajectory (recover_trajectory) with a
 // touchdown guard: {t, impact (false: a touchdown at zero normal velocity; an impact absorbed
 // into a flowing element is read as an impact, recover_trajectory's docstring), guards (2: both

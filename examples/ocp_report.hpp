@@ -22,6 +22,12 @@ struct OcpFeasibility {
   double target_error = 0.0;
 };
 
+/// A state as a JSON array.
+template <class V>
+std::vector<double> as_vector(const V& x) {
+  return std::vector<double>(x.data(), x.data() + x.size());
+}
+
 /// {"converged", "message", "complementarity", "max_path_violation", "worst_path_constraint",
 /// "target_error", "constraint_violation", "objective", "homotopy_steps", "continuation_stages",
 /// "ipopt_iterations", "solve_seconds", "steps": [{sigma, polish, complementarity, objective,
@@ -29,10 +35,15 @@ struct OcpFeasibility {
 /// "continuation": [...],
 /// "events": [{kind: "impact" (t, clock_advance) | "gap" | "normal velocity" | "tangential
 /// velocity" (t, alpha_before, alpha_after, switching_function)}], "recovered_events": [{t,
-/// impact, guards: ["touchdown C_L", ...], mode_before, mode_after, x_minus, x_plus}] (the HybridTrajectory of
-/// recover_trajectory: impacts and mode changes in physical time), "resim_max_error",
-/// "resim_max_error_at": {t, state_component} (where the largest distance is attained),
-/// "resim_event_time_error", "resim_events": [{t, guards (their count), x_minus, x_plus}]}.
+/// impact, guards: ["touchdown C_L", ...], mode_before, mode_after, x_minus, x_plus, x_plus_t}]
+/// (the HybridTrajectory of recover_trajectory: impacts and mode changes in physical time; states
+/// are (q, v), size 2 nq; x_plus_t: the time x+ belongs to, later than t where the discretisation's
+/// clock ran on before the impact ended, timefreezing::x_plus_time), "resim_max_error",
+/// "resim_max_error_at": {t, state_component} (where the largest distance is attained; the
+/// component indexes (q, v)),
+/// "resim_event_time_error" (null when the event counts differ: the imported reference counts its
+/// impacts only, the re-simulation every event), "resim_events": [{t, guards (their count),
+/// x_minus, x_plus}]}.
 template <Scene S>
 nlohmann::ordered_json ocp_report(const S& scene, const timefreezing::TimeFreezingOcpResult<S>& r,
                                   const OcpFeasibility& f) {
@@ -75,7 +86,8 @@ nlohmann::ordered_json ocp_report(const S& scene, const timefreezing::TimeFreezi
   }
   j["events"] = events;
   auto recovered = nlohmann::ordered_json::array();
-  for (const auto& ev : r.trajectory.events) {
+  for (std::size_t e = 0; e < r.trajectory.events.size(); ++e) {
+    const auto& ev = r.trajectory.events[e];
     auto guards = nlohmann::ordered_json::array();
     for (const Guard& g : ev.guards()) guards.push_back(std::string(to_string(g.kind)) + " " + scene.contact(g.contact).name);
     recovered.push_back({{"t", ev.t},
@@ -83,11 +95,13 @@ nlohmann::ordered_json ocp_report(const S& scene, const timefreezing::TimeFreezi
                          {"guards", guards},
                          {"mode_before", describe(scene, ev.mode_before)},
                          {"mode_after", describe(scene, ev.mode_after)},
-                         {"x_minus", std::vector<double>(ev.x_minus.data(), ev.x_minus.data() + ev.x_minus.size())},
-                         {"x_plus", std::vector<double>(ev.x_plus.data(), ev.x_plus.data() + ev.x_plus.size())}});
+                         {"x_minus", as_vector(ev.x_minus)},
+                         {"x_plus", as_vector(ev.x_plus)},
+                         {"x_plus_t", x_plus_time(r.trajectory, e)}});
   }
   j["recovered_events"] = recovered;
   j["resim_max_error"] = nullptr;
+  j["resim_max_error_at"] = nullptr;
   j["resim_event_time_error"] = nullptr;
   j["resim_events"] = nlohmann::ordered_json::array();
   if (r.converged()) {
@@ -99,8 +113,8 @@ nlohmann::ordered_json ocp_report(const S& scene, const timefreezing::TimeFreezi
       for (const auto& ev : resim.trajectory.events)
         j["resim_events"].push_back({{"t", ev.t},
                                      {"guards", ev.guards().size()},
-                                     {"x_minus", std::vector<double>(ev.x_minus.data(), ev.x_minus.data() + ev.x_minus.size())},
-                                     {"x_plus", std::vector<double>(ev.x_plus.data(), ev.x_plus.data() + ev.x_plus.size())}});
+                                     {"x_minus", as_vector(ev.x_minus)},
+                                     {"x_plus", as_vector(ev.x_plus)}});
     } catch (const Error& e) {
       j["resim_failure"] = e.what();
     }

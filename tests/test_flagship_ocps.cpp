@@ -158,9 +158,10 @@ TEST(PlankBoxFlatLanding, IpoptDerivativeCheckerFindsNoError) {
 // element boundary): converged to complementarity 0 by the branch NLP, the box parallel to the
 // plank and the target met; the recovered reference lands with both corners in ONE impact, slides,
 // sticks and lifts off; the event-driven simulator under the optimal input finds the same events
-// (its impact is the simultaneous impact of both corners) and stays within the discretisation's
-// distance: measured 0.065 m/s, at the impact's x+, where the grid finished the impact inside a
-// flowing element (recover_trajectory) and the clock ran 0.024 s meanwhile.
+// (its impact is the simultaneous impact of both corners) and stays close: measured 0.026 (the
+// plank's rate, after the lift-off). The grid finishes the impact inside a flowing element whose
+// clock runs 0.024 s meanwhile; x+ is read there at its own time (recover_trajectory,
+// x_plus_time; read at the impact's time it was 0.065 away).
 TEST(PlankBoxFlatLanding, OptimalReferenceLandsFlatAndAgreesWithTheEventDrivenSimulator) {
 #if defined(SALTUS_TESTS_UNDER_SANITIZERS)
   GTEST_SKIP() << "about 100 s in Release: run in the release stage only";
@@ -190,7 +191,7 @@ TEST(PlankBoxFlatLanding, OptimalReferenceLandsFlatAndAgreesWithTheEventDrivenSi
   std::cout << "plank-box flagship: objective " << r.solution.objective << ", " << r.solution.ipopt_iterations
             << " Ipopt iterations, " << r.solution.seconds << " s; re-simulation distance " << resim.state_distance
             << " at t = " << resim.worst_sample_time << "\n";
-  EXPECT_LT(resim.state_distance, 0.1);
+  EXPECT_LT(resim.state_distance, 0.05);
 }
 
 }  // namespace

@@ -314,7 +314,8 @@ TEST(Fesd, IpoptDerivativeCheckerFindsNoError) {
   // on the rotating plank (a gap nonlinear in q).
   o.lift_step_functions = false;
   o.integrated_gap = true;
-  const FesdMpcc<PlankBox> two_integrated(plank, NoObjective{}, Vec<4>(0.5, 0.08, 0.01, 0.0), Vec<4>(0.2, -1.0, 0.3, 0.0), o);
+  const FesdMpcc<PlankBox> two_integrated(plank, NoObjective{}, Vec<4>(0.5, 0.08, 0.01, 0.0),
+                                          Vec<4>(0.2, -1.0, 0.3, 0.0), o);
   const DerivativeCheckReport report4 = check_derivatives(two_integrated, interior_point(two_integrated, 7));
   EXPECT_EQ(report4.errors, 0) << report4.output;
 }
@@ -1070,12 +1071,15 @@ TEST(TimeFreezingRecovery, AnImpactAbsorbedIntoAFlowingElementIsAnImpactEvent) {
 // A frozen run that ends before its impact does (the plank-box flagship's landing: the corners
 // still approaching at the run's end, the impact finished by the next, flowing element): x+ is read
 // where the impact ends, at that element's first stage point with J_n v >= 0, not at the run's
-// end (mid-impact: v = (0.8, -0.3)); recover_reference's x+ sample is aligned with it.
+// end (mid-impact: v = (0.8, -0.3)), and it belongs to that point's time (x_plus_time);
+// recover_reference's x+ sample is aligned with it.
 TEST(TimeFreezingRecovery, AFrozenRunEndingMidImpactReadsXPlusWhereTheImpactEnds) {
   const TimeFreezingSystem<PointMass> system = recovery_system();
   std::vector<FesdPoint<7, 3, 2>> points;
   auto add = [&](int element, int stage, double tau, double t, Vec<2> q, Vec<2> v, double weight = 1.0,
-                 double closing = 0.0) { points.push_back(recovery_point(element, stage, tau, t, q, v, weight, closing)); };
+                 double closing = 0.0) {
+    points.push_back(recovery_point(element, stage, tau, t, q, v, weight, closing));
+  };
   add(-1, -1, 0.0, 0.0, Vec<2>(0.0, 0.1), Vec<2>(1.0, -1.0));
   add(0, 0, 0.05, 0.05, Vec<2>(0.05, 0.05), Vec<2>(1.0, -1.0));
   add(0, 1, 0.10, 0.10, Vec<2>(0.10, 0.0), Vec<2>(1.0, -1.0));
@@ -1096,9 +1100,11 @@ TEST(TimeFreezingRecovery, AFrozenRunEndingMidImpactReadsXPlusWhereTheImpactEnds
   EXPECT_EQ(impact.mode_after[0], ContactState::slip_planar(1));
   ASSERT_EQ(traj.segments.size(), 2u);
   EXPECT_EQ(traj.state(1, 0.11), impact.x_plus);  // held over the clock's advance 0.1 .. 0.12
+  EXPECT_EQ(x_plus_time(traj, 0), 0.12);
   EXPECT_LT((traj.state(1, 0.17) - points[6].y.head<4>()).cwiseAbs().maxCoeff(), 1e-14);
   EXPECT_LT((traj.state(1, 0.27) - points[8].y.head<4>()).cwiseAbs().maxCoeff(), 1e-14);
-  // The samples: x+ at the event time is the trajectory's x+ after the alignment.
+  // The samples: after the alignment the first post-event sample is the trajectory's x+, at the
+  // time it belongs to.
   ImportedReference<PointMass> ref = recover_reference<PointMass>(points, 2);
   ASSERT_EQ(ref.event_times, std::vector<double>{0.1});
   std::size_t plus = 0;
@@ -1108,6 +1114,8 @@ TEST(TimeFreezingRecovery, AFrozenRunEndingMidImpactReadsXPlusWhereTheImpactEnds
   EXPECT_EQ(ref.x[plus], points[4].y.head<4>());  // recover_reference alone: the run's end
   detail::align_impact_samples(ref, traj);
   EXPECT_EQ(ref.x[plus], impact.x_plus);
+  EXPECT_EQ(ref.t[plus], 0.12);
+  EXPECT_NO_THROW(ref.validate());
 }
 
 // recover_trajectory on a hand-made solution (n_s = 2, a point mass with friction mu = 0.3):

@@ -23,8 +23,8 @@
 //     K_L - s Theta l(x, u) = 0                                  (time_freezing_system.hpp),
 // and the collocation rows Y_r - y_start - h sum_l a_rl K_l = 0 are bilinear. Switching rows
 // (eq. 31): c(q_r, v_r) - lambda_p,r + lambda_n,r = 0 (with FesdOptions::integrated_gap, the gap
-// entries of c read the integrated gaps g_r instead of gap(q_r); below). Lifted: beta_i - (1 - alpha_i1)(1 - alpha_i2)
-// = 0 per contact, and the field reads beta where the plain form multiplies the alphas out.
+// entries of c read the integrated gaps g_r instead of gap(q_r); below). Lifted:
+// beta_i - (1 - alpha_i1)(1 - alpha_i2) = 0 per contact, and the field reads beta where the plain form multiplies the alphas out.
 //
 // COMPLEMENTARITY (all sides affine). Switch detection (FESD paper, cross-complementarity in
 // NOSNOC's FE_STAGE form): for each element, each switching function m and each point p among
@@ -71,10 +71,12 @@
 //     gap(q_1) = gap(q_0) + J_n(q_1) h K - (h^2 / 2) K' grad^2 gap K + O(h^3),
 // so gap(q_0) = 0 and J_n(q_1) v_1 = 0 give gap(q_1) = -(h^2 / 2) K' grad^2 gap K + O(h^3): not
 // zero unless the gap is linear in q (the point mass) or the motion stops (the hopper standing
-// still). For n_s >= 2 the same Taylor argument with Radau IIA's simplifying conditions
-// sum_l a_rl c_l^(k-1) = c_r^k / k (k <= n_s) leaves a residual of the stage order's next power of
-// h, again times the gap's second derivative along the motion. So where that curvature has the
-// sign that lifts the contact, the discrete stance has no solution with both held: gap(q_r) > 0
+// still). For n_s >= 2 Radau IIA's simplifying conditions sum_l a_rl c_l^(k-1) = c_r^k / k
+// (k <= n_s) cancel the h^2 term; what is left is of higher order in h and involves the gap's
+// second derivative along the velocity and the acceleration (grad^2 gap[q', q'']) or its third
+// derivative (a user's check with n_s = 2: a quadratic gap at constant velocity leaves no
+// residual; in general O(h^3) at the inner stage, O(h^4) at the end point). So where the residual
+// has the sign that lifts the contact, the discrete stance has no solution with both held: gap(q_r) > 0
 // forces alpha_gap = 1, i.e. no contact force at that stage. A relaxed homotopy can hide this
 // while sigma is larger than the residual; then it cannot go on (bench/README.md, the flagships).
 // The integrated gaps g (g' = Theta J_n v, collocated like q) have stage values g_r = g_0 + h sum_l
@@ -195,8 +197,11 @@ struct FesdOptions {
   /// (plain 2.4e-4), the plank-box's at 2.4e-4 (plain 8.4e-7). Hence off by default (NOSNOC: on).
   bool lift_step_functions = false;
   double element_length_freedom = 1.0;  ///< gamma_h in [0, 1]: h in [(1-gamma_h) h0, (1+gamma_h) h0]
-  /// The gap switching functions read the integrated gaps g (the state's last nc entries, g' =
-  /// Theta J_n v, g(0) = gap(q0); time_freezing_system.hpp) instead of gap(q) at each stage point.
+  /// The gap switching functions read the integrated gaps g [m] (the state's last nc entries,
+  /// g' = s Theta J_n v, g(0) = gap(q0); time_freezing_system.hpp) instead of gap(q) at each stage
+  /// point. Throws nothing of its own. When to turn it on: a contact that slides or sticks while
+  /// its gap is nonlinear in q and the configuration moves (a box on a rotating plank; a foot
+  /// whose height depends on joint angles), when the homotopy or its branch NLP stalls there.
   /// Why: in a moving stance, holding gap(q) = 0 and J_n v = 0 at every stage point is
   /// overdetermined for a gap nonlinear in q (file comment, "INTEGRATED GAP"); the two agree
   /// exactly for g. For gaps linear in q the discrete problem is the same as with false (Example
@@ -1087,7 +1092,8 @@ class FesdMpcc final : public Mpcc {
             } else {
               const Vec<nsw> c = system_.template switching_functions<double>(wx.template head<nq>(), wx.template segment<nq>(nq));
               for (int m = 0; m < nsw; ++m) {
-                const double cm = reads_integrated_gap(m) ? x[state_index(k, j, r) + System::gap_state_index + m / 3] : c[m];
+                const int gi = state_index(k, j, r) + System::gap_state_index + m / 3;
+                const double cm = reads_integrated_gap(m) ? x[gi] : c[m];
                 (*g)[srow + m] = switching_scale(m) * cm - x[lp + m] + x[ln + m];
               }
             }

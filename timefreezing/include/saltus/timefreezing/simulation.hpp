@@ -691,25 +691,47 @@ struct TimeFreezingOcpResult {
   bool converged() const { return solution.converged; }
 };
 
+/// The physical time [s] that event `e` of a trajectory from recover_trajectory reads its x+ at:
+/// the event's time, or later where the discretisation's clock ran on past the impact's instant
+/// before the impact ended (recover_trajectory's docstring: x+ is held constant over that
+/// advance, as the first piece of the next segment). Throws InvalidArgument for e out of range.
+template <Scene S>
+double x_plus_time(const HybridTrajectory<S>& traj, std::size_t e) {
+  SALTUS_REQUIRE(e < traj.events.size(), "x_plus_time: event ", e, " of ", traj.events.size());
+  const double t = traj.events[e].t;
+  for (const Segment<S>& seg : traj.segments)
+    if (seg.t_begin == t && !seg.x.empty()) {
+      const auto& first = seg.x.pieces().front();
+      if (first.degree == 0 && first.t0 == t && first.t1 > t && first.c.col(0) == traj.events[e].x_plus) return first.t1;
+    }
+  return t;
+}
+
 namespace detail {
 /// The x+ sample of each of recover_reference's events set to the x+ of recover_trajectory's
-/// impact event at the same time, where there is one: recover_reference takes x+ at the end of the
-/// frozen run, recover_trajectory at the end of the impact when the run ended before it
-/// (recover_trajectory's docstring), and the re-simulation (polish()) compares the samples.
+/// impact event at the same time, at the time x+ belongs to (x_plus_time), where there is one:
+/// recover_reference takes x+ at the end of the frozen run, recover_trajectory at the end of the
+/// impact when the run ended before it (recover_trajectory's docstring), and the re-simulation
+/// (polish()) compares each sample with the simulated state at the sample's time.
 template <Scene S>
 void align_impact_samples(ImportedReference<S>& ref, const HybridTrajectory<S>& traj) {
   for (std::size_t k = 0; k < ref.event_times.size(); ++k) {
     const double t = ref.event_times[k];
-    const Event<S>* impact = nullptr;
-    for (const Event<S>& ev : traj.events)
-      if (ev.impact() && std::abs(ev.t - t) <= 1e-12 * (1.0 + std::abs(t))) {
-        impact = &ev;
+    std::size_t impact = traj.events.size();
+    for (std::size_t e = 0; e < traj.events.size(); ++e)
+      if (traj.events[e].impact() && std::abs(traj.events[e].t - t) <= 1e-12 * (1.0 + std::abs(t))) {
+        impact = e;
         break;
       }
-    if (impact == nullptr) continue;
+    if (impact == traj.events.size()) continue;
     for (std::size_t j = 0; j < ref.size(); ++j)
       if (ref.segment_of(j) == static_cast<int>(k) + 1) {
-        if (ref.t[j] == t) ref.x[j] = impact->x_plus;
+        const double t_plus = x_plus_time(traj, impact);
+        const bool before_next = j + 1 >= ref.size() || t_plus < ref.t[j + 1];
+        if (ref.t[j] == t && before_next) {
+          ref.x[j] = traj.events[impact].x_plus;
+          ref.t[j] = t_plus;
+        }
         break;
       }
   }

@@ -6,21 +6,22 @@
 // time), the cost quadrature L (the running cost integrated over physical time only, eq. 29: it
 // runs with the clock) and the integrated gaps g (one per contact, below). Inputs u in R^nu.
 //
-// INTEGRATED GAPS (this library's addition, not in the paper). g_i' = Theta J_n,i(q) v with
-// g_i(0) = gap_i(q0): since q' = Theta v in every region, g_i = gap_i(q) along every exact
+// INTEGRATED GAPS (this library's addition, not in the paper). g_i' = Theta J_n,i(q) v [m per unit
+// numerical time; times s, eq. 33] with g_i(0) = gap_i(q0) [m]: since q' = Theta v in every region,
+// g_i = gap_i(q) along every exact
 // solution; a discretisation integrates g with the same collocation as q, so g_i differs from
 // gap_i(q) by the discretisation error only. Why carry it: in a stance the exact solution sits
 // on gap = 0 AND J_n v = 0 (the auxiliary field freezes q, so an impact ends ON the surface, and
 // the Filippov solution then slides along J_n v = 0). A collocation step that holds both at every
 // stage point imposes two conditions where the continuous problem has one; for a gap nonlinear
-// in q they disagree at the order of the step's local error (the gap's second derivative along
+// in q they disagree at the order of the step's local error (the gap's higher derivatives along
 // the motion), so the discrete problem with both exactly zero has no solution in a moving stance
-// (derivation in fesd.hpp, "INTEGRATED GAP"). g's stage values are g_start + h sum_l a_rl Theta_l
+// (derivation in fesd.hpp, "INTEGRATED GAP"). g's stage values are g_start + h sum_l a_rl s Theta_l
 // J_n v_l, which vanish whenever the stage values of J_n v do: the two conditions then agree
 // exactly, as they do for a gap linear in q. FesdOptions::integrated_gap chooses which gap the
 // switching functions read.
 //
-// ONE CONTACT i (eq. 25). Switching functions c_i = (g_i(q), J_n,i(q) v, J_t,i(q) v): gap, normal
+// ONE CONTACT i (eq. 25). Switching functions c_i = (gap_i(q), J_n,i(q) v, J_t,i(q) v): gap, normal
 // and tangential velocity (J = the gradients of the scene's gap and tangent position). With the
 // step functions alpha_i,k in [0, 1] of c_i,k (alpha = 1 where c > 0, eq. 31):
 //     theta_i^free  = alpha_i1 + (1 - alpha_i1) alpha_i2        (R1: open, or closed and leaving)
