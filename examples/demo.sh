@@ -31,8 +31,9 @@ OPENBLAS_NUM_THREADS=1 "$build/examples/guiding_example" --json | tee "$SALTUS_R
 # The flagship OCPs, one thread each and side by side on the 2 cores (one progress line per Ipopt
 # solve on stderr, prefixed): the hopper over three holes (time-freezing paper Section 6) from the
 # paper's initialisation, continuation on the holes, then the smoothing homotopy (about 15
-# minutes), and the plank-box flat landing (about 10 minutes). Neither converges yet (issue
-# "Optimal references for the flagship scenes"): the JSON says how far each got.
+# minutes; it does not converge yet, issue "Optimal references for the flagship scenes": the JSON
+# says how far it got), and the plank-box flat landing (about 2 minutes; it converges, and its
+# JSON has the recovered events and the event-driven re-simulation's).
 ocp_summary() {
   python3 - "$1" <<'PY'
 import json, sys
@@ -40,6 +41,13 @@ d = json.load(open(sys.argv[1]))
 print(f'converged {d["converged"]}  complementarity {d["complementarity"]:.2e}  path violation {d["max_path_violation"]:.2e}'
       f'  target error {d["target_error"]:.2e}  objective {d["objective"]:.4g}  Ipopt iterations {d["ipopt_iterations"]}'
       f'  {d["solve_seconds"]:.0f} s  ({d["message"]})')
+for e in d.get("recovered_events", []):
+    print(f'  event t = {e["t"]:.6f}: {"impact" if e["impact"] else "mode change"}, {", ".join(e["guards"])}'
+          f'  ({e["mode_before"]} -> {e["mode_after"]})')
+if d.get("resim_max_error") is not None:
+    print(f'  event-driven re-simulation: {len(d["resim_events"])} events at '
+          + ", ".join(f'{e["t"]:.6f}' for e in d["resim_events"])
+          + f'; largest state distance {d["resim_max_error"]:.2e} at t = {d["resim_max_error_at"]["t"]:.4f}')
 PY
 }
 echo
