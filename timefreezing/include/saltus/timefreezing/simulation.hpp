@@ -358,6 +358,13 @@ HybridTrajectory<S> recover_trajectory(const TimeFreezingSystem<S>& system,
     return m;
   };
   auto frozen = [&](int e) { return detail::element_frozen(points, stages, e, options.frozen_tolerance); };
+  // The earliest stage r <= last of element e such that `holds` (of the switching functions) is
+  // true at every stage r .. last; -1 when it is false at `last`.
+  auto start_of_trailing_run = [&](int e, int last, const auto& holds) {
+    int first = -1;
+    for (int r = last; r >= 0 && holds(switching(stage_of(e, r))); --r) first = r;
+    return first;
+  };
   // How contact i took an impulse, as the impact solver labels it: stick for a frictionless contact
   // or a tangential rest after the impact, else slip along J_t v+ (c_plus: the switching
   // functions at x+).
@@ -477,17 +484,12 @@ HybridTrajectory<S> recover_trajectory(const TimeFreezingSystem<S>& system,
         std::vector<int> approaching;
         for (int i = 0; i < nc; ++i)
           if (c_end[3 * i] <= gap_tol && c_end[3 * i + 1] < -vel_tol) approaching.push_back(i);
-        if (!approaching.empty()) {
-          int first_done = -1;
-          for (int r = stages - 1; r >= 0; --r) {
-            const Vec<nsw> cr = switching(stage_of(f + 1, r));
+        if (!approaching.empty())
+          tail = start_of_trailing_run(f + 1, stages - 1, [&](const Vec<nsw>& cr) {
             bool done = true;
             for (int i : approaching) done = done && cr[3 * i + 1] >= -vel_tol;
-            if (done) first_done = r;
-            else break;
-          }
-          tail = first_done;
-        }
+            return done;
+          });
       }
       const Point& plus = tail >= 0 ? stage_of(f + 1, tail) : end_of(f);
       const ModeT after = f + 1 < elements ? mode_of_element(f + 1) : mode_at(plus);
@@ -539,14 +541,13 @@ HybridTrajectory<S> recover_trajectory(const TimeFreezingSystem<S>& system,
       if (!struck.empty()) {
         // From the stage that decided the element's mode (closed for them) back to the earliest
         // stage of a closed run.
-        int first_closed = stages >= 2 ? stages - 2 : 0;
-        for (int r = first_closed; r >= 0; --r) {
-          const Vec<nsw> cr = switching(stage_of(e, r));
+        const int deciding = stages >= 2 ? stages - 2 : 0;
+        int first_closed = start_of_trailing_run(e, deciding, [&](const Vec<nsw>& cr) {
           bool closed = true;
           for (int i : struck) closed = closed && contact_class(cr, i) != 0;
-          if (closed) first_closed = r;
-          else break;
-        }
+          return closed;
+        });
+        if (first_closed < 0) first_closed = deciding;
         const Point& plus = stage_of(e, first_closed);
         std::vector<Guard> guards = changes(current, m);
         ImpactMode<nc> impulse;

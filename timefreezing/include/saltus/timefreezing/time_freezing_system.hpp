@@ -8,9 +8,8 @@
 //
 // INTEGRATED GAPS (this library's addition, not in the paper). g_i' = Theta J_n,i(q) v [m per unit
 // numerical time; times s, eq. 33] with g_i(0) = gap_i(q0) [m]: since q' = Theta v in every region,
-// g_i = gap_i(q) along every exact
-// solution; a discretisation integrates g with the same collocation as q, so g_i differs from
-// gap_i(q) by the discretisation error only. Why carry it: in a stance the exact solution sits
+// g_i = gap_i(q) along every exact solution; a discretisation integrates g with the same
+// collocation as q, so g_i differs from gap_i(q) by the discretisation error only. Why carry it: in a stance the exact solution sits
 // on gap = 0 AND J_n v = 0 (the auxiliary field freezes q, so an impact ends ON the surface, and
 // the Filippov solution then slides along J_n v = 0). A collocation step that holds both at every
 // stage point imposes two conditions where the continuous problem has one; for a gap nonlinear
@@ -111,10 +110,8 @@ class TimeFreezingSystem {
   /// c(q, v) (size 3 nc): per contact (gap, J_n v, J_t v); the third is 1 for a frictionless one.
   template <class T>
   VecT<T, n_switch> switching_functions(const VecT<T, nq>& q, const VecT<T, nq>& v) const {
-    // Directional derivatives along v: one more AD level with one direction.
     using D = ad::Dual<T, 1>;
-    VecT<D, nq> qd;
-    for (int k = 0; k < nq; ++k) qd[k] = D(q[k], Eigen::Matrix<T, 1, 1>(v[k]));
+    const VecT<D, nq> qd = seeded_along<T>(q, v);
     VecT<T, n_switch> c;
     for (int i = 0; i < nc; ++i) {
       const D g = scene_.template gap<D>(i, qd);
@@ -134,12 +131,10 @@ class TimeFreezingSystem {
   /// field is Theta times these.
   template <class T>
   VecT<T, (nc > 0 ? nc : 1)> normal_velocities(const VecT<T, nq>& q, const VecT<T, nq>& v) const {
-    using D = ad::Dual<T, 1>;
-    VecT<D, nq> qd;
-    for (int k = 0; k < nq; ++k) qd[k] = D(q[k], Eigen::Matrix<T, 1, 1>(v[k]));
+    const VecT<ad::Dual<T, 1>, nq> qd = seeded_along<T>(q, v);
     VecT<T, (nc > 0 ? nc : 1)> out;
     out.setZero();
-    for (int i = 0; i < nc; ++i) out[i] = scene_.template gap<D>(i, qd).derivatives()[0];
+    for (int i = 0; i < nc; ++i) out[i] = scene_.template gap<ad::Dual<T, 1>>(i, qd).derivatives()[0];
     return out;
   }
 
@@ -192,6 +187,15 @@ class TimeFreezingSystem {
   }
 
  private:
+  // q seeded with the direction v: functions of it carry their directional derivative along v
+  // (J v for the gap and the tangent position), one more AD level with one direction.
+  template <class T>
+  static VecT<ad::Dual<T, 1>, nq> seeded_along(const VecT<T, nq>& q, const VecT<T, nq>& v) {
+    VecT<ad::Dual<T, 1>, nq> qd;
+    for (int k = 0; k < nq; ++k) qd[k] = ad::Dual<T, 1>(q[k], Eigen::Matrix<T, 1, 1>(v[k]));
+    return qd;
+  }
+
   // Theta (S u - h) + a_n sum_i beta_i [alpha_i3 (J_n - mu J_t) + (1 - alpha_i3)(J_n + mu J_t)].
   template <class T>
   VecT<T, nq> force_from_weights(const VecT<T, nq>& q, const VecT<T, nq>& v, const VecT<T, nu>& u, const T& theta,
