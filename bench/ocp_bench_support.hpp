@@ -112,6 +112,21 @@ inline std::optional<OcpBenchArgs> parse_ocp_bench_args(int argc, char** argv, c
   return a;
 }
 
+/// Whether `only` (the --only NAME argument; empty: every variant) names one of `variants` (each
+/// with a `name`); if not, prints "<program>: no variant named ..." with the names to stderr, so
+/// that a mistyped name is an error (exit status 2), not an empty run.
+template <class Variants>
+bool only_names_a_variant(const std::string& only, const Variants& variants, const char* program) {
+  if (only.empty()) return true;
+  std::string names;
+  for (const auto& v : variants) {
+    if (only == v.name) return true;
+    names += std::string(names.empty() ? "" : ", ") + v.name;
+  }
+  std::fprintf(stderr, "%s: no variant named '%s'; the variants: %s\n", program, only.c_str(), names.c_str());
+  return false;
+}
+
 /// A second homotopy (`relaxation` from sigma_0, `steps` steps, polish on) from the primal-dual
 /// solution `first` of an earlier homotopy on a problem with the same variables and rows; returns
 /// its solution with `first`'s steps, iterations and seconds put in front.

@@ -111,6 +111,7 @@ int main(int argc, char** argv) {
   const bool json = args->json;
   const std::string& only = args->only;
   nlohmann::ordered_json rows = nlohmann::ordered_json::array();
+  if (!bench::only_names_a_variant(only, variants(), "plank_box_ocp")) return 2;
   if (!json)
     std::printf("%-24s %4s %5s %6s %9s %9s %9s %11s %-28s %8s\n", "variant", "conv", "steps", "iters", "compl", "flat",
                 "target", "J", "status", "seconds");

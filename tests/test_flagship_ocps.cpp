@@ -21,6 +21,7 @@
 #include <cstdlib>
 #include <iostream>
 #include <numbers>
+#include <string>
 #include <vector>
 
 namespace saltus::scenes {
@@ -106,6 +107,53 @@ TEST(HopperOverThreeHoles, FeasibilityReportNamesTheWorstRow) {
   EXPECT_NEAR(f.target_error, 1e-3, 1e-15);
   const std::vector<P> clean{start, end};
   EXPECT_EQ(Ocp::feasibility(clean).worst_row, -1);
+}
+
+// The one-hole test bed (bench/hopper_ocp --one-hole): its own target, horizon, grid and hole
+// continuation, the flagship's rows; its feasibility report measures the target error against its
+// own target, and its FESD MPCC reads that target in the terminal rows.
+TEST(HopperOverOneHole, TargetGridAndRowsAreTheShortTask) {
+  using Short = HopperOverOneHole;
+  EXPECT_EQ(Short::q_target(), Vec<4>(1.0, 0.4, 0.0, 0.0));
+  EXPECT_EQ(Short{}.terminal_lower(), Short::q_target());
+  EXPECT_EQ(Short{}.terminal_upper(), Short::q_target());
+  const timefreezing::FesdOptions grid = Short::grid();
+  EXPECT_EQ(grid.control_intervals, 8);
+  EXPECT_EQ(grid.finite_elements, 3);
+  EXPECT_EQ(grid.horizon, 1.0);
+  EXPECT_EQ(grid.physical_horizon, 1.0);
+  EXPECT_EQ(grid.horizon / grid.control_intervals, Ocp::grid().horizon / Ocp::grid().control_intervals);
+  const std::vector<Short> levels = Short::hole_continuation();
+  ASSERT_EQ(levels.size(), Ocp::hole_continuation().size());
+  EXPECT_EQ(levels.back().hole_level, 1.0);
+  EXPECT_EQ(Short{}.path_lower(), Ocp{}.path_lower());
+  struct P {
+    Vec<10> y;
+    Vec<2> u;
+  };
+  P start{Vec<10>::Zero(), Vec<2>::Zero()}, end = start;
+  start.y.head<4>() = Short::q0();
+  end.y.head<4>() = Short::q_target();
+  const std::vector<P> path{start, end};
+  EXPECT_EQ(Short::feasibility(path).target_error, 0.0);
+  EXPECT_EQ(Short::feasibility(path).worst_row, -1);
+  EXPECT_EQ(Ocp::feasibility(path).target_error, 2.0);  // the flagship's target is x = 3
+  const timefreezing::FesdMpcc<Hopper, Short> problem(Short::system(), Short{}, Short::q0(), Short::v0(),
+                                                      Short::grid(1, 2, 2));
+  EXPECT_EQ(problem.nt, 4);
+  const int n = problem.variable_count(), m = problem.constraint_count();
+  Eigen::VectorXd x_lower(n), x_upper(n), g_lower(m), g_upper(m);
+  problem.bounds(x_lower, x_upper, g_lower, g_upper);
+  int terminal_rows = 0;
+  for (int j = 0; j < m; ++j) {
+    const std::string name = problem.constraint_name(j);
+    if (name.rfind("terminal constraint ", 0) != 0) continue;
+    const int i = std::stoi(name.substr(20));
+    EXPECT_EQ(g_lower[j], Short::q_target()[i]) << name;
+    EXPECT_EQ(g_upper[j], Short::q_target()[i]) << name;
+    ++terminal_rows;
+  }
+  EXPECT_EQ(terminal_rows, 4);
 }
 
 // The start: both corners 5 cm above the level plank, the box parallel to it (path row 0); the

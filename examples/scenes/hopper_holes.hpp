@@ -176,6 +176,11 @@ struct HopperOverThreeHoles {
   };
   template <class Points>
   static Feasibility feasibility(const Points& points) {
+    return feasibility_against(points, q_target());
+  }
+  /// feasibility() with the target error measured against `target` (q(T), size nq = 4).
+  template <class Points>
+  static Feasibility feasibility_against(const Points& points, const Vec<4>& target) {
     const HopperOverThreeHoles full;
     const Vec<11> lo = full.path_lower(), hi = full.path_upper();
     Feasibility f;
@@ -189,7 +194,7 @@ struct HopperOverThreeHoles {
         }
       }
     }
-    f.target_error = (points.back().y.template head<4>() - q_target()).cwiseAbs().maxCoeff();
+    f.target_error = (points.back().y.template head<4>() - target).cwiseAbs().maxCoeff();
     return f;
   }
 
@@ -198,6 +203,36 @@ struct HopperOverThreeHoles {
       "hip x >= -0.05", "foot x >= -0.05", "knee x >= -0.05", "0.2 <= z <= 0.55", "|phi_hip| <= 3 pi/8",
       "|phi_knee| <= pi/2", "knee z >= 0.05", "-0.005 <= foot z <= 0.2", "outside hole 1", "outside hole 2",
       "outside hole 3"};
+};
+
+/// The same hopper over the first hole only, a test bed with 8 of the flagship's 20 control intervals (bench/
+/// hopper_ocp --one-hole; bench/README.md, "Hopper over three holes"): T = 1 s, target q(T) =
+/// (1, 0.4, 0, 0), N = 8 control intervals (0.125 s each, as the flagship's), 3 finite elements,
+/// n_s = 2; the same path rows (holes 2 and 3 lie beyond the target: the foot ends on the ground
+/// in [0.75, 1.25]), start, torque bounds, a_n, homotopy and hole continuation. hop_guess (three
+/// hops over 2.5 s) does not describe this task.
+struct HopperOverOneHole : HopperOverThreeHoles {
+  static constexpr double horizon = 1.0;  ///< T [s]
+  static Vec<4> q_target() { return Vec<4>(1.0, 0.4, 0.0, 0.0); }
+  Vec<4> terminal_lower() const { return q_target(); }
+  Vec<4> terminal_upper() const { return q_target(); }
+  static timefreezing::FesdOptions grid(int control_intervals = 8, int finite_elements = 3, int stages = 2) {
+    return terminal_clock_grid(horizon, control_intervals, finite_elements, stages,
+                               Eigen::VectorXd::Constant(2, -torque_limit), Eigen::VectorXd::Constant(2, torque_limit));
+  }
+  static std::vector<HopperOverOneHole> hole_continuation() {
+    std::vector<HopperOverOneHole> stages;
+    for (const HopperOverThreeHoles& full : HopperOverThreeHoles::hole_continuation()) {
+      HopperOverOneHole o;
+      o.hole_level = full.hole_level;
+      stages.push_back(o);
+    }
+    return stages;
+  }
+  template <class Points>
+  static Feasibility feasibility(const Points& points) {
+    return feasibility_against(points, q_target());
+  }
 };
 
 }  // namespace saltus::scenes
