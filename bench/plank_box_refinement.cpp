@@ -28,6 +28,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -35,7 +37,9 @@
 #include <iostream>
 #include <limits>
 #include <sstream>
+#include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace {
@@ -53,6 +57,12 @@ struct ConstantInput {
     return VecT<T, 3>(T(u[0]), T(u[1]), T(u[2]));
   }
 };
+
+/// The state's components (x, y, theta: the box; phi: the plank; then their rates) by index.
+const char* component_name(int i) {
+  static constexpr const char* names[] = {"x", "y", "theta", "phi", "v_x", "v_y", "box_rate", "plank_rate"};
+  return i >= 0 && i < 8 ? names[i] : "none";
+}
 
 struct Controls {
   Vec<4> q0, v0;
@@ -80,6 +90,13 @@ Controls from_json(const nlohmann::json& j) {
   for (const auto& u : j.at("u")) c.u.push_back(Vec<3>(u.at(0).get<double>(), u.at(1).get<double>(), u.at(2).get<double>()));
   c.s = j.at("s").get<std::vector<double>>();
   c.ocp_distance = j.at("ocp_resim_distance").get<double>();
+  // The numerical interval length comes from the scene's grid: a file of another grid would be
+  // integrated with the wrong lengths.
+  const int n = Ocp::grid().control_intervals;
+  if (static_cast<int>(c.u.size()) != n || static_cast<int>(c.s.size()) != n)
+    throw std::runtime_error("the controls file has " + std::to_string(c.u.size()) + " inputs and " +
+                             std::to_string(c.s.size()) + " speeds of time; the flagship's grid has " +
+                             std::to_string(n) + " control intervals");
   return c;
 }
 
@@ -106,7 +123,12 @@ struct Row {
   int elements = 0;
   bool converged = false;
   int iterations = 0;
-  double seconds = 0.0, distance = 0.0, worst_t = 0.0, event_time_distance = 0.0;
+  double seconds = 0.0, distance = 0.0, worst_t = 0.0;
+  double x_plus_advance = 0.0;  ///< the largest x_plus_time - t over the impacts [s]
+  double distance_away_from_impacts = 0.0;  ///< as distance, over the samples > 2 ms from an impact
+  /// The simulation's impacts as recover_trajectory reads them: time [s] and number of guards
+  /// (2: both corners in one impact).
+  std::vector<std::pair<double, int>> impacts;
   int worst_component = -1;
   std::vector<double> events;
   std::vector<std::string> retries;
@@ -173,12 +195,38 @@ Row simulate(const Controls& c, int elements) {
     t0 = end[TimeFreezingSystem<Scene>::clock_index];
     tau0 += piece.horizon;
   }
-  const ImportedReference<Scene> ref = recover_reference<Scene>(points, piece.stages);
+  // Read as the OCP's reference is (solve_time_freezing_ocp): where a frozen run ends before the
+  // impact does, its x+ sample is the state where the impact ends, at that state's time
+  // (recover_trajectory's docstring, x_plus_time). Without it the 480-element simulation's frozen
+  // run ended mid-impact and its distance was 1.04 (the box's rate at t = 0.400).
+  ImportedReference<Scene> ref = recover_reference<Scene>(points, piece.stages);
+  const HybridTrajectory<Scene> traj = recover_trajectory<Scene>(Ocp::system(), points, piece.stages);
+  timefreezing::detail::align_impact_samples(ref, traj);
+  for (std::size_t e = 0; e < traj.events.size(); ++e)
+    if (traj.events[e].impact()) {
+      row.x_plus_advance = std::max(row.x_plus_advance, x_plus_time(traj, e) - traj.events[e].t);
+      row.impacts.push_back({traj.events[e].t, static_cast<int>(traj.events[e].guards().size())});
+    }
   const PolishResult<Scene> resim = polish(Scene{}, ref);
+  // The distance away from the impacts (samples more than 2 ms from every impact event of the
+  // re-simulation, compared with its state at their time), and the samples within 1 ms of an
+  // impact on stderr: where polish's largest distance sits at an impact, these say whether the
+  // rest of the motion agrees.
+  std::vector<double> impact_times;
+  for (const auto& ev : resim.trajectory.events)
+    if (ev.impact()) impact_times.push_back(ev.t);
+  for (std::size_t j = 0; j < ref.size(); ++j) {
+    double nearest = std::numeric_limits<double>::infinity();
+    for (double t : impact_times) nearest = std::min(nearest, std::abs(ref.t[j] - t));
+    const double d = (ref.x[j] - resim.trajectory.state_at(ref.t[j])).cwiseAbs().maxCoeff();
+    if (nearest > 2e-3) row.distance_away_from_impacts = std::max(row.distance_away_from_impacts, d);
+    if (nearest <= 1e-3)
+      std::fprintf(stderr, "%d elements per interval: sample %zu at t = %.9f (segment %d), %.3e from the re-simulation\n",
+                   elements, j, ref.t[j], ref.segment_of(j), d);
+  }
   row.distance = resim.state_distance;
   row.worst_t = resim.worst_sample_time;
   row.worst_component = resim.worst_component;
-  row.event_time_distance = resim.event_time_distance;
   for (const auto& ev : resim.trajectory.events) row.events.push_back(ev.t);
   return row;
 }
@@ -204,41 +252,65 @@ int main(int argc, char** argv) {
     } else if (std::strcmp(argv[i], "--controls") == 0 && i + 1 < argc) {
       controls_file = argv[++i];
     } else {
-      std::fprintf(stderr, "usage: plank_box_refinement [--elements M1,M2,...] [--controls FILE]\n");
-      return 2;
+      const bool help = std::strcmp(argv[i], "--help") == 0;
+      std::fprintf(help ? stdout : stderr,
+                   "usage: plank_box_refinement [--elements M1,M2,...] [--controls FILE]\n"
+                   "  the plank-box flagship's optimal inputs integrated again with M elements per control\n"
+                   "  interval (default 2,4,8,16) and re-simulated (bench/README.md); --controls FILE reads\n"
+                   "  the inputs from FILE if it exists, else solves the OCP and writes them there.\n");
+      return help ? 0 : 2;
     }
   }
   Controls c;
-  std::ifstream in(controls_file);
-  if (!controls_file.empty() && in) {
-    c = from_json(nlohmann::json::parse(in));
-    std::fprintf(stderr, "controls read from %s\n", controls_file.c_str());
-  } else {
-    c = solve_flagship();
-    if (!controls_file.empty()) std::ofstream(controls_file) << to_json(c).dump(1) << "\n";
+  try {
+    std::ifstream in(controls_file);
+    if (!controls_file.empty() && in) {
+      c = from_json(nlohmann::json::parse(in));
+      std::fprintf(stderr, "controls read from %s\n", controls_file.c_str());
+    } else {
+      c = solve_flagship();
+      if (!controls_file.empty()) std::ofstream(controls_file) << to_json(c).dump(1) << "\n";
+    }
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "plank_box_refinement: %s%s: %s\n", controls_file.empty() ? "" : "controls file ",
+                 controls_file.c_str(), e.what());
+    return 1;
   }
-  std::printf("the OCP's own re-simulation distance (N = 15, 2 elements per interval): %.3g\n", c.ocp_distance);
-  std::printf("%8s %5s %7s %8s %10s %8s %4s %9s  %s\n", "elements", "conv", "iters", "seconds", "distance", "at t",
-              "comp", "dt_event", "events (re-simulation)");
+  const int intervals = static_cast<int>(c.u.size());
+  std::printf("the OCP's own re-simulation distance (N = %d, %d elements per interval): %.3g\n", intervals,
+              Ocp::grid().finite_elements, c.ocp_distance);
+  // Columns: the simulation's elements (M per interval), whether every interval's homotopy
+  // converged, Ipopt iterations and the sum of the solves' seconds, the re-simulation's largest
+  // state distance, the time and state component where it is largest, the largest clock advance
+  // of an impact's x+ (x_plus_time - t, 0 when every frozen run ends with its impact), and the
+  // re-simulation's events (the impact, the stop, the lift-off).
+  std::printf("%8s %5s %7s %8s %10s %8s %-12s %9s  %s\n", "elements", "conv", "iters", "seconds", "distance", "at t",
+              "component", "x+ adv", "events (re-simulation)");
   nlohmann::ordered_json rows = nlohmann::ordered_json::array();
   for (int m : element_counts) {
     const Row r = simulate(c, m);
     std::string events;
     for (double t : r.events) events += (events.empty() ? "" : ", ") + std::to_string(t);
     for (const std::string& retry : r.retries) std::fprintf(stderr, "%d elements per interval: %s\n", m, retry.c_str());
-    std::printf("%8d %5s %7d %8.1f %10.3e %8.4f %4d %9.2e  %s %s\n", m * 15, r.converged ? "yes" : "no", r.iterations,
-                r.seconds, r.distance, r.worst_t, r.worst_component, r.event_time_distance, events.c_str(),
-                r.message.c_str());
+    std::fprintf(stderr, "%d elements per interval: distance more than 2 ms from the impacts %.3e\n", m,
+                 r.distance_away_from_impacts);
+    for (const auto& [t, guards] : r.impacts)
+      std::fprintf(stderr, "%d elements per interval: an impact at t = %.9f with %d guards\n", m, t, guards);
+    std::printf("%8d %5s %7d %8.1f %10.3e %8.4f %-12s %9.2e  %s %s\n", m * intervals, r.converged ? "yes" : "no",
+                r.iterations, r.seconds, r.distance, r.worst_t, component_name(r.worst_component), r.x_plus_advance,
+                events.c_str(), r.message.c_str());
     std::fflush(stdout);
     rows.push_back({{"elements_per_interval", m},
-                    {"elements", m * 15},
+                    {"elements", m * intervals},
                     {"converged", r.converged},
                     {"ipopt_iterations", r.iterations},
                     {"seconds", r.seconds},
                     {"resim_distance", r.distance},
                     {"worst_t", r.worst_t},
-                    {"worst_component", r.worst_component},
-                    {"event_time_distance", r.event_time_distance},
+                    {"worst_component", component_name(r.worst_component)},
+                    {"x_plus_advance", r.x_plus_advance},
+                    {"distance_away_from_impacts", r.distance_away_from_impacts},
+                    {"impacts", r.impacts},
                     {"events", r.events},
                     {"retries", r.retries},
                     {"failure", r.message}});

@@ -205,9 +205,9 @@ struct HopperOverThreeHoles {
       "outside hole 3"};
 };
 
-/// The same hopper over the first hole only, a test bed with 8 of the flagship's 20 control intervals (bench/
-/// hopper_ocp --one-hole; bench/README.md, "Hopper over three holes"): T = 1 s, target q(T) =
-/// (1, 0.4, 0, 0), N = 8 control intervals (0.125 s each, as the flagship's), 3 finite elements,
+/// The same hopper over the first hole only, a test bed with 8 of the flagship's 20 control
+/// intervals (bench/hopper_ocp --one-hole; bench/README.md, "The one-hole test bed"): T = 1 s,
+/// target q(T) = (1, 0.4, 0, 0), N = 8 control intervals (0.125 s each, as the flagship's), 3 finite elements,
 /// n_s = 2; the same path rows (holes 2 and 3 lie beyond the target: the foot ends on the ground
 /// in [0.75, 1.25]), start, torque bounds, a_n, homotopy and hole continuation. hop_guess (three
 /// hops over 2.5 s) does not describe this task.
