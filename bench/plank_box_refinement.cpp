@@ -1,7 +1,7 @@
 // Is the plank-box flagship's re-simulation distance the discretisation's error? (bench/README.md,
 // "Plank-box flat landing", the refinement table.)
 //
-//   plank_box_refinement [--elements M1,M2,...] [--controls FILE]
+//   plank_box_refinement [--elements M1,M2,...] [--controls FILE] [--reference-prefix P]
 //
 // The flagship OCP (scenes/plank_box_landing.hpp, its default grid: N = 15 control intervals of
 // 2 finite elements, n_s = 2) is solved once; its optimal inputs u_k and speeds of time s_k are then
@@ -135,7 +135,21 @@ struct Row {
   std::string message;
 };
 
-Row simulate(const Controls& c, int elements) {
+/// The reference read from a simulation (samples t, x, u, their segments, the event times), for
+/// inspection: --reference-prefix P writes P<M>.json per element count M.
+nlohmann::json reference_json(const ImportedReference<Scene>& ref) {
+  nlohmann::json j;
+  j["t"] = ref.t;
+  for (std::size_t k = 0; k < ref.size(); ++k) {
+    j["x"].push_back(std::vector<double>(ref.x[k].data(), ref.x[k].data() + 8));
+    j["u"].push_back(std::vector<double>(ref.u[k].data(), ref.u[k].data() + 3));
+  }
+  j["segment"] = ref.segment;
+  j["event_times"] = ref.event_times;
+  return j;
+}
+
+Row simulate(const Controls& c, int elements, const std::string& reference_prefix) {
   const FesdOptions ocp_grid = Ocp::grid();
   const double h = ocp_grid.horizon / ocp_grid.control_intervals;  // numerical length of an interval
   // A simulation's settings (those of test_time_freezing's plank-box landing against the
@@ -207,6 +221,8 @@ Row simulate(const Controls& c, int elements) {
       row.x_plus_advance = std::max(row.x_plus_advance, x_plus_time(traj, e) - traj.events[e].t);
       row.impacts.push_back({traj.events[e].t, static_cast<int>(traj.events[e].guards().size())});
     }
+  if (!reference_prefix.empty())
+    std::ofstream(reference_prefix + std::to_string(elements) + ".json") << reference_json(ref).dump() << "\n";
   const PolishResult<Scene> resim = polish(Scene{}, ref);
   // The distance away from the impacts (samples more than 2 ms from every impact event of the
   // re-simulation, compared with its state at their time), and the samples within 1 ms of an
@@ -235,7 +251,7 @@ Row simulate(const Controls& c, int elements) {
 
 int main(int argc, char** argv) {
   std::vector<int> element_counts{2, 4, 8, 16};
-  std::string controls_file;
+  std::string controls_file, reference_prefix;
   for (int i = 1; i < argc; ++i) {
     if (std::strcmp(argv[i], "--elements") == 0 && i + 1 < argc) {
       element_counts.clear();
@@ -251,13 +267,17 @@ int main(int argc, char** argv) {
       }
     } else if (std::strcmp(argv[i], "--controls") == 0 && i + 1 < argc) {
       controls_file = argv[++i];
+    } else if (std::strcmp(argv[i], "--reference-prefix") == 0 && i + 1 < argc) {
+      reference_prefix = argv[++i];
     } else {
       const bool help = std::strcmp(argv[i], "--help") == 0;
       std::fprintf(help ? stdout : stderr,
-                   "usage: plank_box_refinement [--elements M1,M2,...] [--controls FILE]\n"
+                   "usage: plank_box_refinement [--elements M1,M2,...] [--controls FILE] [--reference-prefix P]\n"
                    "  the plank-box flagship's optimal inputs integrated again with M elements per control\n"
                    "  interval (default 2,4,8,16) and re-simulated (bench/README.md); --controls FILE reads\n"
-                   "  the inputs from FILE if it exists, else solves the OCP and writes them there.\n");
+                   "  the inputs from FILE if it exists, else solves the OCP and writes them there;\n"
+                   "  --reference-prefix P writes each simulation's reference (samples, segments, events) to\n"
+                   "  P<M>.json.\n");
       return help ? 0 : 2;
     }
   }
@@ -288,7 +308,7 @@ int main(int argc, char** argv) {
               "component", "x+ adv", "events (re-simulation)");
   nlohmann::ordered_json rows = nlohmann::ordered_json::array();
   for (int m : element_counts) {
-    const Row r = simulate(c, m);
+    const Row r = simulate(c, m, reference_prefix);
     std::string events;
     for (double t : r.events) events += (events.empty() ? "" : ", ") + std::to_string(t);
     for (const std::string& retry : r.retries) std::fprintf(stderr, "%d elements per interval: %s\n", m, retry.c_str());
