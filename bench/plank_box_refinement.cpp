@@ -229,7 +229,7 @@ Row simulate(const Controls& c, int elements, const std::string& reference_prefi
   // impact on stderr: where polish's largest distance sits at an impact, these say whether the
   // rest of the motion agrees. (state_at is the post-impact state from the simulated impact on,
   // so a pre-impact sample stamped a hair after it reads the jump here: 0.74 for x- at 120 and 240
-  // elements, where polish, which pairs the events, finds it within 2e-10.)
+  // elements, where polish, which pairs the events, finds it within 2e-10 at 120.)
   std::vector<double> impact_times;
   for (const auto& ev : resim.trajectory.events)
     if (ev.impact()) impact_times.push_back(ev.t);
