@@ -74,6 +74,14 @@ inline std::optional<timefreezing::IpoptOption> parse_ipopt_option(const std::st
 /// The parsed command line, or nullopt after printing the usage line (bad or unknown argument).
 inline std::optional<OcpBenchArgs> parse_ocp_bench_args(int argc, char** argv, const char* program) {
   OcpBenchArgs a;
+  // An integer argument in [lo, hi], the whole string parsed; false (out left as it is) otherwise.
+  const auto integer_in = [](const char* text, long lo, long hi, int& out) {
+    char* end = nullptr;
+    const long k = std::strtol(text, &end, 10);
+    if (end == text || *end != '\0' || k < lo || k > hi) return false;
+    out = static_cast<int>(k);
+    return true;
+  };
   const auto usage = [program] {
     std::fprintf(stderr,
                  "usage: %s [--json] [--only NAME] [--max-steps K] [--lift] [--integrated-gap] [--velocity-cross] "
@@ -88,20 +96,14 @@ inline std::optional<OcpBenchArgs> parse_ocp_bench_args(int argc, char** argv, c
     else if (std::strcmp(argv[i], "--integrated-gap") == 0) a.integrated_gap = true;
     else if (std::strcmp(argv[i], "--velocity-cross") == 0) a.velocity_cross = true;
     else if (std::strcmp(argv[i], "--max-steps") == 0 && i + 1 < argc) {
-      char* end = nullptr;
-      const long k = std::strtol(argv[++i], &end, 10);
-      if (*end != '\0' || k < 1 || k > 1000) return usage();
-      a.max_steps = static_cast<int>(k);
+      if (!integer_in(argv[++i], 1, 1000, a.max_steps)) return usage();
     } else if (std::strcmp(argv[i], "--polish-below") == 0 && i + 1 < argc) {
       char* end = nullptr;
       const double s = std::strtod(argv[++i], &end);
       if (*end != '\0' || !(s >= 0.0 && s <= 1.0)) return usage();
       a.polish_below = s;
     } else if (std::strcmp(argv[i], "--polish-max-iter") == 0 && i + 1 < argc) {
-      char* end = nullptr;
-      const long k = std::strtol(argv[++i], &end, 10);
-      if (*end != '\0' || k < 1 || k > 100000) return usage();
-      a.polish_max_iter = static_cast<int>(k);
+      if (!integer_in(argv[++i], 1, 100000, a.polish_max_iter)) return usage();
     } else if (std::strcmp(argv[i], "--ipopt") == 0 && i + 1 < argc) {
       std::optional<timefreezing::IpoptOption> option = parse_ipopt_option(argv[++i]);
       if (!option) return usage();
