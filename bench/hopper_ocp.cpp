@@ -2,7 +2,7 @@
 // Section 6), under the solver and formulation variants the issue asks to measure one by one.
 //
 //   hopper_ocp [--one-hole] [--json] [--only NAME] [--max-steps K] [--lift] [--integrated-gap]
-//              [--velocity-cross] [--polish-below S] [--polish-max-iter K] [--ipopt NAME=VALUE]...
+//              [--velocity-cross] [--elastic] [--gap-scale K] [--polish-below S] [--polish-max-iter K] [--ipopt NAME=VALUE]...
 //
 // --one-hole runs the variants on scenes::HopperOverOneHole instead: T = 1 s over the first hole,
 // N = 8 of the flagship's 20 intervals, which meets the same wall (bench/README.md, "The one-hole
@@ -241,7 +241,7 @@ int run(const std::optional<bench::OcpBenchArgs>& args) {
     for (const MpccHomotopyStep& st : r.solution.steps) per_step.push_back(st.ipopt_iterations);
     const std::size_t solves = per_step.size();
     if (json)
-      rows.push_back({{"variant", v.name}, {"what", v.what}, {"lifted_step_functions", args->lift}, {"control_intervals", grid.control_intervals},
+      rows.push_back({{"variant", v.name}, {"what", v.what}, {"lifted_step_functions", args->lift}, {"elastic_infinity", args->elastic}, {"gap_scale", grid.switching_scale[0]}, {"control_intervals", grid.control_intervals},
                       {"converged", r.converged()}, {"solves", solves},
                       {"ipopt_iterations", r.solution.ipopt_iterations}, {"iterations_per_solve", per_step},
                       {"complementarity", r.solution.complementarity}, {"max_path_violation", f.path_violation},

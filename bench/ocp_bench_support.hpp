@@ -2,13 +2,15 @@
 // second homotopy of the variants that change the relaxation on the way ("smoothing, then ...").
 //
 //   NAME [--json] [--only VARIANT] [--max-steps K] [--lift] [--integrated-gap] [--velocity-cross]
-//        [--polish-below S] [--polish-max-iter K] [--ipopt OPTION=VALUE]...
+//        [--elastic] [--gap-scale K] [--polish-below S] [--polish-max-iter K] [--ipopt OPTION=VALUE]...
 //
 // --max-steps K overrides the homotopy's step budget; --lift solves every variant with the lifted
 // step functions (FesdOptions::lift_step_functions); --integrated-gap with the gap switching
 // functions read from the integrated gaps (FesdOptions::integrated_gap); --velocity-cross with
 // cross-complementarity on the velocity switching functions too
-// (FesdOptions::velocity_switch_detection); --polish-below and --polish-max-iter set
+// (FesdOptions::velocity_switch_detection); --elastic with the l-infinity elastic steering of the
+// inequality-relaxed pairs (MpccSolverOptions::elastic_infinity); --gap-scale K sets the gaps'
+// switching-function scale K_gap [1/m] (FesdOptions::switching_scale[0]); --polish-below and --polish-max-iter set
 // MpccSolverOptions::polish_below and polish_max_iter; --ipopt passes an Ipopt option to every solve
 // (an integer or a number when VALUE parses as one, else a string), e.g. `--ipopt
 // mumps_pivtol=1e-4 --ipopt print_timing_statistics=yes --ipopt output_file=ip.log --ipopt
@@ -34,6 +36,8 @@ struct OcpBenchArgs {
   std::string only;   ///< one variant by name; empty: all
   int max_steps = -1; ///< > 0: MpccSolverOptions::max_homotopy_steps
   bool lift = false;  ///< FesdOptions::lift_step_functions for every variant
+  bool elastic = false;  ///< MpccSolverOptions::elastic_infinity for every variant
+  double gap_scale = 0.0;  ///< > 0: FesdOptions::switching_scale[0] (K_gap) for every variant
   bool integrated_gap = false;  ///< FesdOptions::integrated_gap for every variant
   bool velocity_cross = false;  ///< FesdOptions::velocity_switch_detection for every variant
   double polish_below = -1.0;  ///< >= 0: MpccSolverOptions::polish_below
@@ -45,15 +49,17 @@ struct OcpBenchArgs {
   void apply(timefreezing::MpccSolverOptions& s) const {
     if (max_steps > 0) s.max_homotopy_steps = max_steps;
     if (polish_below >= 0.0) s.polish_below = polish_below;
+    if (elastic) s.elastic_infinity = true;
     if (polish_max_iter > 0) s.polish_max_iter = polish_max_iter;
     s.ipopt_options.insert(s.ipopt_options.end(), ipopt_options.begin(), ipopt_options.end());
   }
   /// The command line's share of a variant's grid options: the lifted step functions, the
-  /// integrated gap, the velocities' switch detection.
+  /// integrated gap, the velocities' switch detection, the gap scale.
   void apply(timefreezing::FesdOptions& grid) const {
     if (lift) grid.lift_step_functions = true;
     if (integrated_gap) grid.integrated_gap = true;
     if (velocity_cross) grid.velocity_switch_detection = true;
+    if (gap_scale > 0.0) grid.switching_scale[0] = gap_scale;
   }
 };
 
@@ -85,7 +91,7 @@ inline std::optional<OcpBenchArgs> parse_ocp_bench_args(int argc, char** argv, c
   const auto usage = [program] {
     std::fprintf(stderr,
                  "usage: %s [--json] [--only NAME] [--max-steps K] [--lift] [--integrated-gap] [--velocity-cross] "
-                 "[--polish-below S] [--polish-max-iter K] [--ipopt NAME=VALUE]...\n",
+                 "[--elastic] [--gap-scale K] [--polish-below S] [--polish-max-iter K] [--ipopt NAME=VALUE]...\n",
                  program);
     return std::optional<OcpBenchArgs>();
   };
@@ -93,6 +99,7 @@ inline std::optional<OcpBenchArgs> parse_ocp_bench_args(int argc, char** argv, c
     if (std::strcmp(argv[i], "--json") == 0) a.json = true;
     else if (std::strcmp(argv[i], "--only") == 0 && i + 1 < argc) a.only = argv[++i];
     else if (std::strcmp(argv[i], "--lift") == 0) a.lift = true;
+    else if (std::strcmp(argv[i], "--elastic") == 0) a.elastic = true;
     else if (std::strcmp(argv[i], "--integrated-gap") == 0) a.integrated_gap = true;
     else if (std::strcmp(argv[i], "--velocity-cross") == 0) a.velocity_cross = true;
     else if (std::strcmp(argv[i], "--max-steps") == 0 && i + 1 < argc) {
@@ -102,6 +109,11 @@ inline std::optional<OcpBenchArgs> parse_ocp_bench_args(int argc, char** argv, c
       const double s = std::strtod(argv[++i], &end);
       if (*end != '\0' || !(s >= 0.0 && s <= 1.0)) return usage();
       a.polish_below = s;
+    } else if (std::strcmp(argv[i], "--gap-scale") == 0 && i + 1 < argc) {
+      char* end = nullptr;
+      const double k = std::strtod(argv[++i], &end);
+      if (*end != '\0' || !(k > 0.0 && k <= 1e6)) return usage();
+      a.gap_scale = k;
     } else if (std::strcmp(argv[i], "--polish-max-iter") == 0 && i + 1 < argc) {
       if (!integer_in(argv[++i], 1, 100000, a.polish_max_iter)) return usage();
     } else if (std::strcmp(argv[i], "--ipopt") == 0 && i + 1 < argc) {

@@ -349,6 +349,37 @@ TEST(MpccSolver, ScholtesReachesTheUniqueBStationaryPoint) {
   EXPECT_NE(progress.str().find("sigma"), std::string::npos);
 }
 
+// The l-infinity elastic steering (MpccSolverOptions::elastic_infinity): one slack s for both
+// pairs, G H <= s, cost f + s / sigma. It is an exact penalty: once 1 / sigma exceeds the sum of
+// the relaxation rows' multipliers the minimiser has s = 0, so the products reach Ipopt's
+// tolerance without sigma reaching 1e-9 (Scholtes above: 10-11 steps).
+TEST(MpccSolver, ElasticInfinityReachesTheUniqueBStationaryPoint) {
+  SmallMpcc problem;
+  std::ostringstream progress;
+  MpccSolverOptions options;
+  options.progress = &progress;
+  options.polish = false;
+  options.elastic_infinity = true;
+  const MpccSolution s = solve_mpcc(problem, options);
+  print_steps("SmallMpcc, l-infinity elastic Scholtes", s);
+  std::cout << progress.str();
+  expect_small_mpcc_solved(s, progress.str());
+  EXPECT_EQ(s.elastic_pairs, 2);
+  EXPECT_LT(s.steps.size(), 10u);
+  // The slack is the relaxation: every step's products stay below it (up to Ipopt's tol), and it
+  // is at rounding level at the end.
+  for (const MpccHomotopyStep& st : s.steps) {
+    EXPECT_GE(st.elastic_slack, 0.0);
+    EXPECT_LE(st.complementarity, st.elastic_slack + 1e-9) << "step " << st.index;
+  }
+  EXPECT_LE(s.steps.back().elastic_slack, 1e-9);
+  EXPECT_NE(progress.str().find("slack"), std::string::npos);
+  // Without the option no slack is reported.
+  MpccSolverOptions plain;
+  plain.polish = false;
+  EXPECT_EQ(solve_mpcc(problem, plain).elastic_pairs, 0);
+}
+
 // Refinement past convergence (MpccSolverOptions::complementarity_refinement): on SmallMpcc the
 // Scholtes row of x _|_ y is active (x y = sigma, x = sigma / 2), so the converged homotopy's x is
 // ~1e-10 from the solution; refined, the homotopy goes on decreasing sigma until the residual is at
@@ -460,6 +491,23 @@ class InactivePair : public Mpcc {
   std::vector<ComplementarityPair> pairs_{{variable(0), variable(1), "x _|_ y"}};
 };
 
+// Under Smoothing a smoothable pair keeps G H = sigma and gets no slack; an unmarked one does.
+TEST(MpccSolver, ElasticInfinityLeavesSmoothedPairsOnTheirCurve) {
+  MpccSolverOptions options;
+  options.relaxation = MpccSolverOptions::Relaxation::Smoothing;
+  options.elastic_infinity = true;
+  options.polish = false;
+  options.max_homotopy_steps = 3;
+  const MpccSolution marked = solve_mpcc(InactivePair(true), options);
+  EXPECT_EQ(marked.smoothed_pairs, 1);
+  EXPECT_EQ(marked.elastic_pairs, 0);
+  for (const MpccHomotopyStep& st : marked.steps) EXPECT_NEAR(st.complementarity, st.sigma, 1e-8 * st.sigma);
+  const MpccSolution unmarked = solve_mpcc(InactivePair(false), options);
+  EXPECT_EQ(unmarked.elastic_pairs, 1);
+  ASSERT_TRUE(unmarked.converged) << unmarked.message;
+  EXPECT_NEAR(unmarked.x[0], 2.0, 1e-7);
+}
+
 // Relaxation::Smoothing puts a smoothable pair on its curve G H = sigma_k at every step; an
 // unmarked pair (and every pair under Scholtes) keeps the inequality, inactive here.
 TEST(MpccSolver, SmoothingHoldsASmoothablePairOnItsCurve) {
@@ -530,6 +578,10 @@ TEST(MpccSolver, DerivativeCheckerPassesCorrectDerivatives) {
   EXPECT_EQ(check_derivatives(hs071, y).errors, 0);
   SmallMpcc small;
   EXPECT_EQ(check_derivatives(small, SmallMpcc::target()).errors, 0);
+  // The l-infinity elastic NLP: the slack's gradient entry and its -1 column in the rows.
+  const DerivativeCheckReport elastic = check_derivatives(small, SmallMpcc::target(), 1e-7, 1e-4, true);
+  EXPECT_EQ(elastic.errors, 0) << elastic.output;
+  EXPECT_EQ(check_derivatives(problem, x, 1e-7, 1e-4, true).errors, 0);
 }
 
 TEST(MpccSolver, DerivativeCheckerFlagsAWrongJacobianOrHessianEntry) {
@@ -715,6 +767,13 @@ TEST(MpccSolver, BadOptionsAreRefusedByName) {
   o = {};
   o.mumps_mem_percent = -1;
   refused(o, "mumps_mem_percent");
+  o = {};
+  o.elastic_infinity = true;
+  o.relaxation = MpccSolverOptions::Relaxation::Penalty;
+  refused(o, "elastic_infinity");
+  o = {};
+  o.elastic_slack_max = 0.0;
+  refused(o, "elastic_slack_max");
   // A valid extra option is accepted.
   o = {};
   o.ipopt_options.push_back({"acceptable_iter", 10});
@@ -801,6 +860,56 @@ TEST(MpccSolver, FailedStepsAreRetriedWithSlowerDecreaseThenReported) {
   EXPECT_EQ(p.x, s.x);
   EXPECT_EQ(count_lines(buffer2.text), 6);
   EXPECT_NE(buffer2.text.find("mpcc polish"), std::string::npos);
+}
+
+/// Poisons `problem` at the first progress line and cures it at the second: the second solve (step
+/// 1) fails, its retry and every later step succeed.
+class PoisonOnce : public std::streambuf {
+ public:
+  explicit PoisonOnce(const PoisonedAfterFirstStep& p) : problem_(p) {}
+  std::string text;
+
+ protected:
+  int overflow(int c) override {
+    if (c == '\n') problem_.poisoned = ++lines == 1;
+    if (c != EOF) text.push_back(static_cast<char>(c));
+    return c;
+  }
+
+ private:
+  const PoisonedAfterFirstStep& problem_;
+  int lines = 0;
+};
+
+// MpccSolverOptions::kappa_recovery_iterations: after the retry at sqrt(0.1), a cheap first
+// attempt takes kappa back from sqrt(0.1) to 0.1; without it the slower decrease stays.
+TEST(MpccSolver, CheapStepsUndoARetrysSlowDown) {
+  SmallMpcc inner;
+  for (const int recovery : {0, 1000}) {
+    PoisonedAfterFirstStep problem(inner);
+    PoisonOnce buffer(problem);
+    std::ostream progress(&buffer);
+    MpccSolverOptions options;
+    options.progress = &progress;
+    options.polish = false;
+    options.max_homotopy_steps = 4;
+    options.kappa_recovery_iterations = recovery;
+    const MpccSolution s = solve_mpcc(problem, options);
+    std::cout << buffer.text;
+    ASSERT_EQ(s.steps.size(), 5u) << buffer.text;
+    EXPECT_FALSE(s.steps[1].ipopt_succeeded);
+    ASSERT_TRUE(s.steps[2].ipopt_succeeded);
+    const double retried = std::sqrt(0.1);
+    EXPECT_NEAR(s.steps[2].sigma, retried, 1e-12);
+    // The retry's success does not count; step 2 (sigma = 0.1) is a cheap first attempt.
+    EXPECT_NEAR(s.steps[3].sigma, 0.1, 1e-12);
+    EXPECT_LE(s.steps[3].ipopt_iterations, 1000);
+    if (recovery == 0) EXPECT_NEAR(s.steps[4].sigma, 0.1 * retried, 1e-12);  // kappa stays sqrt(0.1)
+    else EXPECT_NEAR(s.steps[4].sigma, 0.01, 1e-12);                          // kappa back to 0.1
+  }
+  MpccSolverOptions bad;
+  bad.kappa_recovery_iterations = -1;
+  EXPECT_THROW(solve_mpcc(inner, bad), InvalidArgument);
 }
 
 TEST(MpccSolver, WarmStartNeedsNoMoreIterationsThanColdStarts) {

@@ -191,7 +191,7 @@ detail::RelaxationKind relaxation_kind(MpccSolverOptions::Relaxation r) {
   return detail::RelaxationKind::Scholtes;
 }
 
-std::string format_step(const MpccHomotopyStep& s, bool penalty) {
+std::string format_step(const MpccHomotopyStep& s, bool penalty, bool elastic) {
   char line[320];
   std::snprintf(line, sizeof line,
                 "mpcc step %3d%-10s %s %9.3e  compl %9.3e  f % .10e  viol %9.3e  iter %5d  %-34s %8.3f s", s.index,
@@ -200,8 +200,10 @@ std::string format_step(const MpccHomotopyStep& s, bool penalty) {
                 s.ipopt_iterations, s.ipopt_status.c_str(), s.seconds);
   // A failed step says where its iterate is infeasible (the wall of a homotopy: dynamics, a path
   // row, a bound).
-  return std::string(line) + (!s.ipopt_succeeded && !s.worst_violation.empty() ? "  worst: " + s.worst_violation : "") +
-         "\n";
+  char slack[48] = "";
+  if (elastic) std::snprintf(slack, sizeof slack, "  slack %9.3e", s.elastic_slack);
+  return std::string(line) + slack +
+         (!s.ipopt_succeeded && !s.worst_violation.empty() ? "  worst: " + s.worst_violation : "") + "\n";
 }
 
 std::string format_polish(const MpccHomotopyStep& s, const std::string& label, int fixed, int eq_rows,
@@ -229,8 +231,8 @@ MpccSolution solve_from(const Mpcc& problem, const MpccStart& start, bool with_m
                         const MpccSolverOptions& options) {
   const Clock::time_point solve_start = Clock::now();
   const bool penalty = options.relaxation == MpccSolverOptions::Relaxation::Penalty;
-  Ipopt::SmartPtr<detail::RelaxedNlp> nlp =
-      new detail::RelaxedNlp(problem, relaxation_kind(options.relaxation));
+  Ipopt::SmartPtr<detail::RelaxedNlp> nlp = new detail::RelaxedNlp(
+      problem, relaxation_kind(options.relaxation), options.elastic_infinity, options.elastic_slack_max);
   const Ipopt::SmartPtr<Ipopt::TNLP> tnlp = Ipopt::GetRawPtr(nlp);
   const int n = nlp->variable_count(), m = nlp->original_constraint_count(), m_total = nlp->total_constraint_count();
 
@@ -253,6 +255,12 @@ MpccSolution solve_from(const Mpcc& problem, const MpccStart& start, bool with_m
   // The last successful iterate: x, all multipliers of the augmented NLP, z_L, z_U.
   struct Iterate {
     Eigen::VectorXd x, lambda, z_lower, z_upper;
+    double slack = 0.0, slack_z_lower = 0.0, slack_z_upper = 0.0;  ///< the elastic slack (elastic_infinity)
+  };
+  const auto result_iterate = [&nlp] {
+    return Iterate{nlp->result_x(),     nlp->result_lambda(),        nlp->result_z_lower(),
+                   nlp->result_z_upper(), nlp->result_slack(), nlp->result_slack_z_lower(),
+                   nlp->result_slack_z_upper()};
   };
   std::optional<Iterate> success;
   std::optional<Iterate> last;  // the last iterate Ipopt returned, successful or not
@@ -265,6 +273,7 @@ MpccSolution solve_from(const Mpcc& problem, const MpccStart& start, bool with_m
   initial.lambda = Eigen::VectorXd::Zero(m_total);
   initial.z_lower = Eigen::VectorXd::Zero(n);
   initial.z_upper = Eigen::VectorXd::Zero(n);
+  initial.slack = std::min(options.sigma_0, options.elastic_slack_max);
   if (user_multipliers) {
     initial.lambda.head(m) = start.constraint_multipliers;
     initial.z_lower = start.bound_multipliers_lower;
@@ -274,6 +283,7 @@ MpccSolution solve_from(const Mpcc& problem, const MpccStart& start, bool with_m
   MpccSolution solution;
   solution.relaxed_rows = m_total;
   solution.sign_rows = nlp->sign_row_count();
+  solution.elastic_pairs = nlp->elastic_pair_count();
   if (options.relaxation == MpccSolverOptions::Relaxation::Smoothing)
     for (const ComplementarityPair& pair : problem.complementarity_pairs()) solution.smoothed_pairs += pair.smoothable;
 
@@ -434,6 +444,7 @@ MpccSolution solve_from(const Mpcc& problem, const MpccStart& start, bool with_m
       const bool warm = options.warm_start && (success.has_value() || user_multipliers);
       if (warm) nlp->set_start(from.x, from.lambda, from.z_lower, from.z_upper);
       else nlp->set_start(from.x);
+      nlp->set_slack_start(from.slack, from.slack_z_lower, from.slack_z_upper);
       session.set_string("warm_start_init_point", warm ? "yes" : "no");
       nlp->set_sigma(sigma);
       nlp->clear_result();
@@ -451,12 +462,13 @@ MpccSolution solve_from(const Mpcc& problem, const MpccStart& start, bool with_m
       const Eigen::VectorXd& x = nlp->has_result() ? nlp->result_x() : from.x;
       step.complementarity = nlp->complementarity(x);
       step.objective = problem.objective(x);
+      step.elastic_slack = nlp->has_result() ? nlp->result_slack() : from.slack;
       step.constraint_violation = nlp->constraint_violation(x, &step.worst_violation);
       step.ipopt_succeeded = successful(status, step.constraint_violation, options);
       step.seconds = seconds_since(step_start);
       solution.ipopt_iterations += step.ipopt_iterations;
       solution.steps.push_back(step);
-      if (options.progress) *options.progress << format_step(step, penalty) << std::flush;
+      if (options.progress) *options.progress << format_step(step, penalty, nlp->elastic()) << std::flush;
 
       if (refining) {
         // A refinement step is kept only when it succeeded and lowered the residual; else the
@@ -478,8 +490,7 @@ MpccSolution solve_from(const Mpcc& problem, const MpccStart& start, bool with_m
           refining = false;
           break;
         }
-        if (nlp->has_result())
-          last = Iterate{nlp->result_x(), nlp->result_lambda(), nlp->result_z_lower(), nlp->result_z_upper()};
+        if (nlp->has_result()) last = result_iterate();
         accept(step);
         ++refinement_steps;
         refining = step.complementarity > options.complementarity_refinement;
@@ -492,11 +503,15 @@ MpccSolution solve_from(const Mpcc& problem, const MpccStart& start, bool with_m
         }
         break;
       }
-      if (nlp->has_result())
-        last = Iterate{nlp->result_x(), nlp->result_lambda(), nlp->result_z_lower(), nlp->result_z_upper()};
+      if (nlp->has_result()) last = result_iterate();
       if (step.ipopt_succeeded) {
         accept(step);
         success_polished = false;
+        // A cheap step undoes one retry's slow-down (MpccSolverOptions::kappa_recovery_iterations).
+        // A retry's own success does not count: it only says that the shorter step was easy.
+        if (options.kappa_recovery_iterations > 0 && retry == 0 &&
+            step.ipopt_iterations <= options.kappa_recovery_iterations && kappa > options.kappa)
+          kappa = std::max(kappa * kappa, options.kappa);
         if (step.complementarity <= options.complementarity_tolerance) converged = true;
         const bool last_step = converged || k + 1 == options.max_homotopy_steps;
         if (polish_enabled && (step.complementarity <= options.polish_below || last_step)) {
@@ -579,6 +594,11 @@ void MpccSolverOptions::validate() const {
   SALTUS_REQUIRE(std::isfinite(sigma_0) && sigma_0 > 0.0, "MpccSolverOptions::sigma_0 must be > 0 and finite, got ",
                  sigma_0);
   SALTUS_REQUIRE(kappa > 0.0 && kappa < 1.0, "MpccSolverOptions::kappa must be in (0, 1), got ", kappa);
+  SALTUS_REQUIRE(!(elastic_infinity && relaxation == Relaxation::Penalty),
+                 "MpccSolverOptions::elastic_infinity needs the Scholtes or Smoothing relaxation (Penalty has no "
+                 "relaxation rows to hold the slack)");
+  SALTUS_REQUIRE(elastic_slack_max > 0.0 && std::isfinite(elastic_slack_max),
+                 "MpccSolverOptions::elastic_slack_max must be > 0 and finite, got ", elastic_slack_max);
   SALTUS_REQUIRE(complementarity_tolerance >= 0.0 && std::isfinite(complementarity_tolerance),
                  "MpccSolverOptions::complementarity_tolerance must be >= 0 and finite, got ",
                  complementarity_tolerance);
@@ -588,6 +608,8 @@ void MpccSolverOptions::validate() const {
   SALTUS_REQUIRE(max_homotopy_steps >= 1, "MpccSolverOptions::max_homotopy_steps must be >= 1, got ",
                  max_homotopy_steps);
   SALTUS_REQUIRE(max_step_retries >= 0, "MpccSolverOptions::max_step_retries must be >= 0, got ", max_step_retries);
+  SALTUS_REQUIRE(kappa_recovery_iterations >= 0, "MpccSolverOptions::kappa_recovery_iterations must be >= 0, got ",
+                 kappa_recovery_iterations);
   SALTUS_REQUIRE(tol > 0.0 && std::isfinite(tol), "MpccSolverOptions::tol must be > 0 and finite, got ", tol);
   SALTUS_REQUIRE(max_iter >= 0, "MpccSolverOptions::max_iter must be >= 0, got ", max_iter);
   SALTUS_REQUIRE(print_level >= 0 && print_level <= 12, "MpccSolverOptions::print_level must be in [0, 12], got ",
@@ -728,13 +750,14 @@ MpccSolution solve_mpcc(const Mpcc& problem, const MpccStart& start, const MpccS
 }
 
 DerivativeCheckReport check_derivatives(const Mpcc& problem, const Eigen::VectorXd& x, double perturbation,
-                                        double tolerance) {
+                                        double tolerance, bool elastic_slack) {
   validate_problem(problem);
   SALTUS_REQUIRE(perturbation > 0.0 && std::isfinite(perturbation),
                  "check_derivatives: perturbation must be > 0 and finite, got ", perturbation);
   SALTUS_REQUIRE(tolerance > 0.0 && std::isfinite(tolerance), "check_derivatives: tolerance must be > 0 and finite, got ",
                  tolerance);
-  Ipopt::SmartPtr<detail::RelaxedNlp> nlp = new detail::RelaxedNlp(problem, detail::RelaxationKind::Scholtes);
+  Ipopt::SmartPtr<detail::RelaxedNlp> nlp =
+      new detail::RelaxedNlp(problem, detail::RelaxationKind::Scholtes, elastic_slack, 10.0);
   const Ipopt::SmartPtr<Ipopt::TNLP> tnlp = Ipopt::GetRawPtr(nlp);
   SALTUS_REQUIRE(x.size() == nlp->variable_count(), "check_derivatives: x: expected size ", nlp->variable_count(),
                  ", got ", x.size());
@@ -745,6 +768,7 @@ DerivativeCheckReport check_derivatives(const Mpcc& problem, const Eigen::Vector
                    nlp->x_lower()[i], ", ", nlp->x_upper()[i], "] (Ipopt would check elsewhere)");
   nlp->set_sigma(1.0);
   nlp->set_start(x);
+  nlp->set_slack_start(0.5, 0.0, 0.0);
 
   IpoptSession session(0);
   // The checker prints its flagged entries at J_WARNING and its verdict at J_SUMMARY or

@@ -66,7 +66,14 @@ bool NlpResult::store(const double* x_in, const double* z_L, const double* z_U, 
   return true;
 }
 
-RelaxedNlp::RelaxedNlp(const Mpcc& problem, RelaxationKind kind) : problem_(problem), kind_(kind) {
+RelaxedNlp::RelaxedNlp(const Mpcc& problem, RelaxationKind kind) : RelaxedNlp(problem, kind, false, 0.0) {}
+
+bool RelaxedNlp::smoothed(int j) const {
+  return kind_ == RelaxationKind::Smoothing && problem_.complementarity_pairs()[static_cast<std::size_t>(j)].smoothable;
+}
+
+RelaxedNlp::RelaxedNlp(const Mpcc& problem, RelaxationKind kind, bool elastic, double slack_max)
+    : problem_(problem), kind_(kind), elastic_(elastic && kind != RelaxationKind::Penalty), slack_max_(slack_max) {
   n_ = problem.variable_count();
   m_ = problem.constraint_count();
   x_lower_.resize(n_);
@@ -163,6 +170,18 @@ RelaxedNlp::RelaxedNlp(const Mpcc& problem, RelaxationKind kind) : problem_(prob
         pair_jac_a_h_.push_back(a.second);
       }
       pair_jac_ptr_.push_back(static_cast<int>(pair_jac_a_g_.size()));
+    }
+  }
+  // The elastic slack's column: one entry per inequality-relaxed row, after all the others.
+  slack_jac_offset_ = static_cast<int>(jac_row_.size());
+  pair_elastic_.assign(static_cast<std::size_t>(n_pairs_), 0);
+  if (elastic_) {
+    for (int j = 0; j < n_pairs_; ++j) {
+      if (smoothed(j)) continue;
+      pair_elastic_[static_cast<std::size_t>(j)] = 1;
+      ++n_elastic_pairs_;
+      jac_row_.push_back(m_ + n_sign_rows_ + j);
+      jac_col_.push_back(n_);
     }
   }
 
@@ -313,7 +332,7 @@ double RelaxedNlp::constraint_violation(const Eigen::Ref<const Eigen::VectorXd>&
 
 bool RelaxedNlp::get_nlp_info(Ipopt::Index& n, Ipopt::Index& m, Ipopt::Index& nnz_jac_g, Ipopt::Index& nnz_h_lag,
                               IndexStyleEnum& index_style) {
-  n = n_;
+  n = ipopt_n();
   m = m_total_;
   nnz_jac_g = static_cast<Ipopt::Index>(jac_row_.size());
   nnz_h_lag = static_cast<Ipopt::Index>(hess_row_.size());
@@ -333,24 +352,35 @@ bool RelaxedNlp::get_bounds_info(Ipopt::Index, Ipopt::Number* x_l, Ipopt::Number
     g_l[r] = 0.0;
     g_u[r] = inf;
   }
-  const std::vector<ComplementarityPair>& pairs = problem_.complementarity_pairs();
-  for (int r = m_ + n_sign_rows_; r < m_total_; ++r) {
-    const bool smoothed = kind_ == RelaxationKind::Smoothing && pairs[static_cast<std::size_t>(r - m_ - n_sign_rows_)].smoothable;
-    g_l[r] = smoothed ? sigma_ : -inf;
-    g_u[r] = sigma_;
+  for (int r = m_ + n_sign_rows_, j = 0; r < m_total_; ++r, ++j) {
+    // Elastic rows: G_j H_j - s <= 0.
+    const bool is_elastic = pair_elastic_[static_cast<std::size_t>(j)] != 0;
+    g_l[r] = smoothed(j) ? sigma_ : -inf;
+    g_u[r] = is_elastic ? 0.0 : sigma_;
+  }
+  if (elastic_) {
+    x_l[n_] = 0.0;
+    x_u[n_] = slack_max_;
   }
   return true;
 }
 
 bool RelaxedNlp::get_starting_point(Ipopt::Index, bool init_x, Ipopt::Number* x, bool init_z, Ipopt::Number* z_L,
                                     Ipopt::Number* z_U, Ipopt::Index, bool init_lambda, Ipopt::Number* lambda) {
-  if (init_x) std::copy_n(start_x_.data(), n_, x);
+  if (init_x) {
+    std::copy_n(start_x_.data(), n_, x);
+    if (elastic_) x[n_] = start_slack_;
+  }
   // Ipopt asks for multipliers only with warm_start_init_point = yes, which the solver sets
   // only when it has them; zeros otherwise keep the request well defined.
   if (init_z) {
     for (int i = 0; i < n_; ++i) {
       z_L[i] = start_has_multipliers_ ? start_z_lower_[i] : 0.0;
       z_U[i] = start_has_multipliers_ ? start_z_upper_[i] : 0.0;
+    }
+    if (elastic_) {
+      z_L[n_] = start_has_multipliers_ ? start_slack_z_lower_ : 0.0;
+      z_U[n_] = start_has_multipliers_ ? start_slack_z_upper_ : 0.0;
     }
   }
   if (init_lambda)
@@ -368,6 +398,7 @@ bool RelaxedNlp::eval_f(Ipopt::Index, const Ipopt::Number* x, bool, Ipopt::Numbe
     const double rho = 1.0 / sigma_;
     for (int j = 0; j < n_pairs_; ++j) f += rho * side_value(2 * j, x) * side_value(2 * j + 1, x);
   }
+  if (elastic_) f += x[n_] / sigma_;
   obj_value = f;
   return std::isfinite(f);
 }
@@ -385,7 +416,8 @@ bool RelaxedNlp::eval_grad_f(Ipopt::Index, const Ipopt::Number* x, bool, Ipopt::
         grad_f[side_var_[t]] += rho * gv * side_coef_[t];
     }
   }
-  return all_finite(grad_f, n_);
+  if (elastic_) grad_f[n_] = 1.0 / sigma_;
+  return all_finite(grad_f, ipopt_n());
 }
 
 bool RelaxedNlp::eval_g(Ipopt::Index, const Ipopt::Number* x, bool, Ipopt::Index, Ipopt::Number* g) {
@@ -396,7 +428,7 @@ bool RelaxedNlp::eval_g(Ipopt::Index, const Ipopt::Number* x, bool, Ipopt::Index
   }
   for (int r = 0; r < n_sign_rows_; ++r) g[m_ + r] = side_value(sign_row_side_[r], x);
   for (int r = m_ + n_sign_rows_, j = 0; r < m_total_; ++r, ++j)
-    g[r] = side_value(2 * j, x) * side_value(2 * j + 1, x);
+    g[r] = side_value(2 * j, x) * side_value(2 * j + 1, x) - (pair_elastic_[static_cast<std::size_t>(j)] ? x[n_] : 0.0);
   return all_finite(g, m_total_);
 }
 
@@ -421,6 +453,7 @@ bool RelaxedNlp::eval_jac_g(Ipopt::Index, const Ipopt::Number* x, bool, Ipopt::I
         values[relax_jac_offset_ + t] = gv * pair_jac_a_h_[t] + hv * pair_jac_a_g_[t];
     }
   }
+  std::fill(values + slack_jac_offset_, values + nele_jac, -1.0);  // the elastic slack's column
   return all_finite(values, nele_jac);
 }
 
@@ -459,7 +492,11 @@ void RelaxedNlp::finalize_solution(Ipopt::SolverReturn, Ipopt::Index, const Ipop
                                    const Ipopt::Number* z_L, const Ipopt::Number* z_U, Ipopt::Index,
                                    const Ipopt::Number*, const Ipopt::Number* lambda, Ipopt::Number,
                                    const Ipopt::IpoptData*, Ipopt::IpoptCalculatedQuantities*) {
-  result_.store(x, z_L, z_U, lambda);
+  // store() copies the problem's n entries; the slack, Ipopt's last variable, separately.
+  if (!result_.store(x, z_L, z_U, lambda) || !elastic_) return;
+  result_slack_ = x[n_];
+  result_slack_z_lower_ = z_L ? z_L[n_] : 0.0;
+  result_slack_z_upper_ = z_U ? z_U[n_] : 0.0;
 }
 
 // ---- BranchNlp

@@ -48,6 +48,12 @@ double interval_slack(double magnitude);
 ///                                n_s - sum alpha), and one row per distinct expression,
 ///   rows [m + n_sign, m_total)   G_j H_j <= sigma (Scholtes; Smoothing: = sigma for the pairs marked
 ///                                smoothable), one per pair; none under Penalty.
+/// The l-infinity elastic mode (`elastic`, Scholtes or Smoothing only; NOSBENCH Table 1, ELL_INF)
+/// adds ONE variable, the slack s at Ipopt's index n (after the problem's n), with bounds
+/// [0, elastic_slack_max]: the inequality-relaxed rows read G_j H_j - s <= 0 instead of
+/// G_j H_j <= sigma, and the objective gains s / sigma (NOSNOC's objective_scaling_direct: the
+/// penalty weight 1 / sigma grows along the homotopy). Smoothed rows keep G_j H_j = sigma. The
+/// slack enters linearly: its Jacobian entries are -1 and it adds nothing to the Hessian.
 /// Structures are merged once, in the constructor: the problem's Jacobian and Hessian entries
 /// may repeat (mpcc.hpp), and a pair's Hessian a_G a_H' + a_H a_G' lands on entries of f and g
 /// too. Ipopt 3.11's triplet matrices add repeated entries (IpGenTMatrix.hpp: "If nonzero
@@ -60,12 +66,18 @@ class RelaxedNlp : public Ipopt::TNLP {
  public:
   /// The problem must have passed validate_problem and outlive this object.
   RelaxedNlp(const Mpcc& problem, RelaxationKind kind);
+  /// With the l-infinity elastic slack (class comment) in [0, slack_max]; `elastic` must be false
+  /// under Penalty (the caller checks it), slack_max > 0.
+  RelaxedNlp(const Mpcc& problem, RelaxationKind kind, bool elastic, double slack_max);
 
   int variable_count() const { return n_; }
   int original_constraint_count() const { return m_; }
   int total_constraint_count() const { return m_total_; }
   int sign_row_count() const { return n_sign_rows_; }
   int pair_count() const { return n_pairs_; }
+  bool elastic() const { return elastic_; }
+  /// Pairs whose relaxation row holds the elastic slack (0 unless elastic()).
+  int elastic_pair_count() const { return n_elastic_pairs_; }
   /// Sign row of side s (2j: G_j, 2j+1: H_j), -1 when the side has none (pruned by its bounds).
   int sign_row_of_side(int s) const { return sign_row_of_side_[s]; }
   /// Value of side s at x.
@@ -103,6 +115,12 @@ class RelaxedNlp : public Ipopt::TNLP {
   void set_start(const Eigen::VectorXd& x);
   void set_start(const Eigen::VectorXd& x, const Eigen::VectorXd& lambda, const Eigen::VectorXd& z_lower,
                  const Eigen::VectorXd& z_upper);
+  /// The elastic slack's start and its bound multipliers (used when elastic()); set after set_start.
+  void set_slack_start(double s, double z_lower, double z_upper) {
+    start_slack_ = s;
+    start_slack_z_lower_ = z_lower;
+    start_slack_z_upper_ = z_upper;
+  }
 
   /// Filled by finalize_solution (has_result() false when Ipopt returned no iterate).
   bool has_result() const { return result_.present; }
@@ -111,6 +129,10 @@ class RelaxedNlp : public Ipopt::TNLP {
   const Eigen::VectorXd& result_lambda() const { return result_.lambda; }  ///< size m_total
   const Eigen::VectorXd& result_z_lower() const { return result_.z_lower; }
   const Eigen::VectorXd& result_z_upper() const { return result_.z_upper; }
+  /// The elastic slack of the last result and its bound multipliers (0 unless elastic()).
+  double result_slack() const { return result_slack_; }
+  double result_slack_z_lower() const { return result_slack_z_lower_; }
+  double result_slack_z_upper() const { return result_slack_z_upper_; }
 
   /// max_j |G_j(x) H_j(x)| and the pair attaining it (-1 without pairs).
   double complementarity(const Eigen::Ref<const Eigen::VectorXd>& x, int* worst_pair = nullptr) const;
@@ -147,10 +169,22 @@ class RelaxedNlp : public Ipopt::TNLP {
     return v;
   }
 
+  /// Is pair j's relaxation row smoothed (G_j H_j = sigma)?
+  bool smoothed(int j) const;
+
   const Mpcc& problem_;
   RelaxationKind kind_;
   int n_ = 0, m_ = 0, n_pairs_ = 0, n_sign_rows_ = 0, m_total_ = 0;
   double sigma_ = 1.0;
+  // The l-infinity elastic slack (class comment): Ipopt sees n_ + 1 variables, the slack last.
+  bool elastic_ = false;
+  double slack_max_ = 0.0;
+  int n_elastic_pairs_ = 0;
+  int slack_jac_offset_ = 0;             ///< first of its Jacobian entries (-1, one per elastic row)
+  std::vector<char> pair_elastic_;       ///< per pair: its row holds the slack
+  double start_slack_ = 0.0, start_slack_z_lower_ = 0.0, start_slack_z_upper_ = 0.0;
+  double result_slack_ = 0.0, result_slack_z_lower_ = 0.0, result_slack_z_upper_ = 0.0;
+  int ipopt_n() const { return n_ + (elastic_ ? 1 : 0); }
 
   friend class BranchNlp;
 

@@ -21,6 +21,16 @@
 //   with sigma_{k+1} = kappa sigma_k, sigma_0 given, rho_k = 1 / sigma_k (a sigma_k within 1e-12
 //   relative of a power of ten is rounded to it, so that decades are exact: under the smoothing
 //   the residual is sigma_k itself).
+//   l-infinity elastic steering (options.elastic_infinity, with Scholtes or Smoothing; NOSBENCH,
+//   Nurkanovic, Pozharskiy, Diehl 2024, section 3.3 and Table 1, "ELL_INF"; mpcc_robustness.md
+//   R3): ONE slack variable s in [0, elastic_slack_max] replaces sigma_k in every
+//   inequality-relaxed pair, and the objective pays for it:
+//       min f(x) + s / sigma_k   s.t. the same rows, G_j H_j <= s (not smoothed), G_j H_j = sigma_k
+//                                (smoothed pairs, unchanged)
+//   A step can then always loosen its pairs (at a price that grows tenfold per decade of sigma)
+//   instead of failing when the warm start sits in a wrong branch; an exact penalty: for 1 /
+//   sigma_k above the relaxation rows' multiplier sum the minimiser has s = 0 (the products are
+//   then exactly complementary, not <= sigma_k). The slack is warm-started with the iterate.
 //
 // A side that is a single variable with a lower bound >= 0 needs no row for its sign (the bound
 // already says it); every other side gets the linear row side(x) >= 0 (identical sides share one
@@ -125,6 +135,13 @@ struct MpccSolverOptions {
     Penalty     ///< rho_k sum_j G_j H_j in the objective, rho_k = 1 / sigma_k
   };
   Relaxation relaxation = Relaxation::Scholtes;
+  /// The l-infinity elastic steering (top of file) of the inequality-relaxed pairs; Scholtes or
+  /// Smoothing only (validate() refuses it with Penalty). Off by default: measured on the hopper
+  /// in bench/README.md.
+  bool elastic_infinity = false;
+  /// Upper bound of the elastic slack (> 0; NOSNOC's s_elastic_max = 10). The slack starts at
+  /// min(sigma_0, elastic_slack_max).
+  double elastic_slack_max = 10.0;
   /// First relaxation parameter (Penalty: rho_0 = 1 / sigma_0). NOSBENCH 5.4: sigma_0 in [0.1, 10];
   /// a too small sigma_0 loses problems to bad local minima.
   double sigma_0 = 1.0;
@@ -157,6 +174,15 @@ struct MpccSolverOptions {
   /// at most this many times per step; >= 0. The first step has no iterate to restart from: its
   /// failure ends the homotopy.
   int max_step_retries = 3;
+  /// >= 0; 0: off (the slow-down of a retry is kept for the rest of the homotopy). Otherwise a
+  /// successful step (a first attempt, not a retry) that took at most this many Ipopt iterations
+  /// undoes one retry's slow-down:
+  /// kappa <- max(kappa^2, this->kappa) for the next step. Why: a retry's sqrt compounds (after
+  /// four, kappa = 0.1^(1/16) = 0.87), and past a hard stretch of the path the steps can become
+  /// cheap again; measured on the hopper over one hole (bench/README.md) steps of 18-20 iterations
+  /// crept down by 3.5 % each. (NOSNOC issue 104 proposes the opposite move, a non-monotone
+  /// sigma on failure; this is the same bookkeeping on success.)
+  int kappa_recovery_iterations = 0;
 
   // ---- Ipopt, per step
   /// Ipopt `tol` (> 0). For OCPs 1e-8 with the Penalty relaxation is much faster (point-mass
@@ -298,6 +324,7 @@ struct MpccHomotopyStep {
   std::string note;     ///< polish: why it failed ("" when it succeeded)
   double complementarity = 0.0;       ///< max_j |G_j(x) H_j(x)| at the step's final iterate
   double objective = 0.0;             ///< original f at the step's final iterate (no penalty)
+  double elastic_slack = 0.0;         ///< the l-infinity slack s at the final iterate (0 if not elastic)
   double constraint_violation = 0.0;  ///< of the original MPCC (MpccSolution::constraint_violation)
   /// The bound, row or complementarity side attaining constraint_violation, by the Mpcc's names
   /// (Mpcc::variable_name, constraint_name, the pair's name; FesdMpcc's rows read e.g.
@@ -344,6 +371,7 @@ struct MpccSolution {
   bool polished = false;   ///< x is a polish's (branch NLP) solution
   /// Size of the relaxed NLP: rows m + sign_rows (+ one relaxation row per pair, Scholtes).
   int relaxed_rows = 0;
+  int elastic_pairs = 0;  ///< pairs whose relaxation holds the l-infinity slack (elastic_infinity)
   int sign_rows = 0;  ///< rows side(x) >= 0 (after pruning and merging identical sides)
 };
 
@@ -382,8 +410,10 @@ struct DerivativeCheckReport {
 /// @throws InvalidArgument as solve_mpcc for the problem statement, and for x or the numbers.
 /// @throws NumericalFailure when Ipopt's output holds no verdict (the check could not run, e.g.
 ///   a function could not be evaluated at x), with Ipopt's status and output.
+/// With elastic_slack, the NLP checked is the l-infinity elastic one (every pair's row
+/// G_j H_j - s <= 0, the objective f + s; the slack at 0.5 in [0, 10]), sigma = 1.
 DerivativeCheckReport check_derivatives(const Mpcc& problem, const Eigen::VectorXd& x, double perturbation = 1e-7,
-                                        double tolerance = 1e-4);
+                                        double tolerance = 1e-4, bool elastic_slack = false);
 
 /// Throws InvalidArgument naming the first inconsistency of the problem statement (see
 /// solve_mpcc). Evaluates the bounds, the initial point and the structures, no function.
