@@ -977,6 +977,50 @@ TEST(TimeFreezingRecovery, FrozenRunOnAControlIntervalBoundary) {
   EXPECT_EQ(ref.x[3][3], 0.0);  // x+: the impact ended
 }
 
+// An element whose clock creeps (rate 1e-5 < detail::impact_clock_rate = 1e-4, above the frozen
+// tolerance 1e-7) while the velocity jumps is part of the impact: x- is the sample before it, not
+// its end (the plank-box on 480 elements per interval: read as flowing, such an element put a
+// post-impact state among the flow samples, 1.04 from the re-simulation). The same creeping
+// clock without a velocity jump stays a flowing element (a slow clock alone is no impact).
+TEST(TimeFreezingRecovery, AnImpactElementWhoseClockCreptIsPartOfTheImpact) {
+  using Point = FesdPoint<7, 3, 2>;
+  auto point = [](int element, double tau, double t, double v) {
+    Point p;
+    p.interval = 0;
+    p.element = element;
+    p.stage = 0;
+    p.tau = tau;
+    p.y.setZero();
+    p.y[3] = v;
+    p.y[4] = t;
+    p.alpha.setConstant(1.0);
+    p.ode_weight = 1.0;
+    p.u = Vec<2>::Zero();
+    return p;
+  };
+  // Elements of length 0.1: flow to t = 0.1 at v = -1; then an element whose clock advances by
+  // 1e-6 (rate 1e-5) while v jumps from -1 to 0; then flow.
+  const std::vector<Point> impact{point(-1, 0.0, 0.0, -1.0), point(0, 0.1, 0.1, -1.0), point(1, 0.2, 0.1 + 1e-6, 0.0),
+                                  point(2, 0.3, 0.2 + 1e-6, 0.0)};
+  const ImportedReference<PointMass> ref = recover_reference<PointMass>(impact, 1);
+  ASSERT_EQ(ref.event_times.size(), 1u);
+  EXPECT_EQ(ref.event_times[0], 0.1);
+  ASSERT_EQ(ref.size(), 4u);
+  EXPECT_EQ(ref.x[1][3], -1.0);  // x-: before the jump
+  EXPECT_EQ(ref.x[2][3], 0.0);   // x+: after it, at its own (crept) time
+  EXPECT_EQ(ref.t[2], 0.1 + 1e-6);
+  // The same clock without the jump: no event.
+  const std::vector<Point> slow{point(-1, 0.0, 0.0, -1.0), point(0, 0.1, 0.1, -1.0), point(1, 0.2, 0.1 + 1e-6, -1.0),
+                                point(2, 0.3, 0.2 + 1e-6, -1.0)};
+  EXPECT_TRUE(recover_reference<PointMass>(slow, 1).event_times.empty());
+  // A rate above 1e-4 with the jump: a flowing element (an impact absorbed into a flow is
+  // recover_trajectory's business, AnImpactAbsorbedIntoAFlowingElementIsAnImpactEvent).
+  std::vector<Point> fast = impact;
+  fast[2].y[4] = 0.1 + 1e-3;
+  fast[3].y[4] = 0.2 + 1e-3;
+  EXPECT_TRUE(recover_reference<PointMass>(fast, 1).event_times.empty());
+}
+
 // A hand-made point of a point-mass solution for recover_trajectory: (q, v, t, L = 0, g), every step
 // function and Theta at `weight`, input (t, 0). With closing > 0 the point is in a sliding mode on
 // the contact (a stance): alpha_gap = 0, alpha_vn = 1 - closing, so that the closing weight
