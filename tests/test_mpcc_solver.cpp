@@ -792,20 +792,22 @@ class PoisonedAfterFirstStep : public Wrapper {
   mutable bool poisoned = false;
 };
 
+/// Poisons `problem` at the first progress line; with cure_at > 0, cures it again at line cure_at.
 class PoisonOnNewline : public std::streambuf {
  public:
-  explicit PoisonOnNewline(const PoisonedAfterFirstStep& p) : problem_(p) {}
+  explicit PoisonOnNewline(const PoisonedAfterFirstStep& p, int cure_at = 0) : problem_(p), cure_at_(cure_at) {}
   std::string text;
 
  protected:
   int overflow(int c) override {
-    if (c == '\n') problem_.poisoned = true;
+    if (c == '\n') problem_.poisoned = cure_at_ <= 0 || ++lines_ < cure_at_;
     if (c != EOF) text.push_back(static_cast<char>(c));
     return c;
   }
 
  private:
   const PoisonedAfterFirstStep& problem_;
+  int cure_at_ = 0, lines_ = 0;
 };
 
 TEST(MpccSolver, FailedStepsAreRetriedWithSlowerDecreaseThenReported) {
@@ -862,32 +864,13 @@ TEST(MpccSolver, FailedStepsAreRetriedWithSlowerDecreaseThenReported) {
   EXPECT_NE(buffer2.text.find("mpcc polish"), std::string::npos);
 }
 
-/// Poisons `problem` at the first progress line and cures it at the second: the second solve (step
-/// 1) fails, its retry and every later step succeed.
-class PoisonOnce : public std::streambuf {
- public:
-  explicit PoisonOnce(const PoisonedAfterFirstStep& p) : problem_(p) {}
-  std::string text;
-
- protected:
-  int overflow(int c) override {
-    if (c == '\n') problem_.poisoned = ++lines == 1;
-    if (c != EOF) text.push_back(static_cast<char>(c));
-    return c;
-  }
-
- private:
-  const PoisonedAfterFirstStep& problem_;
-  int lines = 0;
-};
-
 // MpccSolverOptions::kappa_recovery_iterations: after the retry at sqrt(0.1), a cheap first
 // attempt takes kappa back from sqrt(0.1) to 0.1; without it the slower decrease stays.
 TEST(MpccSolver, CheapStepsUndoARetrysSlowDown) {
   SmallMpcc inner;
   for (const int recovery : {0, 1000}) {
     PoisonedAfterFirstStep problem(inner);
-    PoisonOnce buffer(problem);
+    PoisonOnNewline buffer(problem, 2);  // step 1 fails, its retry and the later steps do not
     std::ostream progress(&buffer);
     MpccSolverOptions options;
     options.progress = &progress;

@@ -943,6 +943,24 @@ TEST(TimeFreezingSimulation, PlankBoxFlatLandingAgreesWithTheEventDrivenSimulato
             << (landing.x_plus - trajectory.events[0].x_plus).cwiseAbs().maxCoeff() << " from the simulator's\n";
 }
 
+/// A hand-made point-mass point for recover_reference (n_s = 1): vertical velocity v, clock t, every
+/// step function and Theta at `weight`, input (u, 0).
+FesdPoint<7, 3, 2> reference_point(int interval, int element, double tau, double t, double v, double weight = 1.0,
+                                   double u = 0.0) {
+  FesdPoint<7, 3, 2> p;
+  p.interval = interval;
+  p.element = element;
+  p.stage = 0;
+  p.tau = tau;
+  p.y.setZero();
+  p.y[3] = v;
+  p.y[4] = t;
+  p.alpha.setConstant(weight);
+  p.ode_weight = weight;
+  p.u = Vec<2>(u, 0.0);
+  return p;
+}
+
 // The small OCP (scenes::PointMassToTheTarget): land the point mass and slide it to x = 3.
 // A frozen run that starts on a control-interval boundary: the recovered reference has x- and
 // its repeat with the next interval's input at the event time, both before the event (found by a
@@ -950,20 +968,7 @@ TEST(TimeFreezingSimulation, PlankBoxFlatLandingAgreesWithTheEventDrivenSimulato
 // post-impact state, a re-simulation "distance" of the impact's velocity jump).
 TEST(TimeFreezingRecovery, FrozenRunOnAControlIntervalBoundary) {
   using Point = FesdPoint<7, 3, 2>;
-  auto point = [](int interval, int element, double tau, double t, double v, double weight, double u) {
-    Point p;
-    p.interval = interval;
-    p.element = element;
-    p.stage = 0;
-    p.tau = tau;
-    p.y.setZero();
-    p.y[3] = v;
-    p.y[4] = t;
-    p.alpha.setConstant(weight);
-    p.ode_weight = weight;
-    p.u = Vec<2>(u, 0.0);
-    return p;
-  };
+  const auto point = reference_point;
   const std::vector<Point> points{point(0, -1, 0.0, 0.0, 0.0, 1.0, 1.0), point(0, 0, 0.1, 0.1, -1.0, 1.0, 1.0),
                                   point(1, 0, 0.2, 0.1, 0.0, 0.0, 2.0),  // frozen: the clock stands
                                   point(1, 1, 0.3, 0.2, 0.0, 1.0, 2.0)};
@@ -984,20 +989,7 @@ TEST(TimeFreezingRecovery, FrozenRunOnAControlIntervalBoundary) {
 // clock without a velocity jump stays a flowing element (a slow clock alone is no impact).
 TEST(TimeFreezingRecovery, AnImpactElementWhoseClockCreptIsPartOfTheImpact) {
   using Point = FesdPoint<7, 3, 2>;
-  auto point = [](int element, double tau, double t, double v) {
-    Point p;
-    p.interval = 0;
-    p.element = element;
-    p.stage = 0;
-    p.tau = tau;
-    p.y.setZero();
-    p.y[3] = v;
-    p.y[4] = t;
-    p.alpha.setConstant(1.0);
-    p.ode_weight = 1.0;
-    p.u = Vec<2>::Zero();
-    return p;
-  };
+  const auto point = [](int element, double tau, double t, double v) { return reference_point(0, element, tau, t, v); };
   // Elements of length 0.1: flow to t = 0.1 at v = -1; then an element whose clock advances by
   // 1e-6 (rate 1e-5) while v jumps from -1 to 0; then flow.
   const std::vector<Point> impact{point(-1, 0.0, 0.0, -1.0), point(0, 0.1, 0.1, -1.0), point(1, 0.2, 0.1 + 1e-6, 0.0),
