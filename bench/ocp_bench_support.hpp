@@ -9,8 +9,10 @@
 // functions read from the integrated gaps (FesdOptions::integrated_gap); --velocity-cross with
 // cross-complementarity on the velocity switching functions too
 // (FesdOptions::velocity_switch_detection); --elastic with the l-infinity elastic steering of the
-// inequality-relaxed pairs (MpccSolverOptions::elastic_infinity); --gap-scale K sets the gaps'
-// switching-function scale K_gap [1/m] (FesdOptions::switching_scale[0]); --polish-below and --polish-max-iter set
+// inequality-relaxed pairs (MpccSolverOptions::elastic_infinity) for every Scholtes or Smoothing
+// solve (a Penalty variant or stage runs without it: it has no relaxation rows to hold the slack);
+// --gap-scale K sets the gaps' switching-function scale K_gap in (0, 1e6] [1/m]
+// (FesdOptions::switching_scale[0]); --polish-below and --polish-max-iter set
 // MpccSolverOptions::polish_below and polish_max_iter; --ipopt passes an Ipopt option to every solve
 // (an integer or a number when VALUE parses as one, else a string), e.g. `--ipopt
 // mumps_pivtol=1e-4 --ipopt print_timing_statistics=yes --ipopt output_file=ip.log --ipopt
@@ -36,7 +38,7 @@ struct OcpBenchArgs {
   std::string only;   ///< one variant by name; empty: all
   int max_steps = -1; ///< > 0: MpccSolverOptions::max_homotopy_steps
   bool lift = false;  ///< FesdOptions::lift_step_functions for every variant
-  bool elastic = false;  ///< MpccSolverOptions::elastic_infinity for every variant
+  bool elastic = false;  ///< MpccSolverOptions::elastic_infinity for every Scholtes or Smoothing solve
   double gap_scale = 0.0;  ///< > 0: FesdOptions::switching_scale[0] (K_gap) for every variant
   bool integrated_gap = false;  ///< FesdOptions::integrated_gap for every variant
   bool velocity_cross = false;  ///< FesdOptions::velocity_switch_detection for every variant
@@ -49,7 +51,8 @@ struct OcpBenchArgs {
   void apply(timefreezing::MpccSolverOptions& s) const {
     if (max_steps > 0) s.max_homotopy_steps = max_steps;
     if (polish_below >= 0.0) s.polish_below = polish_below;
-    if (elastic) s.elastic_infinity = true;
+    // Penalty has no relaxation rows to hold the slack: its variants run without it.
+    if (elastic && s.relaxation != timefreezing::MpccSolverOptions::Relaxation::Penalty) s.elastic_infinity = true;
     if (polish_max_iter > 0) s.polish_max_iter = polish_max_iter;
     s.ipopt_options.insert(s.ipopt_options.end(), ipopt_options.begin(), ipopt_options.end());
   }
@@ -105,14 +108,16 @@ inline std::optional<OcpBenchArgs> parse_ocp_bench_args(int argc, char** argv, c
     else if (std::strcmp(argv[i], "--max-steps") == 0 && i + 1 < argc) {
       if (!integer_in(argv[++i], 1, 1000, a.max_steps)) return usage();
     } else if (std::strcmp(argv[i], "--polish-below") == 0 && i + 1 < argc) {
+      const char* text = argv[++i];
       char* end = nullptr;
-      const double s = std::strtod(argv[++i], &end);
-      if (*end != '\0' || !(s >= 0.0 && s <= 1.0)) return usage();
+      const double s = std::strtod(text, &end);
+      if (end == text || *end != '\0' || !(s >= 0.0 && s <= 1.0)) return usage();
       a.polish_below = s;
     } else if (std::strcmp(argv[i], "--gap-scale") == 0 && i + 1 < argc) {
+      const char* text = argv[++i];
       char* end = nullptr;
-      const double k = std::strtod(argv[++i], &end);
-      if (*end != '\0' || !(k > 0.0 && k <= 1e6)) return usage();
+      const double k = std::strtod(text, &end);
+      if (end == text || *end != '\0' || !(k > 0.0 && k <= 1e6)) return usage();
       a.gap_scale = k;
     } else if (std::strcmp(argv[i], "--polish-max-iter") == 0 && i + 1 < argc) {
       if (!integer_in(argv[++i], 1, 100000, a.polish_max_iter)) return usage();
@@ -152,6 +157,8 @@ inline timefreezing::MpccSolution continue_homotopy(const timefreezing::Mpcc& pr
   const timefreezing::MpccStart from{first.x, first.constraint_multipliers, first.bound_multipliers_lower,
                                      first.bound_multipliers_upper};
   options.relaxation = relaxation;
+  // The elastic slack needs relaxation rows (MpccSolverOptions::elastic_infinity): not under Penalty.
+  if (relaxation == timefreezing::MpccSolverOptions::Relaxation::Penalty) options.elastic_infinity = false;
   options.sigma_0 = sigma_0;
   options.max_homotopy_steps = std::max(1, steps);
   options.polish = true;

@@ -984,7 +984,7 @@ TEST(TimeFreezingRecovery, FrozenRunOnAControlIntervalBoundary) {
 
 // An element whose clock creeps (rate 1e-5 < detail::impact_clock_rate = 1e-4, above the frozen
 // tolerance 1e-7) while the velocity jumps is part of the impact: x- is the sample before it, not
-// its end (the plank-box on 480 elements per interval: read as flowing, such an element put a
+// its end (the plank-box on 480 elements, 32 per interval: read as flowing, such an element put a
 // post-impact state among the flow samples, 1.04 from the re-simulation). The same creeping
 // clock without a velocity jump stays a flowing element (a slow clock alone is no impact).
 TEST(TimeFreezingRecovery, AnImpactElementWhoseClockCreptIsPartOfTheImpact) {

@@ -139,8 +139,8 @@ struct MpccSolverOptions {
   /// Smoothing only (validate() refuses it with Penalty). Off by default: measured on the hopper
   /// in bench/README.md.
   bool elastic_infinity = false;
-  /// Upper bound of the elastic slack (> 0; NOSNOC's s_elastic_max = 10). The slack starts at
-  /// min(sigma_0, elastic_slack_max).
+  /// Upper bound of the elastic slack (> 0 and finite; NOSNOC's s_elastic_max = 10). The slack
+  /// starts at min(sigma_0, elastic_slack_max).
   double elastic_slack_max = 10.0;
   /// First relaxation parameter (Penalty: rho_0 = 1 / sigma_0). NOSBENCH 5.4: sigma_0 in [0.1, 10];
   /// a too small sigma_0 loses problems to bad local minima.
@@ -285,7 +285,8 @@ struct MpccSolverOptions {
 
   /// One line per Ipopt solve (homotopy step or retry) when not null: step, sigma (or rho),
   /// complementarity residual, objective, constraint violation, Ipopt iterations and status,
-  /// seconds; per polish attempt also which attempt ("attempt 0 [first guess]", "attempt 1
+  /// seconds, then the elastic slack ("slack ...", with elastic_infinity) and, for a failed step,
+  /// the row its iterate violates most ("worst: ...", MpccHomotopyStep::worst_violation); per polish attempt also which attempt ("attempt 0 [first guess]", "attempt 1
   /// [biactive flipped (3)]", "attempt 2 [flipped <pair name>]"), the branch, and why it failed. Not owned; must outlive the call.
   std::ostream* progress = nullptr;
 
@@ -324,7 +325,9 @@ struct MpccHomotopyStep {
   std::string note;     ///< polish: why it failed ("" when it succeeded)
   double complementarity = 0.0;       ///< max_j |G_j(x) H_j(x)| at the step's final iterate
   double objective = 0.0;             ///< original f at the step's final iterate (no penalty)
-  double elastic_slack = 0.0;         ///< the l-infinity slack s at the final iterate (0 if not elastic)
+  /// The l-infinity slack s at the step's final iterate (its starting value when Ipopt returned
+  /// no iterate; 0 without elastic_infinity).
+  double elastic_slack = 0.0;
   double constraint_violation = 0.0;  ///< of the original MPCC (MpccSolution::constraint_violation)
   /// The bound, row or complementarity side attaining constraint_violation, by the Mpcc's names
   /// (Mpcc::variable_name, constraint_name, the pair's name; FesdMpcc's rows read e.g.
@@ -369,7 +372,9 @@ struct MpccSolution {
   /// Pairs held on G_j H_j = sigma (Relaxation::Smoothing and marked smoothable; 0 otherwise).
   int smoothed_pairs = 0;
   bool polished = false;   ///< x is a polish's (branch NLP) solution
-  /// Size of the relaxed NLP: rows m + sign_rows (+ one relaxation row per pair, Scholtes).
+  /// Size of the relaxed NLP: rows m + sign_rows (+ one relaxation row per pair, Scholtes and
+  /// Smoothing; none under Penalty). With elastic_infinity the relaxed NLP also has one more
+  /// variable, the slack.
   int relaxed_rows = 0;
   int elastic_pairs = 0;  ///< pairs whose relaxation holds the l-infinity slack (elastic_infinity)
   int sign_rows = 0;  ///< rows side(x) >= 0 (after pruning and merging identical sides)
