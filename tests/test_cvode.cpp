@@ -11,8 +11,6 @@
 namespace saltus::testing {
 namespace {
 
-constexpr double g = 9.81;
-
 class Cvode : public ::testing::TestWithParam<IntegratorKind> {
  protected:
   SimulationOptions tight() const {

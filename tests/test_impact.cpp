@@ -125,7 +125,7 @@ TEST(Impact, FlatLandingSplitsTheImpulseEqually) {
 class KaneDoublePendulum {
  public:
   static constexpr int nq = 2, nu = 0, nc = 1;
-  static constexpr const char* name = "kane_double_pendulum";
+  [[maybe_unused]] static constexpr const char* name = "kane_double_pendulum";  // read by templates (S::name)
   KaneDoublePendulum(double mu, double e_n, std::optional<double> e_t)
       : tip_{"tip", Friction::Planar, mu, e_n, e_t} {}
   const ContactSpec& contact(int) const { return tip_; }
