@@ -243,7 +243,7 @@ TEST(PlankBoxFlatLanding, OptimalReferenceLandsFlatAndAgreesWithTheEventDrivenSi
 }
 
 // The coarse grid the issue asks for: the shorter flat landing (scenes::PlankBoxShortLanding, T = 1 s,
-// N = 10) in about a minute in Release (57-66 s measured with another run on the machine). Converged by the branch NLP (measured: 1,048 Ipopt
+// N = 10) in about a minute in Release (measured 57-67 s). Converged by the branch NLP (measured: 1,048 Ipopt
 // iterations, complementarity 0); the recovered reference lands with both corners in ONE
 // impact at t = 0.3 and lifts off with both at 0.6, still sliding (no stop on this short slide).
 // The event-driven simulator under the optimal input lands and lifts off at the same times; in

@@ -54,9 +54,18 @@ struct PlankBoxFlatLanding {
   static Vec<4> q0() { return PlankBox{}.flat_state(start_along, clearance).head<4>(); }
   static Vec<4> v0() { return Vec<4>::Zero(); }
   /// (x, y, theta) of the box at T.
-  static Vec<3> box_target() {
-    const Vec<8> x = PlankBox{}.flat_state(target_along, clearance);
+  static Vec<3> box_target() { return box_target_at(target_along); }
+  /// (x, y, theta) of the box flat `clearance` above the level plank, its centre `along` [m] from
+  /// the hinge.
+  static Vec<3> box_target_at(double along) {
+    const Vec<8> x = PlankBox{}.flat_state(along, clearance);
     return Vec<3>(x[0], x[1], x[2]);
+  }
+  /// The terminal rows' bounds of a target pose (size 6): the pose, and the box at rest.
+  static Vec<6> resting_target(const Vec<3>& pose) {
+    Vec<6> b;
+    b << pose, Vec<3>::Zero();
+    return b;
   }
 
   static timefreezing::TimeFreezingSystem<PlankBox> system() { return {PlankBox{}, auxiliary_acceleration}; }
@@ -81,11 +90,7 @@ struct PlankBoxFlatLanding {
     c << x[0], x[1], x[2], x[4], x[5], x[6];
     return c;
   }
-  Vec<6> terminal_lower() const {
-    Vec<6> b;
-    b << box_target(), Vec<3>::Zero();
-    return b;
-  }
+  Vec<6> terminal_lower() const { return resting_target(box_target()); }
   Vec<6> terminal_upper() const { return terminal_lower(); }
 
   /// terminal_clock_grid (scenes/ocp_grid.hpp: speed of time s in [1, 5], needed because the clock
@@ -165,15 +170,8 @@ struct PlankBoxShortLanding : PlankBoxFlatLanding {
   static constexpr double horizon = 1.0;        ///< T [s]
   static constexpr double target_along = 0.55;  ///< [m]
   static constexpr int control_intervals = 10;
-  static Vec<3> box_target() {
-    const Vec<8> x = PlankBox{}.flat_state(target_along, clearance);
-    return Vec<3>(x[0], x[1], x[2]);
-  }
-  Vec<6> terminal_lower() const {
-    Vec<6> b;
-    b << box_target(), Vec<3>::Zero();
-    return b;
-  }
+  static Vec<3> box_target() { return box_target_at(target_along); }
+  Vec<6> terminal_lower() const { return resting_target(box_target()); }
   Vec<6> terminal_upper() const { return terminal_lower(); }
   static timefreezing::FesdOptions grid(int intervals = control_intervals, int finite_elements = 2, int stages = 2) {
     // The flagship's grid with this horizon (terminal_clock_grid reads T in these two fields only).
