@@ -2,8 +2,8 @@
 // Section 6), under the solver and formulation variants the issue asks to measure one by one.
 //
 //   hopper_ocp [--one-hole] [--json] [--only NAME] [--max-steps K] [--lift] [--integrated-gap]
-//              [--velocity-cross] [--elastic] [--gap-scale K] [--polish-below S] [--polish-max-iter K]
-//              [--ipopt NAME=VALUE]...
+//              [--velocity-cross] [--composed-kinematics] [--elastic] [--gap-scale K] [--polish-below S]
+//              [--polish-max-iter K] [--max-iter K] [--ipopt NAME=VALUE]...
 //
 // --one-hole runs the variants on scenes::HopperOverOneHole instead: T = 1 s over the first hole,
 // N = 8 of the flagship's 20 intervals, which meets the same wall (bench/README.md, "The one-hole
@@ -266,11 +266,7 @@ int run(const std::optional<bench::OcpBenchArgs>& args) {
 int main(int argc, char** argv) {
   // --one-hole is this program's own flag; the others are the shared ones (ocp_bench_support.hpp).
   bool one_hole = false;
-  std::vector<char*> rest{argv[0]};
-  for (int i = 1; i < argc; ++i) {
-    if (std::strcmp(argv[i], "--one-hole") == 0) one_hole = true;
-    else rest.push_back(argv[i]);
-  }
+  std::vector<char*> rest = bench::take_own_flag(argc, argv, "--one-hole", one_hole);
   const std::optional<bench::OcpBenchArgs> args =
       bench::parse_ocp_bench_args(static_cast<int>(rest.size()), rest.data(), "hopper_ocp [--one-hole]");
   if (!args) return 2;

@@ -42,8 +42,10 @@ struct OcpBenchArgs {
   double gap_scale = 0.0;  ///< > 0: FesdOptions::switching_scale[0] (K_gap) for every variant
   bool integrated_gap = false;  ///< FesdOptions::integrated_gap for every variant
   bool velocity_cross = false;  ///< FesdOptions::velocity_switch_detection for every variant
+  bool composed_kinematics = false;  ///< FesdOptions::composed_kinematics for every variant
   double polish_below = -1.0;  ///< >= 0: MpccSolverOptions::polish_below
   int polish_max_iter = -1;    ///< > 0: MpccSolverOptions::polish_max_iter
+  int max_iter = -1;           ///< > 0: MpccSolverOptions::max_iter (Ipopt iterations per homotopy step)
   std::vector<timefreezing::IpoptOption> ipopt_options;
 
   /// The command line's share of a variant's solver options: the step budget, the polish and the
@@ -54,6 +56,7 @@ struct OcpBenchArgs {
     // Penalty has no relaxation rows to hold the slack: its variants run without it.
     if (elastic && s.relaxation != timefreezing::MpccSolverOptions::Relaxation::Penalty) s.elastic_infinity = true;
     if (polish_max_iter > 0) s.polish_max_iter = polish_max_iter;
+    if (max_iter > 0) s.max_iter = max_iter;
     s.ipopt_options.insert(s.ipopt_options.end(), ipopt_options.begin(), ipopt_options.end());
   }
   /// The command line's share of a variant's grid options: the lifted step functions, the
@@ -62,6 +65,7 @@ struct OcpBenchArgs {
     if (lift) grid.lift_step_functions = true;
     if (integrated_gap) grid.integrated_gap = true;
     if (velocity_cross) grid.velocity_switch_detection = true;
+    if (composed_kinematics) grid.composed_kinematics = true;
     if (gap_scale > 0.0) grid.switching_scale[0] = gap_scale;
   }
 };
@@ -80,6 +84,18 @@ inline std::optional<timefreezing::IpoptOption> parse_ipopt_option(const std::st
   return timefreezing::IpoptOption{name, value};
 }
 
+/// A program's own switch (`--one-hole`, `--short`) taken out of the command line: sets `present`
+/// and returns the other arguments (argv[0] first) for parse_ocp_bench_args.
+inline std::vector<char*> take_own_flag(int argc, char** argv, const char* flag, bool& present) {
+  present = false;
+  std::vector<char*> rest{argv[0]};
+  for (int i = 1; i < argc; ++i) {
+    if (std::strcmp(argv[i], flag) == 0) present = true;
+    else rest.push_back(argv[i]);
+  }
+  return rest;
+}
+
 /// The parsed command line, or nullopt after printing the usage line (bad or unknown argument).
 inline std::optional<OcpBenchArgs> parse_ocp_bench_args(int argc, char** argv, const char* program) {
   OcpBenchArgs a;
@@ -93,8 +109,8 @@ inline std::optional<OcpBenchArgs> parse_ocp_bench_args(int argc, char** argv, c
   };
   const auto usage = [program] {
     std::fprintf(stderr,
-                 "usage: %s [--json] [--only NAME] [--max-steps K] [--lift] [--integrated-gap] [--velocity-cross] "
-                 "[--elastic] [--gap-scale K] [--polish-below S] [--polish-max-iter K] [--ipopt NAME=VALUE]...\n",
+                 "usage: %s [--json] [--only NAME] [--max-steps K] [--lift] [--integrated-gap] [--velocity-cross] [--composed-kinematics] "
+                 "[--elastic] [--gap-scale K] [--polish-below S] [--polish-max-iter K] [--max-iter K] [--ipopt NAME=VALUE]...\n",
                  program);
     return std::optional<OcpBenchArgs>();
   };
@@ -105,6 +121,7 @@ inline std::optional<OcpBenchArgs> parse_ocp_bench_args(int argc, char** argv, c
     else if (std::strcmp(argv[i], "--elastic") == 0) a.elastic = true;
     else if (std::strcmp(argv[i], "--integrated-gap") == 0) a.integrated_gap = true;
     else if (std::strcmp(argv[i], "--velocity-cross") == 0) a.velocity_cross = true;
+    else if (std::strcmp(argv[i], "--composed-kinematics") == 0) a.composed_kinematics = true;
     else if (std::strcmp(argv[i], "--max-steps") == 0 && i + 1 < argc) {
       if (!integer_in(argv[++i], 1, 1000, a.max_steps)) return usage();
     } else if (std::strcmp(argv[i], "--polish-below") == 0 && i + 1 < argc) {
@@ -121,6 +138,8 @@ inline std::optional<OcpBenchArgs> parse_ocp_bench_args(int argc, char** argv, c
       a.gap_scale = k;
     } else if (std::strcmp(argv[i], "--polish-max-iter") == 0 && i + 1 < argc) {
       if (!integer_in(argv[++i], 1, 100000, a.polish_max_iter)) return usage();
+    } else if (std::strcmp(argv[i], "--max-iter") == 0 && i + 1 < argc) {
+      if (!integer_in(argv[++i], 1, 100000, a.max_iter)) return usage();
     } else if (std::strcmp(argv[i], "--ipopt") == 0 && i + 1 < argc) {
       std::optional<timefreezing::IpoptOption> option = parse_ipopt_option(argv[++i]);
       if (!option) return usage();

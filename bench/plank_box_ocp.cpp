@@ -1,8 +1,12 @@
 // The plank-box's flagship OCP, the flat landing (scenes/plank_box_landing.hpp), under the
 // formulation variants measured one by one (bench/README.md, "Plank-box flat landing").
 //
-//   plank_box_ocp [--json] [--only NAME] [--max-steps K] [--lift] [--integrated-gap] [--velocity-cross]
-//                 [--polish-below S] [--polish-max-iter K] [--ipopt NAME=VALUE]...
+//   plank_box_ocp [--short] [--json] [--only NAME] [--max-steps K] [--lift] [--integrated-gap] [--velocity-cross]
+//                 [--composed-kinematics] [--elastic] [--gap-scale K] [--polish-below S] [--polish-max-iter K]
+//                 [--max-iter K] [--ipopt NAME=VALUE]...
+//
+// --short runs the variants on scenes::PlankBoxShortLanding instead (the coarse-grid test's task:
+// T = 1 s, N = 10, target 0.55 m, with its own solver limits).
 //
 // Every variant starts from the contact-implicit initialisation (the start state at every stage
 // point, zero inputs) on the default grid (N = 15, 2 elements, n_s = 2) with the default homotopy
@@ -24,16 +28,17 @@
 #include <nlohmann/json.hpp>
 
 #include <cstdio>
+#include <cstring>
 #include <iostream>
 #include <optional>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 namespace {
 
 using namespace saltus;
 using namespace saltus::timefreezing;
-using Ocp = scenes::PlankBoxFlatLanding;
 
 struct Variant {
   const char* name;
@@ -105,9 +110,8 @@ std::vector<Variant> variants() {
 
 }  // namespace
 
-int main(int argc, char** argv) {
-  const std::optional<bench::OcpBenchArgs> args = bench::parse_ocp_bench_args(argc, argv, "plank_box_ocp");
-  if (!args) return 2;
+template <class Ocp>
+int run(const std::optional<bench::OcpBenchArgs>& args) {
   const bool json = args->json;
   const std::string& only = args->only;
   nlohmann::ordered_json rows = nlohmann::ordered_json::array();
@@ -157,7 +161,7 @@ int main(int argc, char** argv) {
     } else {
       r = solve_time_freezing_ocp(Ocp::system(), ocp, Ocp::q0(), Ocp::v0(), grid, s);
     }
-    const Ocp::Feasibility f = Ocp::feasibility(r.points);
+    const typename Ocp::Feasibility f = Ocp::feasibility(r.points);
     // The landing as the recovered trajectory reads it (recover_trajectory): one impact whose
     // guards are both corners' touchdowns, or two, or a touchdown without impact.
     nlohmann::ordered_json landing = nullptr;
@@ -186,6 +190,19 @@ int main(int argc, char** argv) {
                   f.target_error, r.solution.objective, status.c_str(), r.solution.seconds);
     std::fflush(stdout);
   }
-  if (json) std::cout << nlohmann::ordered_json{{"plank_box_flat_landing", rows}}.dump(2) << "\n";
+  constexpr bool short_landing = std::is_same_v<Ocp, scenes::PlankBoxShortLanding>;
+  if (json)
+    std::cout << nlohmann::ordered_json{{short_landing ? "plank_box_short_landing" : "plank_box_flat_landing", rows}}.dump(2)
+              << "\n";
   return 0;
+}
+
+int main(int argc, char** argv) {
+  // --short is this program's own flag; the others are the shared ones (ocp_bench_support.hpp).
+  bool short_landing = false;
+  std::vector<char*> rest = bench::take_own_flag(argc, argv, "--short", short_landing);
+  const std::optional<bench::OcpBenchArgs> args =
+      bench::parse_ocp_bench_args(static_cast<int>(rest.size()), rest.data(), "plank_box_ocp [--short]");
+  if (!args) return 2;
+  return short_landing ? run<scenes::PlankBoxShortLanding>(args) : run<scenes::PlankBoxFlatLanding>(args);
 }

@@ -9,6 +9,7 @@
 // through two user-defined conversions. PlainAutoDiffScalarDoesNotNestConstants checks the part
 // of this that is detectable at compile time, so that a future Eigen which fixes it is noticed.
 #include <saltus/ad/autodiff.hpp>
+#include <saltus/ad/compose.hpp>
 #include <saltus/hybrid/contact/linear_solve.hpp>
 #include <saltus/hybrid/dynamics/kinematics.hxx>
 
@@ -18,6 +19,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <type_traits>
 
 namespace {
 
@@ -400,6 +402,100 @@ TEST(GccModrefNullBaseLoop, ContactTangentTermsSurviveO3) {
   EXPECT_NE(kappa_fd, 0.0);
   EXPECT_NEAR(c.kappa_t[0], kappa_fd, 1e-7 * (1 + std::abs(kappa_fd)));
   EXPECT_EQ(c.Wt.col(1), Eigen::Vector4d::Zero());
+}
+
+}  // namespace
+
+// ad::compose: a function of n variables inside a computation along N > n directions, by the chain
+// rule (the FESD callbacks' contact kinematics). It must give the derivatives of the direct
+// evaluation at every order, for inputs whose own derivatives are not seeds (curved x(z)), and
+// through an AD level inside f (as the kinematics' Jacobians are).
+namespace {
+
+template <class T>
+Eigen::Matrix<T, 6, 1> seeds_of(const Eigen::Matrix<double, 6, 1>& z);
+template <>
+Eigen::Matrix<Dual<double, 6>, 6, 1> seeds_of(const Eigen::Matrix<double, 6, 1>& z) {
+  Eigen::Matrix<Dual<double, 6>, 6, 1> out;
+  for (int k = 0; k < 6; ++k) out[k] = seed<6>(z[k], k);
+  return out;
+}
+template <>
+Eigen::Matrix<Dual<Dual<double, 6>, 6>, 6, 1> seeds_of(const Eigen::Matrix<double, 6, 1>& z) {
+  Eigen::Matrix<Dual<Dual<double, 6>, 6>, 6, 1> out;
+  for (int k = 0; k < 6; ++k) {
+    Eigen::Matrix<Dual<double, 6>, 6, 1> outer;
+    for (int j = 0; j < 6; ++j) outer[j] = Dual<double, 6>(j == k ? 1.0 : 0.0);
+    out[k] = Dual<Dual<double, 6>, 6>(seed<6>(z[k], k), outer);
+  }
+  return out;
+}
+
+// x(z): curved, so x's second derivatives are not zero (compose's sum_a g_a E_a term).
+template <class T>
+Eigen::Matrix<T, 3, 1> curved_inputs(const Eigen::Matrix<T, 6, 1>& z) {
+  using std::sin;
+  return Eigen::Matrix<T, 3, 1>(T(z[0] * z[1]), T(sin(z[2]) + z[3]), T(z[4] * z[4] * z[5]));
+}
+
+// f: R^3 -> R^3, one output a derivative taken by AD inside f.
+struct WithInnerDerivative {
+  template <class S>
+  Eigen::Matrix<S, 3, 1> operator()(const Eigen::Matrix<S, 3, 1>& x) const {
+    using std::exp;
+    using std::sin;
+    Eigen::Matrix<Dual<S, 3>, 3, 1> xd;
+    for (int a = 0; a < 3; ++a) xd[a] = seed<3>(x[a], a);
+    const Dual<S, 3> inner = exp(xd[0] * xd[2]) + xd[1] * xd[1] * xd[2];
+    return Eigen::Matrix<S, 3, 1>(S(sin(x[0]) * x[1] + x[2] * x[2]), inner.derivatives()[0], inner.derivatives()[2]);
+  }
+};
+
+template <class T>
+void expect_same_derivatives(const T& a, const T& b) {
+  if constexpr (std::is_same_v<T, double>) {
+    EXPECT_NEAR(a, b, 1e-13 * (1.0 + std::abs(b)));
+  } else {
+    expect_same_derivatives(a.value(), b.value());
+    for (int k = 0; k < a.derivatives().size(); ++k) expect_same_derivatives(a.derivatives()[k], b.derivatives()[k]);
+  }
+}
+
+template <class T>
+void expect_compose_matches_direct() {
+  const Eigen::Matrix<double, 6, 1> z(0.3, -0.8, 0.5, 1.2, -0.4, 0.9);
+  const Eigen::Matrix<T, 3, 1> x = curved_inputs<T>(seeds_of<T>(z));
+  const Eigen::Matrix<T, 3, 1> direct = WithInnerDerivative{}(x);
+  const Eigen::Matrix<T, 3, 1> composed = saltus::ad::compose(x, WithInnerDerivative{});
+  for (int i = 0; i < 3; ++i) expect_same_derivatives(composed[i], direct[i]);
+}
+
+TEST(AdCompose, FirstOrderMatchesTheDirectEvaluation) { expect_compose_matches_direct<Dual<double, 6>>(); }
+
+TEST(AdCompose, SecondOrderMatchesTheDirectEvaluationForCurvedInputs) {
+  expect_compose_matches_direct<Dual<Dual<double, 6>, 6>>();
+}
+
+TEST(AdCompose, SecondOrderMatchesForSeededInputs) {
+  // x = (z_0, z_1, z_2) themselves: the FESD Hessian's case (seeds, no curvature).
+  using T = Dual<Dual<double, 6>, 6>;
+  const Eigen::Matrix<T, 6, 1> z = seeds_of<T>(Eigen::Matrix<double, 6, 1>(0.3, -0.8, 0.5, 1.2, -0.4, 0.9));
+  const Eigen::Matrix<T, 3, 1> x = z.head<3>();
+  const Eigen::Matrix<T, 3, 1> direct = WithInnerDerivative{}(x);
+  const Eigen::Matrix<T, 3, 1> composed = saltus::ad::compose(x, WithInnerDerivative{});
+  for (int i = 0; i < 3; ++i) expect_same_derivatives(composed[i], direct[i]);
+}
+
+TEST(AdCompose, FewerDirectionsThanInputsAndDoublesEvaluateDirectly) {
+  const Eigen::Vector3d x0(0.3, -0.8, 0.5);
+  const Eigen::Vector3d direct = WithInnerDerivative{}(x0);
+  EXPECT_EQ(saltus::ad::compose(x0, WithInnerDerivative{}), direct);
+  // N = 2 < n = 3: nothing to save, f runs at x's own type (the fall-back overload).
+  Eigen::Matrix<Dual<double, 2>, 3, 1> x;
+  for (int a = 0; a < 3; ++a) x[a] = Dual<double, 2>(x0[a], Eigen::Vector2d(a + 1.0, 0.5 * a));
+  const Eigen::Matrix<Dual<double, 2>, 3, 1> composed = saltus::ad::compose(x, WithInnerDerivative{});
+  const Eigen::Matrix<Dual<double, 2>, 3, 1> expected = WithInnerDerivative{}(x);
+  for (int i = 0; i < 3; ++i) expect_same_derivatives(composed[i], expected[i]);
 }
 
 }  // namespace

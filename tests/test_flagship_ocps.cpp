@@ -17,10 +17,12 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <iostream>
 #include <numbers>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -201,6 +203,51 @@ TEST(PlankBoxFlatLanding, IpoptDerivativeCheckerFindsNoError) {
   EXPECT_EQ(report.errors, 0) << report.output;
 }
 
+// FesdOptions::composed_kinematics: the contact kinematics chained into the callbacks' AD types by
+// ad::compose. The same constraint values, Jacobian and Hessian as the default evaluation, up to
+// rounding, on both flagship scenes (two contacts with friction on a rotating plank; the hopper's
+// foot on joint angles), at a point inside the bounds with multipliers of both signs.
+template <class Scene, class Ocp>
+void expect_same_callbacks_when_composed(timefreezing::FesdOptions grid) {
+  const timefreezing::FesdMpcc<Scene, Ocp> direct(Ocp::system(), Ocp{}, Ocp::q0(), Ocp::v0(), grid);
+  grid.composed_kinematics = true;
+  const timefreezing::FesdMpcc<Scene, Ocp> composed(Ocp::system(), Ocp{}, Ocp::q0(), Ocp::v0(), grid);
+  const Eigen::VectorXd x = interior_point(direct, 17);
+  std::srand(19);
+  const Eigen::VectorXd mu = Eigen::VectorXd::Random(direct.constraint_count());
+  const auto same = [](const Eigen::VectorXd& a, const Eigen::VectorXd& b, const char* what) {
+    ASSERT_EQ(a.size(), b.size()) << what;
+    EXPECT_LE((a - b).cwiseAbs().maxCoeff(), 1e-12 * (1.0 + a.cwiseAbs().maxCoeff())) << what;
+    EXPECT_GT(a.cwiseAbs().maxCoeff(), 0.0) << what;  // not a comparison of zeros
+  };
+  const auto same_structure = [](const std::vector<timefreezing::SparseEntry>& a,
+                                 const std::vector<timefreezing::SparseEntry>& b) {
+    if (a.size() != b.size()) return false;
+    for (std::size_t k = 0; k < a.size(); ++k)
+      if (a[k].row != b[k].row || a[k].col != b[k].col) return false;
+    return true;
+  };
+  Eigen::VectorXd g1(direct.constraint_count()), g2(composed.constraint_count());
+  direct.constraints(x, g1);
+  composed.constraints(x, g2);
+  same(g1, g2, "constraints");
+  ASSERT_TRUE(same_structure(direct.jacobian_structure(), composed.jacobian_structure()));
+  Eigen::VectorXd j1(static_cast<Eigen::Index>(direct.jacobian_structure().size())), j2(j1.size());
+  direct.jacobian_values(x, j1);
+  composed.jacobian_values(x, j2);
+  same(j1, j2, "Jacobian");
+  ASSERT_TRUE(same_structure(direct.hessian_structure(), composed.hessian_structure()));
+  Eigen::VectorXd h1(static_cast<Eigen::Index>(direct.hessian_structure().size())), h2(h1.size());
+  direct.hessian_values(x, 0.7, mu, h1);
+  composed.hessian_values(x, 0.7, mu, h2);
+  same(h1, h2, "Hessian");
+}
+
+TEST(ComposedKinematics, SameCallbacksOnThePlankBoxAndTheHopper) {
+  expect_same_callbacks_when_composed<PlankBox, PlankBoxFlatLanding>(PlankBoxFlatLanding::grid(2, 2, 2));
+  expect_same_callbacks_when_composed<Hopper, HopperOverThreeHoles>(HopperOverThreeHoles::grid(2, 2, 2));
+}
+
 // The flagship OCP on its own grid (15 control intervals, 2 elements, n_s = 2; the coarser grids
 // tried, 10 and 12 intervals, stall in the homotopy, and 1 element per interval cannot move an
 // element boundary): converged to complementarity 0 by the branch NLP, the box parallel to the
@@ -246,10 +293,17 @@ TEST(PlankBoxFlatLanding, OptimalReferenceLandsFlatAndAgreesWithTheEventDrivenSi
 // N = 10) in about a minute in Release (measured 57-67 s). Converged by the branch NLP (measured: 1,048 Ipopt
 // iterations, complementarity 0); the recovered reference lands with both corners in ONE
 // impact at t = 0.3 and lifts off with both at 0.6, still sliding (no stop on this short slide).
+// Checked as a structure: one flat impact first, then only slip-stick changes, then the release of
+// both corners (another optimum of this task, found under other rounding, also sticks: below).
 // The event-driven simulator under the optimal input lands and lifts off at the same times; in
 // between it lets corner 1 leave the plank for 4.4e-4 s at t = 0.512 (a release and a touchdown the
 // FESD grid does not resolve), hence its two extra events and the distance there (measured 0.022,
 // the box's angular rate at t = 0.5125).
+// The path to this optimum depends on rounding: with FesdOptions::composed_kinematics (the same
+// derivatives, rounded differently) the first step needs 296 iterations and is cut at the 220 of
+// the solver's limit; with 400 the homotopy converges (1,049 iterations) to another optimum
+// (objective 52.0 against 61.5) that sticks at 0.564 and lifts off at 0.7 from rest, and absorbs
+// its landing impact into a flowing element (re-simulation 0.069; bench/README.md, "FESD callbacks").
 TEST(PlankBoxShortLanding, CoarseGridConvergesWithAFlatLandingAndALiftOff) {
 #if defined(SALTUS_TESTS_UNDER_SANITIZERS)
   GTEST_SKIP() << "about a minute in Release: run in the release stage only";
@@ -275,22 +329,38 @@ TEST(PlankBoxShortLanding, CoarseGridConvergesWithAFlatLandingAndALiftOff) {
   EXPECT_LE(f.path_violation, 1e-6);
   EXPECT_LE(f.target_error, 1e-6);
   const auto& events = r.trajectory.events;
-  ASSERT_EQ(events.size(), 2u);
-  EXPECT_TRUE(events[0].impact());
-  EXPECT_EQ(events[0].guards(), (std::vector<Guard>{{0, GuardKind::Touchdown}, {1, GuardKind::Touchdown}}));
-  EXPECT_FALSE(events[1].impact());
-  EXPECT_EQ(events[1].guards(), (std::vector<Guard>{{0, GuardKind::Release}, {1, GuardKind::Release}}));
+  std::ostringstream listed;  // the recovered events, for the failure messages
+  for (const auto& ev : events) {
+    listed << "\n  t = " << ev.t << (ev.impact() ? " impact" : "");
+    for (const Guard& g : ev.guards()) listed << " " << g.contact << ":" << to_string(g.kind);
+  }
+  // Lands flat (one impact, both corners), then only slip-stick changes on the plank, then lifts
+  // off with both corners at once.
+  ASSERT_GE(events.size(), 2u) << listed.str();
+  EXPECT_TRUE(events.front().impact()) << listed.str();
+  EXPECT_EQ(events.front().guards(), (std::vector<Guard>{{0, GuardKind::Touchdown}, {1, GuardKind::Touchdown}}))
+      << listed.str();
+  for (std::size_t k = 1; k + 1 < events.size(); ++k) {
+    EXPECT_FALSE(events[k].impact()) << listed.str();
+    for (const Guard& g : events[k].guards())
+      EXPECT_TRUE(g.kind == GuardKind::Stop || g.kind == GuardKind::SlipOnset) << listed.str();
+  }
+  EXPECT_FALSE(events.back().impact()) << listed.str();
+  EXPECT_EQ(events.back().guards(), (std::vector<Guard>{{0, GuardKind::Release}, {1, GuardKind::Release}}))
+      << listed.str();
   const PolishResult<PlankBox> resim = polish(PlankBox{}, r.reference);
   const auto& simulated = resim.trajectory.events;
   ASSERT_GE(simulated.size(), 2u);
-  EXPECT_EQ(simulated.front().guards().size(), 2u);
-  EXPECT_NEAR(simulated.front().t, events[0].t, 1e-6);
-  EXPECT_EQ(simulated.back().guards(), events[1].guards());
-  EXPECT_NEAR(simulated.back().t, events[1].t, 1e-6);
+  // The simulator's landing: one impact after which both corners are closed (which corner its
+  // event location names first is a matter of rounding on a flat landing).
+  EXPECT_TRUE(simulated.front().impact());
+  EXPECT_TRUE(simulated.front().mode_after[0].closed() && simulated.front().mode_after[1].closed());
+  EXPECT_NEAR(simulated.front().t, events.front().t, 1e-6);
+  EXPECT_NEAR(simulated.back().t, events.back().t, 1e-6);
   std::cout << "plank-box short landing: objective " << r.solution.objective << ", " << r.solution.ipopt_iterations
             << " Ipopt iterations, " << r.solution.seconds << " s; re-simulation distance " << resim.state_distance
             << " at t = " << resim.worst_sample_time << ", " << simulated.size() << " simulated events\n";
-  EXPECT_LT(resim.state_distance, 0.05);
+  EXPECT_LT(resim.state_distance, 0.05);  // measured 0.022 (above)
 }
 
 }  // namespace

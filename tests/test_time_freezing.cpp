@@ -1113,6 +1113,49 @@ TEST(TimeFreezingRecovery, AnImpactAbsorbedIntoAFlowingElementIsAnImpactEvent) {
   EXPECT_EQ(traj.state(1, 0.11), impact.x_plus);  // held over the clock's advance 0.1 .. 0.12
   EXPECT_LT((traj.state(1, 0.17) - points[4].y.head<4>()).cwiseAbs().maxCoeff(), 1e-14);
   EXPECT_LT((traj.state(1, 0.27) - points[6].y.head<4>()).cwiseAbs().maxCoeff(), 1e-14);
+  // recover_reference has no event there (no frozen run); align_impact_samples adds it: x- the
+  // sample at 0.1, x+ inserted at its own time 0.12, the samples after it in the next segment.
+  ImportedReference<PointMass> ref = recover_reference<PointMass>(points, 2);
+  EXPECT_TRUE(ref.event_times.empty());
+  const std::size_t samples = ref.size();
+  detail::align_impact_samples(ref, traj);
+  ASSERT_EQ(ref.event_times, std::vector<double>{0.1});
+  ASSERT_EQ(ref.size(), samples + 1);
+  EXPECT_EQ(ref.t, (std::vector<double>{0.0, 0.1, 0.12, 0.17, 0.27}));
+  EXPECT_EQ(ref.segment, (std::vector<int>{0, 0, 1, 1, 1}));
+  EXPECT_EQ(ref.x[1], impact.x_minus);
+  EXPECT_EQ(ref.x[2], impact.x_plus);
+  EXPECT_EQ(ref.u[2], ref.u[3]);  // the element's input
+}
+
+// An element that FESD collapsed to a point (h = 1e-15 here; measured 1.0e-15 and 1.9e-15 at a
+// plank-box short landing's lift-off) has a clock advance of 0 <= frozen_tolerance * h, but it is
+// no impact: recover_trajectory skips it (detail::element_degenerate). It was read as an impact
+// event without guards and without a velocity change. recover_reference keeps it as before (an
+// empty event: x- = x+; its samples are the re-simulation's input breakpoints).
+TEST(TimeFreezingRecovery, AnElementCollapsedToAPointIsNoEvent) {
+  const TimeFreezingSystem<PointMass> system = recovery_system();
+  std::vector<FesdPoint<7, 3, 2>> points;
+  auto add = [&](int element, int stage, double tau, double t, Vec<2> q, Vec<2> v) {
+    points.push_back(recovery_point(element, stage, tau, t, q, v));
+  };
+  add(-1, -1, 0.0, 0.0, Vec<2>(0.0, 0.1), Vec<2>(1.0, 0.5));
+  add(0, 0, 0.05, 0.05, Vec<2>(0.05, 0.125), Vec<2>(1.0, 0.5));
+  add(0, 1, 0.10, 0.10, Vec<2>(0.10, 0.15), Vec<2>(1.0, 0.5));
+  add(1, 0, 0.10 + 0.5e-15, 0.10, Vec<2>(0.10, 0.15), Vec<2>(1.0, 0.5));  // collapsed: h = 1e-15
+  add(1, 1, 0.10 + 1e-15, 0.10, Vec<2>(0.10, 0.15), Vec<2>(1.0, 0.5));
+  add(2, 0, 0.15, 0.15, Vec<2>(0.15, 0.175), Vec<2>(1.0, 0.5));
+  add(2, 1, 0.20, 0.20, Vec<2>(0.20, 0.20), Vec<2>(1.0, 0.5));
+  ASSERT_TRUE(detail::element_degenerate(points, 2, 1));
+  EXPECT_FALSE(detail::element_degenerate(points, 2, 0));
+  EXPECT_TRUE(detail::element_frozen(points, 2, 1, 1e-7));  // the clock stands over it
+  const ImportedReference<PointMass> ref = recover_reference<PointMass>(points, 2);
+  ASSERT_EQ(ref.event_times.size(), 1u);
+  EXPECT_EQ(ref.x[1], ref.x[2]);  // x- = x+
+  const HybridTrajectory<PointMass> traj = recover_trajectory(system, points, 2);
+  EXPECT_TRUE(traj.events.empty());
+  ASSERT_EQ(traj.segments.size(), 1u);
+  EXPECT_LT((traj.state(0, 0.2) - points.back().y.head<4>()).cwiseAbs().maxCoeff(), 1e-14);
 }
 
 // A frozen run that ends before its impact does (the plank-box flagship's landing: the corners

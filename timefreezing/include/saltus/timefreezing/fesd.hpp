@@ -212,6 +212,11 @@ struct FesdOptions {
   /// hopper's homotopy with it stalls near 5e-3 (with gap(q): near 1e-3 .. 2.4e-4). Hence off by
   /// default and on in the plank-box flagship's grid.
   bool integrated_gap = false;
+  /// The contact kinematics of the stage fields chained in by ad::compose
+  /// (TimeFreezingSystem::set_composed_kinematics: the Hessian 1.3-2.8x cheaper, the same
+  /// derivatives up to rounding; off by default because the flagship homotopies' paths depend on
+  /// that rounding, measured there).
+  bool composed_kinematics = false;
   /// Scales K = {gap [1/m], J_n v [s/m], J_t v [s/m]} of the switching functions, the same for
   /// every contact (function m uses entry m % 3); > 0. The rows
   /// read K c(q, v) - lambda_p + lambda_n = 0. The step functions and the switches do not change,
@@ -375,6 +380,7 @@ class FesdMpcc final : public Mpcc {
 
   FesdMpcc(const System& system, const Ocp& ocp, const Vec<nq>& q0, const Vec<nq>& v0, const FesdOptions& options)
       : system_(system), ocp_(ocp), options_(options), tableau_(radau_iia(options.stages)) {
+    system_.set_composed_kinematics(options.composed_kinematics);
     require_finite(q0, "FESD: initial configuration q0");
     require_finite(v0, "FESD: initial velocity v0");
     SALTUS_REQUIRE(options.control_intervals >= 1, "FESD: control_intervals must be >= 1, got ", options.control_intervals);

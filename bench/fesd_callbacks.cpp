@@ -1,0 +1,128 @@
+// fesd_callbacks: CPU time of one call of each NLP callback Ipopt makes per iteration (constraints,
+// constraint Jacobian, Lagrangian Hessian) of the two flagship FESD MPCCs on their own grids: the
+// plank-box's short landing (the coarse-grid test's problem) and the hopper over three holes.
+// The Hessian is the largest share of a plank-box iteration (perf: about 60 % of the coarse-grid
+// test's time in the second-order AD); this bench measures what a change to it buys. Each problem
+// runs twice: as the library evaluates it by default and with FesdOptions::composed_kinematics
+// (the contact kinematics chained in by ad::compose).
+//
+// Each problem is evaluated at a fixed point inside its bounds (the derivative tests' interior_point,
+// seed 7) and with fixed multipliers (Eigen's Random after std::srand(11)), so every version of the code times the same arithmetic. Before
+// timing, the bench prints a checksum of each callback's values: a change that should not change
+// the numbers must keep them (to rounding).
+//
+//   OPENBLAS_NUM_THREADS=1 build/bench/fesd_callbacks [--benchmark_filter=...]
+#include "scenes/hopper_holes.hpp"
+#include "scenes/plank_box_landing.hpp"
+
+#include "mpcc_support.hpp"  // tests/: the derivative tests' interior_point
+
+#include <saltus/timefreezing/fesd.hpp>
+
+#include <benchmark/benchmark.h>
+
+#include <Eigen/Core>
+
+#include <cstdio>
+#include <cstdlib>
+#include <memory>
+
+namespace {
+
+using namespace saltus;
+
+struct Evaluation {
+  std::unique_ptr<timefreezing::Mpcc> problem;
+  Eigen::VectorXd x, multipliers, g, jacobian, hessian;
+};
+
+template <class Scene, class Ocp>
+Evaluation make(timefreezing::FesdOptions grid, bool composed) {
+  grid.composed_kinematics = composed;
+  Evaluation e;
+  e.problem = std::make_unique<timefreezing::FesdMpcc<Scene, Ocp>>(Ocp::system(), Ocp{}, Ocp::q0(), Ocp::v0(), grid);
+  e.x = saltus::testing::interior_point(*e.problem, 7);  // inside the bounds, away from the start
+  std::srand(11);
+  e.multipliers = Eigen::VectorXd::Random(e.problem->constraint_count());
+  e.g.resize(e.problem->constraint_count());
+  e.jacobian.resize(static_cast<Eigen::Index>(e.problem->jacobian_structure().size()));
+  e.hessian.resize(static_cast<Eigen::Index>(e.problem->hessian_structure().size()));
+  return e;
+}
+
+Evaluation& plank_box() {
+  static Evaluation e = make<scenes::PlankBox, scenes::PlankBoxShortLanding>(scenes::PlankBoxShortLanding::grid(), false);
+  return e;
+}
+Evaluation& plank_box_composed() {
+  static Evaluation e = make<scenes::PlankBox, scenes::PlankBoxShortLanding>(scenes::PlankBoxShortLanding::grid(), true);
+  return e;
+}
+Evaluation& hopper() {
+  static Evaluation e = make<scenes::Hopper, scenes::HopperOverThreeHoles>(scenes::HopperOverThreeHoles::grid(), false);
+  return e;
+}
+Evaluation& hopper_composed() {
+  static Evaluation e = make<scenes::Hopper, scenes::HopperOverThreeHoles>(scenes::HopperOverThreeHoles::grid(), true);
+  return e;
+}
+
+void constraints(benchmark::State& state, Evaluation& (*which)()) {
+  Evaluation& e = which();
+  for (auto _ : state) {
+    e.problem->constraints(e.x, e.g);
+    benchmark::DoNotOptimize(e.g.data());
+  }
+}
+void jacobian(benchmark::State& state, Evaluation& (*which)()) {
+  Evaluation& e = which();
+  for (auto _ : state) {
+    e.problem->jacobian_values(e.x, e.jacobian);
+    benchmark::DoNotOptimize(e.jacobian.data());
+  }
+}
+void hessian(benchmark::State& state, Evaluation& (*which)()) {
+  Evaluation& e = which();
+  for (auto _ : state) {
+    e.problem->hessian_values(e.x, 0.5, e.multipliers, e.hessian);
+    benchmark::DoNotOptimize(e.hessian.data());
+  }
+}
+
+void print_checksums(const char* name, Evaluation& e) {
+  e.problem->constraints(e.x, e.g);
+  e.problem->jacobian_values(e.x, e.jacobian);
+  e.problem->hessian_values(e.x, 0.5, e.multipliers, e.hessian);
+  std::printf("%s: n = %d, m = %d, Jacobian nonzeros %lld, Hessian entries %lld; sums of |values|: g %.15e, "
+              "Jacobian %.15e, Hessian %.15e\n",
+              name, e.problem->variable_count(), e.problem->constraint_count(),
+              static_cast<long long>(e.jacobian.size()), static_cast<long long>(e.hessian.size()),
+              e.g.cwiseAbs().sum(), e.jacobian.cwiseAbs().sum(), e.hessian.cwiseAbs().sum());
+}
+
+}  // namespace
+
+BENCHMARK_CAPTURE(constraints, plank_box_short_landing, &plank_box)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(constraints, plank_box_short_landing_composed, &plank_box_composed)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(jacobian, plank_box_short_landing, &plank_box)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(jacobian, plank_box_short_landing_composed, &plank_box_composed)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(hessian, plank_box_short_landing, &plank_box)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(hessian, plank_box_short_landing_composed, &plank_box_composed)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(constraints, hopper_over_three_holes, &hopper)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(constraints, hopper_over_three_holes_composed, &hopper_composed)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(jacobian, hopper_over_three_holes, &hopper)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(jacobian, hopper_over_three_holes_composed, &hopper_composed)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(hessian, hopper_over_three_holes, &hopper)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(hessian, hopper_over_three_holes_composed, &hopper_composed)->Unit(benchmark::kMicrosecond);
+
+int main(int argc, char** argv) {
+  print_checksums("plank-box short landing", plank_box());
+  print_checksums("plank-box short landing, composed kinematics", plank_box_composed());
+  print_checksums("hopper over three holes", hopper());
+  print_checksums("hopper over three holes, composed kinematics", hopper_composed());
+  benchmark::Initialize(&argc, argv);
+  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  return 0;
+}
