@@ -6,10 +6,11 @@
 // runs twice: as the library evaluates it by default and with FesdOptions::composed_kinematics
 // (the contact kinematics chained in by ad::compose).
 //
-// Each problem is evaluated at a fixed point inside its bounds (the derivative tests' interior_point,
-// seed 7) and with fixed multipliers (Eigen's Random after std::srand(11)), so every version of the code times the same arithmetic. Before
-// timing, the bench prints a checksum of each callback's values: a change that should not change
-// the numbers must keep them (to rounding).
+// Each problem is evaluated at a fixed point inside its bounds (the derivative tests'
+// interior_point, seed 7) and with fixed multipliers (Eigen's Random after std::srand(11)), so
+// every version of the code times the same arithmetic. Before timing, the bench prints a checksum
+// of each callback's values: a change that should not change the numbers must keep them (to
+// rounding).
 //
 //   OPENBLAS_NUM_THREADS=1 build/bench/fesd_callbacks [--benchmark_filter=...]
 #include "scenes/hopper_holes.hpp"

@@ -17,7 +17,6 @@
 
 #include <gtest/gtest.h>
 
-#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <iostream>
@@ -356,6 +355,7 @@ TEST(PlankBoxShortLanding, CoarseGridConvergesWithAFlatLandingAndALiftOff) {
   EXPECT_TRUE(simulated.front().impact());
   EXPECT_TRUE(simulated.front().mode_after[0].closed() && simulated.front().mode_after[1].closed());
   EXPECT_NEAR(simulated.front().t, events.front().t, 1e-6);
+  EXPECT_EQ(simulated.back().guards(), events.back().guards());
   EXPECT_NEAR(simulated.back().t, events.back().t, 1e-6);
   std::cout << "plank-box short landing: objective " << r.solution.objective << ", " << r.solution.ipopt_iterations
             << " Ipopt iterations, " << r.solution.seconds << " s; re-simulation distance " << resim.state_distance

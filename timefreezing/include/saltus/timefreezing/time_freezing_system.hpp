@@ -105,6 +105,8 @@ class TimeFreezingSystem {
   }
 
   const S& scene() const { return scene_; }
+  double auxiliary_acceleration() const { return a_n_; }
+  bool has_friction(int i) const { return planar_[i]; }
 
   /// Whether the contact kinematics (gaps, J_n, J_t: functions of q alone) are evaluated along the
   /// nq coordinates and chained into the caller's AD type (ad::compose) instead of at that type
@@ -118,15 +120,14 @@ class TimeFreezingSystem {
   bool composed_kinematics() const { return composed_kinematics_; }
 
   /// Per contact i, at offset i (2 nq + 1): gap_i(q) [m], J_n,i(q) (size nq), J_t,i(q) (size nq;
-  /// zero for a frictionless contact), by ad::compose (composed_kinematics()).
+  /// zero for a frictionless contact), evaluated along the nq coordinates and chained into T by
+  /// ad::compose whatever composed_kinematics() says (it is the path that flag selects).
   static constexpr int kinematics_stride = 2 * nq + 1;
   static constexpr int kinematics_size = nc > 0 ? nc * kinematics_stride : 1;
   template <class T>
   VecT<T, kinematics_size> contact_kinematics(const VecT<T, nq>& q) const {
-    return ad::compose(q, [this]<class R>(const VecT<R, nq>& qr) { return kinematics_direct<R>(qr); });
+    return ad::compose(q, [this]<class R>(const VecT<R, nq>& qr) { return this->template kinematics_direct<R>(qr); });
   }
-  double auxiliary_acceleration() const { return a_n_; }
-  bool has_friction(int i) const { return planar_[i]; }
 
   /// c(q, v) (size 3 nc): per contact (gap, J_n v, J_t v); the third is 1 for a frictionless one.
   template <class T>
@@ -243,28 +244,13 @@ class TimeFreezingSystem {
     if constexpr (nu > 0) f += scene_input_matrix<S, T>(scene_, q) * u;
     f *= theta;
     if constexpr (nc > 0) {
-      if (composed_kinematics_) {
-        const VecT<T, kinematics_size> k = contact_kinematics<T>(q);
-        for (int i = 0; i < nc; ++i) {
-          const T plus = T(closing[i] * alpha[3 * i + 2]);
-          const T minus = T(closing[i] * T(1.0 - alpha[3 * i + 2]));
-          f += T(a_n_ * T(plus + minus)) * k.template segment<nq>(i * kinematics_stride + 1);
-          if (planar_[i]) f += T(a_n_ * mu_[i] * T(minus - plus)) * k.template segment<nq>(i * kinematics_stride + 1 + nq);
-        }
-        return f;
-      }
-      using D = ad::Dual<T, nq>;
-      VecT<D, nq> qd;
-      for (int k = 0; k < nq; ++k) qd[k] = ad::seed<nq>(q[k], k);
+      // The direct evaluation does the same arithmetic as the scene's gap differentiated in place.
+      const VecT<T, kinematics_size> k = composed_kinematics_ ? contact_kinematics<T>(q) : kinematics_direct<T>(q);
       for (int i = 0; i < nc; ++i) {
         const T plus = T(closing[i] * alpha[3 * i + 2]);
         const T minus = T(closing[i] * T(1.0 - alpha[3 * i + 2]));
-        const VecT<T, nq> jn = scene_.template gap<D>(i, qd).derivatives();
-        f += T(a_n_ * T(plus + minus)) * jn;
-        if (planar_[i]) {
-          const VecT<T, nq> jt = scene_.template tangent_position<D>(i, qd)[0].derivatives();
-          f += T(a_n_ * mu_[i] * T(minus - plus)) * jt;
-        }
+        f += T(a_n_ * T(plus + minus)) * k.template segment<nq>(i * kinematics_stride + 1);
+        if (planar_[i]) f += T(a_n_ * mu_[i] * T(minus - plus)) * k.template segment<nq>(i * kinematics_stride + 1 + nq);
       }
     }
     return f;
