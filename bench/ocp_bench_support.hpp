@@ -110,13 +110,18 @@ inline std::optional<OcpBenchArgs> parse_ocp_bench_args(int argc, char** argv, c
   const auto usage = [program] {
     std::fprintf(stderr,
                  "usage: %s [--json] [--only NAME] [--max-steps K] [--lift] [--integrated-gap] [--velocity-cross] [--composed-kinematics] "
-                 "[--elastic] [--gap-scale K] [--polish-below S] [--polish-max-iter K] [--max-iter K] [--ipopt NAME=VALUE]...\n",
+                 "[--elastic] [--gap-scale K] [--polish-below S] [--polish-max-iter K] [--max-iter K] [--ipopt NAME=VALUE]...\n"
+                 "  (NAME non-empty; --max-steps 1..1000; --max-iter, --polish-max-iter 1..100000; --gap-scale in (0, 1e6];\n"
+                 "   --polish-below in [0, 1])\n",
                  program);
     return std::optional<OcpBenchArgs>();
   };
   for (int i = 1; i < argc; ++i) {
     if (std::strcmp(argv[i], "--json") == 0) a.json = true;
-    else if (std::strcmp(argv[i], "--only") == 0 && i + 1 < argc) a.only = argv[++i];
+    else if (std::strcmp(argv[i], "--only") == 0 && i + 1 < argc) {
+      a.only = argv[++i];
+      if (a.only.empty()) return usage();  // an empty name would run every variant
+    }
     else if (std::strcmp(argv[i], "--lift") == 0) a.lift = true;
     else if (std::strcmp(argv[i], "--elastic") == 0) a.elastic = true;
     else if (std::strcmp(argv[i], "--integrated-gap") == 0) a.integrated_gap = true;

@@ -301,7 +301,7 @@ TEST(PlankBoxFlatLanding, OptimalReferenceLandsFlatAndAgreesWithTheEventDrivenSi
 // The path to this optimum depends on rounding: with FesdOptions::composed_kinematics (the same
 // derivatives, rounded differently) the first step needs 296 iterations and is cut at the 220 of
 // the solver's limit; with 400 the homotopy converges (1,049 iterations) to another optimum
-// (objective 52.0 against 61.5) that sticks at 0.564 and lifts off at 0.7 from rest, and absorbs
+// (objective 52.0 against 61.5) that sticks at t = 0.564 s and lifts off at t = 0.7 s from rest, and absorbs
 // its landing impact into a flowing element (re-simulation 0.069; bench/README.md, "FESD callbacks").
 TEST(PlankBoxShortLanding, CoarseGridConvergesWithAFlatLandingAndALiftOff) {
 #if defined(SALTUS_TESTS_UNDER_SANITIZERS)

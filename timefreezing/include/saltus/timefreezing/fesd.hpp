@@ -213,7 +213,7 @@ struct FesdOptions {
   /// default and on in the plank-box flagship's grid.
   bool integrated_gap = false;
   /// The contact kinematics of the stage fields chained in by ad::compose
-  /// (TimeFreezingSystem::set_composed_kinematics: the Hessian 1.3-2.8x cheaper, the same
+  /// (TimeFreezingSystem::set_composed_kinematics: the Hessian 1.3-2.8x cheaper (hopper to plank-box), the same
   /// derivatives up to rounding; off by default because the flagship homotopies' paths depend on
   /// that rounding, measured there).
   bool composed_kinematics = false;

@@ -794,10 +794,10 @@ void add_absorbed_impacts(ImportedReference<S>& ref, const HybridTrajectory<S>& 
 /// absorbed into a flowing element: no frozen run, so recover_reference's samples pass through it
 /// as flow) becomes an event of the reference: x- is the last sample at the event's time (the
 /// element's start), x+ the trajectory's x+ at x_plus_time, inserted as a sample of the next
-/// segment (with the input of the sample after it, the element's interval) unless it is the next
-/// sample itself. Without it the re-simulation's impact had no partner in the reference, and its
+/// segment (with the input of the sample after it, the element's interval); when x+ falls on the
+/// next sample's time, that sample (the element's end) starts the next segment as it is. Without it the re-simulation's impact had no partner in the reference, and its
 /// samples around the landing were compared across the jump (measured: the plank-box short
-/// landing's optimum of 2026-12-01, 0.69 in the box's vertical velocity at t = 0.3).
+/// landing's optimum under FesdOptions::composed_kinematics, measured 2026-12-02: 0.69 in the box's vertical velocity at t = 0.3).
 template <Scene S>
 void align_impact_samples(ImportedReference<S>& ref, const HybridTrajectory<S>& traj) {
   add_absorbed_impacts(ref, traj);

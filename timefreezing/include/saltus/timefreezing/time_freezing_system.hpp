@@ -112,9 +112,10 @@ class TimeFreezingSystem {
   /// nq coordinates and chained into the caller's AD type (ad::compose) instead of at that type
   /// (default: false). The same values and derivatives up to rounding, and cheaper where the
   /// caller differentiates along many more than nq directions: the FESD Hessian of the plank-box
-  /// 2.8x, of the hopper 1.27x cheaper (one run, bench/README.md, "FESD callbacks"). Off by default
+  /// 2.8x, of the hopper 1.3-1.8x cheaper (runs on a loaded machine, bench/README.md, "FESD
+  /// callbacks"). Off by default
   /// because the flagship homotopies' paths are sensitive to rounding: with it, the plank-box
-  /// flagship stalled at complementarity 4.5e-3 where it converges without (measured). Set
+  /// flagship stalled at sigma = complementarity = 4.5e-3 where it converges without (measured). Set
   /// through FesdOptions::composed_kinematics.
   void set_composed_kinematics(bool on) { composed_kinematics_ = on; }
   bool composed_kinematics() const { return composed_kinematics_; }
