@@ -51,22 +51,16 @@ Evaluation make(timefreezing::FesdOptions grid, bool composed) {
   return e;
 }
 
-Evaluation& plank_box() {
-  static Evaluation e = make<scenes::PlankBox, scenes::PlankBoxShortLanding>(scenes::PlankBoxShortLanding::grid(), false);
+// One problem per scene and variant, built on first use.
+template <class Scene, class Ocp, bool composed>
+Evaluation& cached() {
+  static Evaluation e = make<Scene, Ocp>(Ocp::grid(), composed);
   return e;
 }
-Evaluation& plank_box_composed() {
-  static Evaluation e = make<scenes::PlankBox, scenes::PlankBoxShortLanding>(scenes::PlankBoxShortLanding::grid(), true);
-  return e;
-}
-Evaluation& hopper() {
-  static Evaluation e = make<scenes::Hopper, scenes::HopperOverThreeHoles>(scenes::HopperOverThreeHoles::grid(), false);
-  return e;
-}
-Evaluation& hopper_composed() {
-  static Evaluation e = make<scenes::Hopper, scenes::HopperOverThreeHoles>(scenes::HopperOverThreeHoles::grid(), true);
-  return e;
-}
+Evaluation& (*const plank_box)() = &cached<scenes::PlankBox, scenes::PlankBoxShortLanding, false>;
+Evaluation& (*const plank_box_composed)() = &cached<scenes::PlankBox, scenes::PlankBoxShortLanding, true>;
+Evaluation& (*const hopper)() = &cached<scenes::Hopper, scenes::HopperOverThreeHoles, false>;
+Evaluation& (*const hopper_composed)() = &cached<scenes::Hopper, scenes::HopperOverThreeHoles, true>;
 
 void constraints(benchmark::State& state, Evaluation& (*which)()) {
   Evaluation& e = which();
@@ -103,18 +97,18 @@ void print_checksums(const char* name, Evaluation& e) {
 
 }  // namespace
 
-BENCHMARK_CAPTURE(constraints, plank_box_short_landing, &plank_box)->Unit(benchmark::kMicrosecond);
-BENCHMARK_CAPTURE(constraints, plank_box_short_landing_composed, &plank_box_composed)->Unit(benchmark::kMicrosecond);
-BENCHMARK_CAPTURE(jacobian, plank_box_short_landing, &plank_box)->Unit(benchmark::kMicrosecond);
-BENCHMARK_CAPTURE(jacobian, plank_box_short_landing_composed, &plank_box_composed)->Unit(benchmark::kMicrosecond);
-BENCHMARK_CAPTURE(hessian, plank_box_short_landing, &plank_box)->Unit(benchmark::kMicrosecond);
-BENCHMARK_CAPTURE(hessian, plank_box_short_landing_composed, &plank_box_composed)->Unit(benchmark::kMicrosecond);
-BENCHMARK_CAPTURE(constraints, hopper_over_three_holes, &hopper)->Unit(benchmark::kMicrosecond);
-BENCHMARK_CAPTURE(constraints, hopper_over_three_holes_composed, &hopper_composed)->Unit(benchmark::kMicrosecond);
-BENCHMARK_CAPTURE(jacobian, hopper_over_three_holes, &hopper)->Unit(benchmark::kMicrosecond);
-BENCHMARK_CAPTURE(jacobian, hopper_over_three_holes_composed, &hopper_composed)->Unit(benchmark::kMicrosecond);
-BENCHMARK_CAPTURE(hessian, hopper_over_three_holes, &hopper)->Unit(benchmark::kMicrosecond);
-BENCHMARK_CAPTURE(hessian, hopper_over_three_holes_composed, &hopper_composed)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(constraints, plank_box_short_landing, plank_box)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(constraints, plank_box_short_landing_composed, plank_box_composed)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(jacobian, plank_box_short_landing, plank_box)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(jacobian, plank_box_short_landing_composed, plank_box_composed)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(hessian, plank_box_short_landing, plank_box)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(hessian, plank_box_short_landing_composed, plank_box_composed)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(constraints, hopper_over_three_holes, hopper)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(constraints, hopper_over_three_holes_composed, hopper_composed)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(jacobian, hopper_over_three_holes, hopper)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(jacobian, hopper_over_three_holes_composed, hopper_composed)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(hessian, hopper_over_three_holes, hopper)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(hessian, hopper_over_three_holes_composed, hopper_composed)->Unit(benchmark::kMicrosecond);
 
 int main(int argc, char** argv) {
   print_checksums("plank-box short landing", plank_box());
