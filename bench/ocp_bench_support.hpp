@@ -2,7 +2,8 @@
 // second homotopy of the variants that change the relaxation on the way ("smoothing, then ...").
 //
 //   NAME [--json] [--only VARIANT] [--max-steps K] [--lift] [--integrated-gap] [--velocity-cross]
-//        [--elastic] [--gap-scale K] [--polish-below S] [--polish-max-iter K] [--ipopt OPTION=VALUE]...
+//        [--elastic] [--gap-scale K] [--warm-start primal|primal-dual] [--polish-below S]
+//        [--polish-max-iter K] [--ipopt OPTION=VALUE]...
 //
 // --max-steps K overrides the homotopy's step budget; --lift solves every variant with the lifted
 // step functions (FesdOptions::lift_step_functions); --integrated-gap with the gap switching
@@ -12,7 +13,9 @@
 // inequality-relaxed pairs (MpccSolverOptions::elastic_infinity) for every Scholtes or Smoothing
 // solve (a Penalty variant or stage runs without it: it has no relaxation rows to hold the slack);
 // --gap-scale K sets the gaps' switching-function scale K_gap in (0, 1e6] [1/m]
-// (FesdOptions::switching_scale[0]); --polish-below and --polish-max-iter set
+// (FesdOptions::switching_scale[0]); --warm-start says what every solve after the first starts
+// from (MpccSolverOptions::warm_start: the previous primal-dual solution, the default, or its x
+// alone); --polish-below and --polish-max-iter set
 // MpccSolverOptions::polish_below and polish_max_iter; --ipopt passes an Ipopt option to every solve
 // (an integer or a number when VALUE parses as one, else a string), e.g. `--ipopt
 // mumps_pivtol=1e-4 --ipopt print_timing_statistics=yes --ipopt output_file=ip.log --ipopt
@@ -43,6 +46,7 @@ struct OcpBenchArgs {
   bool integrated_gap = false;  ///< FesdOptions::integrated_gap for every variant
   bool velocity_cross = false;  ///< FesdOptions::velocity_switch_detection for every variant
   bool composed_kinematics = false;  ///< FesdOptions::composed_kinematics for every variant
+  int warm_start = -1;  ///< 1 primal-dual, 0 primal only: MpccSolverOptions::warm_start; -1: the variant's
   double polish_below = -1.0;  ///< >= 0: MpccSolverOptions::polish_below
   int polish_max_iter = -1;    ///< > 0: MpccSolverOptions::polish_max_iter
   int max_iter = -1;           ///< > 0: MpccSolverOptions::max_iter (Ipopt iterations per homotopy step)
@@ -53,6 +57,7 @@ struct OcpBenchArgs {
   void apply(timefreezing::MpccSolverOptions& s) const {
     if (max_steps > 0) s.max_homotopy_steps = max_steps;
     if (polish_below >= 0.0) s.polish_below = polish_below;
+    if (warm_start >= 0) s.warm_start = warm_start == 1;
     // Penalty has no relaxation rows to hold the slack: its variants run without it.
     if (elastic && s.relaxation != timefreezing::MpccSolverOptions::Relaxation::Penalty) s.elastic_infinity = true;
     if (polish_max_iter > 0) s.polish_max_iter = polish_max_iter;
@@ -110,7 +115,7 @@ inline std::optional<OcpBenchArgs> parse_ocp_bench_args(int argc, char** argv, c
   const auto usage = [program] {
     std::fprintf(stderr,
                  "usage: %s [--json] [--only NAME] [--max-steps K] [--lift] [--integrated-gap] [--velocity-cross] [--composed-kinematics] "
-                 "[--elastic] [--gap-scale K] [--polish-below S] [--polish-max-iter K] [--max-iter K] [--ipopt NAME=VALUE]...\n"
+                 "[--elastic] [--gap-scale K] [--warm-start primal|primal-dual] [--polish-below S] [--polish-max-iter K] [--max-iter K] [--ipopt NAME=VALUE]...\n"
                  "  (NAME non-empty; --max-steps 1..1000; --max-iter, --polish-max-iter 1..100000; --gap-scale in (0, 1e6];\n"
                  "   --polish-below in [0, 1])\n",
                  program);
@@ -141,6 +146,11 @@ inline std::optional<OcpBenchArgs> parse_ocp_bench_args(int argc, char** argv, c
       const double k = std::strtod(text, &end);
       if (end == text || *end != '\0' || !(k > 0.0 && k <= 1e6)) return usage();
       a.gap_scale = k;
+    } else if (std::strcmp(argv[i], "--warm-start") == 0 && i + 1 < argc) {
+      const std::string kind = argv[++i];
+      if (kind == "primal") a.warm_start = 0;
+      else if (kind == "primal-dual") a.warm_start = 1;
+      else return usage();
     } else if (std::strcmp(argv[i], "--polish-max-iter") == 0 && i + 1 < argc) {
       if (!integer_in(argv[++i], 1, 100000, a.polish_max_iter)) return usage();
     } else if (std::strcmp(argv[i], "--max-iter") == 0 && i + 1 < argc) {

@@ -216,7 +216,8 @@ std::string format_polish(const MpccHomotopyStep& s, const std::string& label, i
                 eq_rows, ineq_rows, s.complementarity, s.objective, s.constraint_violation, s.ipopt_iterations,
                 s.ipopt_status.c_str(), s.seconds);
   // The note can be long (a branch's reason to be infeasible names variables): appended as is.
-  return std::string(line) + (s.note.empty() ? "" : "  failed: " + s.note) + "\n";
+  return std::string(line) + (s.note.empty() ? "" : "  failed: " + s.note) +
+         (!s.ipopt_succeeded && !s.worst_violation.empty() ? "  worst: " + s.worst_violation : "") + "\n";
 }
 
 void require_finite(const Eigen::VectorXd& v, const char* what, const Mpcc& problem, bool is_x) {
