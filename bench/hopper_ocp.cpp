@@ -2,8 +2,9 @@
 // Section 6), under the solver and formulation variants the issue asks to measure one by one.
 //
 //   hopper_ocp [--one-hole] [--json] [--only NAME] [--max-steps K] [--lift] [--integrated-gap]
-//              [--velocity-cross] [--composed-kinematics] [--elastic] [--gap-scale K] [--polish-below S]
-//              [--polish-max-iter K] [--max-iter K] [--ipopt NAME=VALUE]...
+//              [--velocity-cross] [--composed-kinematics] [--elastic] [--gap-scale K]
+//              [--warm-start primal|primal-dual] [--polish-below S] [--polish-max-iter K] [--max-iter K]
+//              [--ipopt NAME=VALUE]...
 //
 // --one-hole runs the variants on scenes::HopperOverOneHole instead: T = 1 s over the first hole,
 // N = 8 of the flagship's 20 intervals, which meets the same wall (bench/README.md, "The one-hole

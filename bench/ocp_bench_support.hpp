@@ -2,8 +2,8 @@
 // second homotopy of the variants that change the relaxation on the way ("smoothing, then ...").
 //
 //   NAME [--json] [--only VARIANT] [--max-steps K] [--lift] [--integrated-gap] [--velocity-cross]
-//        [--elastic] [--gap-scale K] [--warm-start primal|primal-dual] [--polish-below S]
-//        [--polish-max-iter K] [--ipopt OPTION=VALUE]...
+//        [--composed-kinematics] [--elastic] [--gap-scale K] [--warm-start primal|primal-dual]
+//        [--polish-below S] [--polish-max-iter K] [--max-iter K] [--ipopt OPTION=VALUE]...
 //
 // --max-steps K overrides the homotopy's step budget; --lift solves every variant with the lifted
 // step functions (FesdOptions::lift_step_functions); --integrated-gap with the gap switching
@@ -13,13 +13,13 @@
 // inequality-relaxed pairs (MpccSolverOptions::elastic_infinity) for every Scholtes or Smoothing
 // solve (a Penalty variant or stage runs without it: it has no relaxation rows to hold the slack);
 // --gap-scale K sets the gaps' switching-function scale K_gap in (0, 1e6] [1/m]
-// (FesdOptions::switching_scale[0]); --warm-start says what every solve after the first starts
-// from (MpccSolverOptions::warm_start: the previous primal-dual solution, the default, or its x
-// alone); --polish-below and --polish-max-iter set
-// MpccSolverOptions::polish_below and polish_max_iter; --ipopt passes an Ipopt option to every solve
-// (an integer or a number when VALUE parses as one, else a string), e.g. `--ipopt
-// mumps_pivtol=1e-4 --ipopt print_timing_statistics=yes --ipopt output_file=ip.log --ipopt
-// file_print_level=5`.
+// (FesdOptions::switching_scale[0]); --warm-start says what every solve after the first
+// (continuation stages, homotopy steps, retries, polishes) starts from (MpccSolverOptions::
+// warm_start: the previous primal-dual solution, the default, or its x alone); --polish-below and
+// --polish-max-iter set MpccSolverOptions::polish_below and polish_max_iter; --ipopt passes an
+// Ipopt option to every solve (an integer or a number when VALUE parses as one, else a string),
+// e.g. `--ipopt mumps_pivtol=1e-4 --ipopt print_timing_statistics=yes --ipopt output_file=ip.log
+// --ipopt file_print_level=5`.
 #pragma once
 
 #include <saltus/timefreezing/fesd.hpp>
@@ -117,7 +117,7 @@ inline std::optional<OcpBenchArgs> parse_ocp_bench_args(int argc, char** argv, c
                  "usage: %s [--json] [--only NAME] [--max-steps K] [--lift] [--integrated-gap] [--velocity-cross] [--composed-kinematics] "
                  "[--elastic] [--gap-scale K] [--warm-start primal|primal-dual] [--polish-below S] [--polish-max-iter K] [--max-iter K] [--ipopt NAME=VALUE]...\n"
                  "  (NAME non-empty; --max-steps 1..1000; --max-iter, --polish-max-iter 1..100000; --gap-scale in (0, 1e6];\n"
-                 "   --polish-below in [0, 1])\n",
+                 "   --warm-start default primal-dual; --polish-below in [0, 1])\n",
                  program);
     return std::optional<OcpBenchArgs>();
   };

@@ -2,8 +2,8 @@
 // formulation variants measured one by one (bench/README.md, "Plank-box flat landing").
 //
 //   plank_box_ocp [--short] [--json] [--only NAME] [--max-steps K] [--lift] [--integrated-gap] [--velocity-cross]
-//                 [--composed-kinematics] [--elastic] [--gap-scale K] [--polish-below S] [--polish-max-iter K]
-//                 [--max-iter K] [--ipopt NAME=VALUE]...
+//                 [--composed-kinematics] [--elastic] [--gap-scale K] [--warm-start primal|primal-dual]
+//                 [--polish-below S] [--polish-max-iter K] [--max-iter K] [--ipopt NAME=VALUE]...
 //
 // --short runs the variants on scenes::PlankBoxShortLanding instead (the coarse-grid test's task:
 // T = 1 s, N = 10, target 0.55 m, with its own solver limits).

@@ -1099,6 +1099,18 @@ TEST(MpccSolver, FailedPolishKeepsTheHomotopyGoing) {
     EXPECT_NEAR(s.objective, 1.0002, 1e-9);
     EXPECT_EQ(count_lines(progress.str()), static_cast<int>(s.steps.size()));
     EXPECT_NE(progress.str().find("failed: "), std::string::npos);
+    // A polish line names its worst row exactly when its point violates the constraints by more
+    // than polish_feasibility_tolerance (lines and steps are in the same order).
+    std::istringstream lines(progress.str());
+    std::string line;
+    int infeasible_polishes = 0;
+    for (std::size_t k = 0; k < s.steps.size() && std::getline(lines, line); ++k) {
+      if (!s.steps[k].polish) continue;
+      const bool infeasible = s.steps[k].constraint_violation > options.polish_feasibility_tolerance;
+      infeasible_polishes += infeasible ? 1 : 0;
+      EXPECT_EQ(line.find("worst: ") != std::string::npos, infeasible && !s.steps[k].worst_violation.empty()) << line;
+    }
+    if (!by_bound) EXPECT_GE(infeasible_polishes, 1);  // Ipopt's end point of an infeasible branch
     int total = 0;
     for (const MpccHomotopyStep& st : s.steps) total += st.ipopt_iterations;
     EXPECT_EQ(total, s.ipopt_iterations);

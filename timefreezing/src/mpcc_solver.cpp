@@ -207,7 +207,7 @@ std::string format_step(const MpccHomotopyStep& s, bool penalty, bool elastic) {
 }
 
 std::string format_polish(const MpccHomotopyStep& s, const std::string& label, int fixed, int eq_rows,
-                          int ineq_rows) {
+                          int ineq_rows, bool infeasible) {
   char line[400];
   std::snprintf(line, sizeof line,
                 "mpcc polish %3d  attempt %d [%s]  G=0 %d H=0 %d biactive %d trend %d (fixed %d, rows %d =, %d >=)  "
@@ -216,8 +216,9 @@ std::string format_polish(const MpccHomotopyStep& s, const std::string& label, i
                 eq_rows, ineq_rows, s.complementarity, s.objective, s.constraint_violation, s.ipopt_iterations,
                 s.ipopt_status.c_str(), s.seconds);
   // The note can be long (a branch's reason to be infeasible names variables): appended as is.
+  // The worst row only where it says something: not for a polish refused for its objective alone.
   return std::string(line) + (s.note.empty() ? "" : "  failed: " + s.note) +
-         (!s.ipopt_succeeded && !s.worst_violation.empty() ? "  worst: " + s.worst_violation : "") + "\n";
+         (infeasible && !s.worst_violation.empty() ? "  worst: " + s.worst_violation : "") + "\n";
 }
 
 void require_finite(const Eigen::VectorXd& v, const char* what, const Mpcc& problem, bool is_x) {
@@ -362,7 +363,8 @@ MpccSolution solve_from(const Mpcc& problem, const MpccStart& start, bool with_m
     solution.steps.push_back(step);
     if (options.progress)
       *options.progress << format_polish(step, label, branch->fixed_variable_count(), branch->equality_row_count(),
-                                         branch->inequality_row_count())
+                                         branch->inequality_row_count(),
+                                         step.constraint_violation > options.polish_feasibility_tolerance)
                         << std::flush;
     if (!step.ipopt_succeeded) return false;
     polished = Iterate{branch->result_x(), branch->result_lambda(), branch->result_z_lower(),

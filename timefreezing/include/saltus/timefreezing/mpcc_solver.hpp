@@ -286,8 +286,11 @@ struct MpccSolverOptions {
   /// One line per Ipopt solve (homotopy step or retry) when not null: step, sigma (or rho),
   /// complementarity residual, objective, constraint violation, Ipopt iterations and status,
   /// seconds, then the elastic slack ("slack ...", with elastic_infinity) and, for a failed step,
-  /// the row its iterate violates most ("worst: ...", MpccHomotopyStep::worst_violation); per polish attempt also which attempt ("attempt 0 [first guess]", "attempt 1
-  /// [biactive flipped (3)]", "attempt 2 [flipped <pair name>]"), the branch, and why it failed. Not owned; must outlive the call.
+  /// the row its iterate violates most ("worst: ...", MpccHomotopyStep::worst_violation); per
+  /// polish attempt also which attempt ("attempt 0 [first guess]", "attempt 1 [biactive flipped
+  /// (3)]", "attempt 2 [flipped <pair name>]"), the branch, why it failed and, when its violation
+  /// exceeds polish_feasibility_tolerance, its worst row ("worst: ..."). Not owned; must outlive
+  /// the call.
   std::ostream* progress = nullptr;
 
   /// Throws InvalidArgument naming the first field out of its domain.
@@ -333,7 +336,8 @@ struct MpccHomotopyStep {
   /// (Mpcc::variable_name, constraint_name, the pair's name; FesdMpcc's rows read e.g.
   /// "stage dynamics[k,j,r][i]": control interval k, finite element j, stage r, state component i,
   /// all from 0); set for every step, also a converged one whose violation is at rounding level;
-  /// "" only when nothing is violated at all. The progress line prints it for failed steps.
+  /// "" only when nothing is violated at all. The progress line prints it for failed steps and
+  /// for polish attempts whose violation exceeds polish_feasibility_tolerance.
   std::string worst_violation;
   int ipopt_iterations = 0;
   std::string ipopt_status;  ///< Ipopt's ApplicationReturnStatus by name, e.g. "Solve_Succeeded"
