@@ -2,7 +2,8 @@
 // second homotopy of the variants that change the relaxation on the way ("smoothing, then ...").
 //
 //   NAME [--json] [--only VARIANT] [--max-steps K] [--lift] [--integrated-gap] [--velocity-cross]
-//        [--composed-kinematics] [--elastic] [--gap-scale K] [--warm-start primal|primal-dual]
+//        [--composed-kinematics] [--elastic] [--gap-scale K] [--contact-side W]
+//        [--warm-start primal|primal-dual] [--kappa K]
 //        [--polish-below S] [--polish-max-iter K] [--max-iter K] [--ipopt OPTION=VALUE]...
 //
 // --max-steps K overrides the homotopy's step budget; --lift solves every variant with the lifted
@@ -13,7 +14,10 @@
 // inequality-relaxed pairs (MpccSolverOptions::elastic_infinity) for every Scholtes or Smoothing
 // solve (a Penalty variant or stage runs without it: it has no relaxation rows to hold the slack);
 // --gap-scale K sets the gaps' switching-function scale K_gap in (0, 1e6] [1/m]
-// (FesdOptions::switching_scale[0]); --warm-start says what every solve after the first
+// (FesdOptions::switching_scale[0]); --contact-side W sets the contact-side selection's weight
+// rho_c in [0, 1e3] (FesdOptions::contact_side_weight; 0 switches it off) for every variant;
+// --kappa K sets the homotopy's decrease factor in (0, 1) (MpccSolverOptions::kappa);
+// --warm-start says what every solve after the first
 // (continuation stages, homotopy steps, retries, polishes) starts from (MpccSolverOptions::
 // warm_start: the previous primal-dual solution, the default, or its x alone); --polish-below and
 // --polish-max-iter set MpccSolverOptions::polish_below and polish_max_iter; --ipopt passes an
@@ -43,6 +47,7 @@ struct OcpBenchArgs {
   bool lift = false;  ///< FesdOptions::lift_step_functions for every variant
   bool elastic = false;  ///< MpccSolverOptions::elastic_infinity for every Scholtes or Smoothing solve
   double gap_scale = 0.0;  ///< > 0: FesdOptions::switching_scale[0] (K_gap) for every variant
+  double contact_side = -1.0;  ///< >= 0: FesdOptions::contact_side_weight (rho_c) for every variant
   bool integrated_gap = false;  ///< FesdOptions::integrated_gap for every variant
   bool velocity_cross = false;  ///< FesdOptions::velocity_switch_detection for every variant
   bool composed_kinematics = false;  ///< FesdOptions::composed_kinematics for every variant
@@ -50,10 +55,11 @@ struct OcpBenchArgs {
   double polish_below = -1.0;  ///< >= 0: MpccSolverOptions::polish_below
   int polish_max_iter = -1;    ///< > 0: MpccSolverOptions::polish_max_iter
   int max_iter = -1;           ///< > 0: MpccSolverOptions::max_iter (Ipopt iterations per homotopy step)
+  double kappa = -1.0;         ///< in (0, 1): MpccSolverOptions::kappa
   std::vector<timefreezing::IpoptOption> ipopt_options;
 
-  /// The command line's share of a variant's solver options: the step budget, the polish and the
-  /// Ipopt options.
+  /// The command line's share of a variant's solver options: the step budget, kappa, the warm
+  /// start, the polish and the Ipopt options.
   void apply(timefreezing::MpccSolverOptions& s) const {
     if (max_steps > 0) s.max_homotopy_steps = max_steps;
     if (polish_below >= 0.0) s.polish_below = polish_below;
@@ -62,16 +68,18 @@ struct OcpBenchArgs {
     if (elastic && s.relaxation != timefreezing::MpccSolverOptions::Relaxation::Penalty) s.elastic_infinity = true;
     if (polish_max_iter > 0) s.polish_max_iter = polish_max_iter;
     if (max_iter > 0) s.max_iter = max_iter;
+    if (kappa > 0.0) s.kappa = kappa;
     s.ipopt_options.insert(s.ipopt_options.end(), ipopt_options.begin(), ipopt_options.end());
   }
   /// The command line's share of a variant's grid options: the lifted step functions, the
-  /// integrated gap, the velocities' switch detection, the gap scale.
+  /// integrated gap, the velocities' switch detection, the gap scale, the contact-side weight.
   void apply(timefreezing::FesdOptions& grid) const {
     if (lift) grid.lift_step_functions = true;
     if (integrated_gap) grid.integrated_gap = true;
     if (velocity_cross) grid.velocity_switch_detection = true;
     if (composed_kinematics) grid.composed_kinematics = true;
     if (gap_scale > 0.0) grid.switching_scale[0] = gap_scale;
+    if (contact_side >= 0.0) grid.contact_side_weight = contact_side;
   }
 };
 
@@ -146,6 +154,18 @@ inline std::optional<OcpBenchArgs> parse_ocp_bench_args(int argc, char** argv, c
       const double k = std::strtod(text, &end);
       if (end == text || *end != '\0' || !(k > 0.0 && k <= 1e6)) return usage();
       a.gap_scale = k;
+    } else if (std::strcmp(argv[i], "--contact-side") == 0 && i + 1 < argc) {
+      const char* text = argv[++i];
+      char* end = nullptr;
+      const double w = std::strtod(text, &end);
+      if (end == text || *end != '\0' || !(w >= 0.0 && w <= 1e3)) return usage();
+      a.contact_side = w;
+    } else if (std::strcmp(argv[i], "--kappa") == 0 && i + 1 < argc) {
+      const char* text = argv[++i];
+      char* end = nullptr;
+      const double k = std::strtod(text, &end);
+      if (end == text || *end != '\0' || !(k > 0.0 && k < 1.0)) return usage();
+      a.kappa = k;
     } else if (std::strcmp(argv[i], "--warm-start") == 0 && i + 1 < argc) {
       const std::string kind = argv[++i];
       if (kind == "primal") a.warm_start = 0;

@@ -2,7 +2,8 @@
 // formulation variants measured one by one (bench/README.md, "Plank-box flat landing").
 //
 //   plank_box_ocp [--short] [--json] [--only NAME] [--max-steps K] [--lift] [--integrated-gap] [--velocity-cross]
-//                 [--composed-kinematics] [--elastic] [--gap-scale K] [--warm-start primal|primal-dual]
+//                 [--composed-kinematics] [--elastic] [--gap-scale K] [--contact-side W]
+//                 [--warm-start primal|primal-dual] [--kappa K]
 //                 [--polish-below S] [--polish-max-iter K] [--max-iter K] [--ipopt NAME=VALUE]...
 //
 // --short runs the variants on scenes::PlankBoxShortLanding instead (the coarse-grid test's task:
