@@ -10,17 +10,19 @@
 // N = 8 of the flagship's 20 intervals, which meets the same wall (bench/README.md, "The one-hole
 // test bed"); hop-guess (a three-hop guess) is skipped there, and `--one-hole --only hop-guess` is
 // refused. On --one-hole every variant starts from that bed's own settings, which converge there
-// (HopperOverOneHole: the contact-side selection 1e-2, primal-only warm starts, 11 steps); the
-// one-hole measurements dated before 2026-12-02 ran with the flagship's, which are
-// `--contact-side 0 --warm-start primal-dual --max-steps 10` now. The other flags:
-// ocp_bench_support.hpp.
+// (HopperOverOneHole: the contact-side selection 1e-2, so `side` is `default` there, primal-only
+// warm starts, 11 steps; the two-phase variants' second phase keeps its own budget and weight); the
+// one-hole measurements before bench/README.md's "The one-hole bed converges" ran with the
+// flagship's, which are `--contact-side 0 --warm-start primal-dual --max-steps 10` now. The
+// other flags: ocp_bench_support.hpp.
 // --max-steps K overrides the homotopy's step budget (10; --one-hole: 11); --ipopt passes an Ipopt option to every
 // solve (ocp_bench_support.hpp; the measurements of bench/README.md's hopper section use both).
 //
 // Every variant but hop-guess starts from the paper's initialisation (the start state at every stage point,
 // zero torques; FesdMpcc::initial_point), on the paper's grid (N = 20, 3 elements, n_s = 2; N = 8
 // with --one-hole), with
-// sigma_0 = 1, kappa = 0.1, 10 steps, 1500 Ipopt iterations per step, Ipopt tol 1e-8; one
+// sigma_0 = 1, kappa = 0.1, 10 steps (--one-hole: 11, primal-only starts, rho_c = 1e-2), 1500 Ipopt
+// iterations per step, Ipopt tol 1e-8; one
 // progress line per Ipopt solve on stderr. Columns, per variant:
 //   conv          the homotopy converged (complementarity <= 1e-9 at a successful step)
 //   steps         Ipopt solves run (continuation stages, homotopy steps, retries, polish attempts)

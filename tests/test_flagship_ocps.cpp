@@ -26,7 +26,6 @@
 #include <numbers>
 #include <sstream>
 #include <string>
-#include <utility>
 #include <vector>
 
 namespace saltus::scenes {
@@ -161,20 +160,21 @@ TEST(HopperOverOneHole, TargetGridAndRowsAreTheShortTask) {
   EXPECT_EQ(terminal_rows, 4);
 }
 
-// The hopper's coarse grid the issue asks for: the one-hole bed (scenes::HopperOverOneHole, T = 1 s,
-// N = 8, over the first hole) with its own settings (its docstring: the contact-side selection,
-// primal-only warm starts, 11 steps). Measured: converged at sigma = 1e-10, 5,373 Ipopt iterations,
-// 170 s with another solve on the machine (bench/README.md, "The one-hole bed converges"); above the
-// issue's minute. The gait found: a small hop, a slide to the hole's near edge, a jump over it (lift-off at foot x = 0.246,
-// touchdown at 0.951), a slide, a small hop to x = 1. Checked as a structure that a
-// different gait would also pass: every touchdown lands outside the hole, one flight crosses it, and the
-// foot ends on the ground at the target.
+// The hopper's shorter task the issue asks for: the one-hole bed (scenes::HopperOverOneHole, T = 1 s,
+// N = 8 of the flagship's 0.125 s intervals, over the first hole) with its own settings (its
+// docstring: the contact-side selection, primal-only warm starts, 11 steps). Measured: converged
+// at sigma = 1e-10, 5,373 Ipopt iterations, 153 s with another solve on the machine
+// (bench/README.md, "The one-hole bed converges"); over the issue's minute. The gait found: a hop
+// and a bounce, a slide to the hole's near edge, a jump over it (lift-off at foot x = 0.246,
+// touchdown at 0.951), a brief slip and a stop, a small hop to x = 1. Checked as a structure that
+// another gait would also pass: every touchdown lands outside the hole, one flight crosses it,
+// and no lift-off comes last (the target, fixed, puts the foot on the ground).
 // The event-driven re-simulation under the optimal torques is printed, not bounded: it leaves the
 // reference (measured 291 at t = 1: the hopper is unstable open loop, and the simulator's first
 // event comes at t = 0.05, where the reference still sticks), bench/README.md says more.
 TEST(HopperOverOneHole, CoarseGridConvergesAndJumpsTheHole) {
 #if defined(SALTUS_TESTS_UNDER_SANITIZERS)
-  GTEST_SKIP() << "about two minutes in Release: run in the release stage only";
+  GTEST_SKIP() << "about 2.5 minutes in Release: run in the release stage only";
 #endif
   using Short = HopperOverOneHole;
   EXPECT_EQ(Short::grid().contact_side_weight, 1e-2);
@@ -187,14 +187,13 @@ TEST(HopperOverOneHole, CoarseGridConvergesAndJumpsTheHole) {
   EXPECT_LE(f.path_violation, 1e-6);
   EXPECT_LE(f.target_error, 1e-6);
   const Short ocp;
-  const auto foot = [&ocp](const Vec<8>& x) {  // (foot x, foot z)
-    const Vec<11> c = ocp.path_constraints<double>(x, Vec<2>::Zero());
-    return std::pair<double, double>{c[1], c[7]};
+  const auto foot_x = [&ocp](const Vec<8>& x) {  // path row 1
+    return ocp.path_constraints<double>(x, Vec<2>::Zero())[1];
   };
   const auto& events = r.trajectory.events;
   std::ostringstream listed;
   for (const auto& ev : events) {
-    listed << "\n  t = " << ev.t << (ev.impact() ? " impact" : "") << " foot x " << foot(ev.x_minus).first;
+    listed << "\n  t = " << ev.t << (ev.impact() ? " impact" : "") << " foot x " << foot_x(ev.x_minus);
     for (const Guard& g : ev.guards()) listed << " " << to_string(g.kind);
   }
   ASSERT_GE(events.size(), 2u) << listed.str();
@@ -202,7 +201,7 @@ TEST(HopperOverOneHole, CoarseGridConvergesAndJumpsTheHole) {
   bool crossed = false;
   for (const auto& ev : events) {
     ASSERT_EQ(ev.guards().size(), 1u) << listed.str();
-    const double fx = foot(ev.x_minus).first;
+    const double fx = foot_x(ev.x_minus);
     if (ev.guards()[0].kind == GuardKind::Release) last_lift_off_x = fx;
     if (ev.guards()[0].kind != GuardKind::Touchdown) continue;
     // A touchdown on the ground (foot z = 0) outside the hole's ellipse: |foot x - 0.5| >= 0.25.
@@ -214,7 +213,6 @@ TEST(HopperOverOneHole, CoarseGridConvergesAndJumpsTheHole) {
   EXPECT_TRUE(crossed) << "no flight from before the hole to beyond it:" << listed.str();
   // Standing at the target: the last event puts the foot on the ground, and nothing lifts it again.
   EXPECT_NE(events.back().guards()[0].kind, GuardKind::Release) << listed.str();
-  EXPECT_NEAR(foot(r.points.back().y.head<8>()).second, 0.0, 1e-6);
   const PolishResult<Hopper> resim = polish(Hopper{}, r.reference);
   std::cout << "hopper over one hole: objective " << r.solution.objective << ", " << r.solution.ipopt_iterations
             << " Ipopt iterations, " << r.solution.seconds << " s; " << events.size()

@@ -205,24 +205,29 @@ struct HopperOverThreeHoles {
       "outside hole 3"};
 };
 
-/// The same hopper over the first hole only, the coarse-grid task with 8 of the flagship's 20
-/// control intervals (bench/hopper_ocp --one-hole; bench/README.md, "The one-hole test bed"):
+/// The same hopper over the first hole only, the shorter task of the hopper's test (a shorter
+/// horizon, 8 of the flagship's 20 control intervals; bench/hopper_ocp --one-hole; bench/README.md,
+/// "The one-hole test bed"):
 /// T = 1 s, target q(T) = (1, 0.4, 0, 0), N = 8 control intervals (0.125 s each, as the
 /// flagship's), 3 finite elements, n_s = 2; the same path rows (holes 2 and 3 lie beyond the
 /// target: the foot ends on the ground in [0.75, 1.25]), start, torque bounds, a_n and hole
 /// continuation. hop_guess (three hops over 2.5 s) does not describe this task.
 /// Its solver settings are the flagship's with three changes, which make it converge
-/// (bench/README.md, "The one-hole bed converges"; measured with `hopper_ocp --one-hole`):
-/// - the contact-side selection rho_c = 1e-2 (grid(); FesdOptions::contact_side_weight: in a
-///   stance alpha_gap = 0, so the gap and J_n v are not both held at zero, which the branch
-///   NLP's Jacobian showed rank-deficient);
+/// (bench/README.md, "The one-hole bed converges"; measured with `hopper_ocp --one-hole`, a
+/// scratch driver and the test HopperOverOneHole.CoarseGridConvergesAndJumpsTheHole):
+/// - the contact-side selection rho_c = 1e-2 (grid(); FesdOptions::contact_side_weight): it pushes
+///   alpha_gap to 0 in the relaxed stances, where a fractional alpha_gap next to the sliding mode
+///   on J_n v leaves the weights of the Filippov field undetermined (the branch NLPs from such
+///   iterates have rank-deficient active Jacobians; measured);
 /// - every solve after the first starts from the previous x alone (MpccSolverOptions::warm_start
-///   = false): Ipopt's barrier starts afresh instead of at the previous solve's mu;
+///   = false): Ipopt's own bound push and multiplier initialisation instead of the previous
+///   solve's multipliers and an iterate 1e-9 from its bounds;
 /// - 11 homotopy steps, the last at sigma = 1e-10: the smoothed products equal sigma to Ipopt's
 ///   tolerance only (at sigma = 1e-9 the residual was 1.0000003e-9 > 1e-9).
-/// With the flagship's settings it stops at complementarity 1.3e-4; each change alone does not
-/// converge (primal-only starts: 1.43e-6; the side selection with warm starts: not measured on
-/// this bed; on the flagship: 3.1e-4). On the flagship these three stop at 1e-3.
+/// The homotopy converges by itself (its final branch NLP fails, which does not matter). With the
+/// flagship's settings it stops at complementarity 1.3e-4; with the selection alone (warm
+/// starts) at 3.3e-4, with primal-only starts alone at 1.43e-6. On the flagship these settings
+/// stop at 1e-3.
 struct HopperOverOneHole : HopperOverThreeHoles {
   static constexpr double horizon = 1.0;  ///< T [s]
   static constexpr double contact_side_weight = 1e-2;  ///< rho_c (struct comment)
