@@ -120,10 +120,18 @@ inline std::optional<OcpBenchArgs> parse_ocp_bench_args(int argc, char** argv, c
     out = static_cast<int>(k);
     return true;
   };
+  // A whole-string number for which valid(value) holds (NaN fails every range test).
+  const auto number_in = [](const char* text, auto valid, double& out) {
+    char* end = nullptr;
+    const double v = std::strtod(text, &end);
+    if (end == text || *end != '\0' || !valid(v)) return false;
+    out = v;
+    return true;
+  };
   const auto usage = [program] {
     std::fprintf(stderr,
                  "usage: %s [--json] [--only NAME] [--max-steps K] [--lift] [--integrated-gap] [--velocity-cross] [--composed-kinematics] "
-                 "[--elastic] [--gap-scale K] [--warm-start primal|primal-dual] [--polish-below S] [--polish-max-iter K] [--max-iter K] [--ipopt NAME=VALUE]...\n"
+                 "[--elastic] [--gap-scale K] [--contact-side W] [--warm-start primal|primal-dual] [--kappa K] [--polish-below S] [--polish-max-iter K] [--max-iter K] [--ipopt NAME=VALUE]...\n"
                  "  (NAME non-empty; --max-steps 1..1000; --max-iter, --polish-max-iter 1..100000; --gap-scale in (0, 1e6];\n"
                  "   --warm-start default primal-dual; --polish-below in [0, 1])\n",
                  program);
@@ -143,29 +151,13 @@ inline std::optional<OcpBenchArgs> parse_ocp_bench_args(int argc, char** argv, c
     else if (std::strcmp(argv[i], "--max-steps") == 0 && i + 1 < argc) {
       if (!integer_in(argv[++i], 1, 1000, a.max_steps)) return usage();
     } else if (std::strcmp(argv[i], "--polish-below") == 0 && i + 1 < argc) {
-      const char* text = argv[++i];
-      char* end = nullptr;
-      const double s = std::strtod(text, &end);
-      if (end == text || *end != '\0' || !(s >= 0.0 && s <= 1.0)) return usage();
-      a.polish_below = s;
+      if (!number_in(argv[++i], [](double s) { return s >= 0.0 && s <= 1.0; }, a.polish_below)) return usage();
     } else if (std::strcmp(argv[i], "--gap-scale") == 0 && i + 1 < argc) {
-      const char* text = argv[++i];
-      char* end = nullptr;
-      const double k = std::strtod(text, &end);
-      if (end == text || *end != '\0' || !(k > 0.0 && k <= 1e6)) return usage();
-      a.gap_scale = k;
+      if (!number_in(argv[++i], [](double k) { return k > 0.0 && k <= 1e6; }, a.gap_scale)) return usage();
     } else if (std::strcmp(argv[i], "--contact-side") == 0 && i + 1 < argc) {
-      const char* text = argv[++i];
-      char* end = nullptr;
-      const double w = std::strtod(text, &end);
-      if (end == text || *end != '\0' || !(w >= 0.0 && w <= 1e3)) return usage();
-      a.contact_side = w;
+      if (!number_in(argv[++i], [](double w) { return w >= 0.0 && w <= 1e3; }, a.contact_side)) return usage();
     } else if (std::strcmp(argv[i], "--kappa") == 0 && i + 1 < argc) {
-      const char* text = argv[++i];
-      char* end = nullptr;
-      const double k = std::strtod(text, &end);
-      if (end == text || *end != '\0' || !(k > 0.0 && k < 1.0)) return usage();
-      a.kappa = k;
+      if (!number_in(argv[++i], [](double k) { return k > 0.0 && k < 1.0; }, a.kappa)) return usage();
     } else if (std::strcmp(argv[i], "--warm-start") == 0 && i + 1 < argc) {
       const std::string kind = argv[++i];
       if (kind == "primal") a.warm_start = 0;
