@@ -133,7 +133,7 @@ inline std::optional<OcpBenchArgs> parse_ocp_bench_args(int argc, char** argv, c
                  "usage: %s [--json] [--only NAME] [--max-steps K] [--lift] [--integrated-gap] [--velocity-cross] [--composed-kinematics] "
                  "[--elastic] [--gap-scale K] [--contact-side W] [--warm-start primal|primal-dual] [--kappa K] [--polish-below S] [--polish-max-iter K] [--max-iter K] [--ipopt NAME=VALUE]...\n"
                  "  (NAME non-empty; --max-steps 1..1000; --max-iter, --polish-max-iter 1..100000; --gap-scale in (0, 1e6];\n"
-                 "   --warm-start default primal-dual; --polish-below in [0, 1])\n",
+                 "   --contact-side in [0, 1e3]; --kappa in (0, 1); --warm-start default primal-dual; --polish-below in [0, 1])\n",
                  program);
     return std::optional<OcpBenchArgs>();
   };
