@@ -33,7 +33,8 @@ OPENBLAS_NUM_THREADS=1 "$build/examples/guiding_example" --json | tee "$SALTUS_R
 # paper's initialisation, continuation on the holes, then the smoothing homotopy (about 15
 # minutes; it does not converge yet, issue "Optimal references for the flagship scenes": the JSON
 # says how far it got), and the plank-box flat landing (about 2 minutes; it converges, and its
-# JSON has the recovered events and the event-driven re-simulation's).
+# JSON has the recovered events, the event-driven re-simulation's, and the analysis of that
+# reference: jump gains, an LQR tracking design, its stability check and 100 perturbed runs).
 ocp_summary() {
   python3 - "$1" <<'PY'
 import json, sys
@@ -48,6 +49,20 @@ if d.get("resim_max_error") is not None:
     print(f'  event-driven re-simulation: {len(d["resim_events"])} events at '
           + ", ".join(f'{e["t"]:.6f}' for e in d["resim_events"])
           + f'; largest state distance {d["resim_max_error"]:.2e} at t = {d["resim_max_error_at"]["t"]:.4f}')
+a = d.get("analysis")
+if a is not None:
+    if "failure" in a:
+        print(f'  analysis of the reference failed at the {a["failed_at"]}: {a["failure"]}')
+    else:
+        for e in a["events"]:
+            gain = (f'conewise gain, {e["pieces"]} pieces' if e["conewise"]
+                    else f'saltation matrix, |G_z| = {e["saltation_norm"]:.5g}')
+            print(f'  jump gain at t = {e["t"]:.6f} ({e["guards"]} guards): {gain}')
+        m = a["monte_carlo"]
+        print(f'  tracking ({a["design"]}): {a["verdict"]}, a(T) in [{a["lower_bound"]:.3g}, {a["upper_bound"]:.3g}];'
+              f' {m["runs"]} perturbed closed-loop runs: {m["kept_event_sequence"]} kept the event sequence,'
+              f' {m["shrank"]} shrank, {m["failed"]} failed; first-order discrepancy {m["max_log_discrepancy"]:.2e}'
+              f'; {"agree" if a["agree"] else "DISAGREE"}')
 PY
 }
 echo

@@ -10,7 +10,9 @@
 #include <nlohmann/json.hpp>
 
 #include <cmath>
+#include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace saltus::examples {
@@ -44,9 +46,11 @@ std::vector<double> as_vector(const V& x) {
 /// "resim_event_time_error" (null when the event counts differ: the imported reference counts its
 /// impacts only, the re-simulation every event), "resim_events": [{t, guards (their count),
 /// x_minus, x_plus}]}.
+/// The re-simulation runs with SimulationOptions{} (polish's default); when `resim` is given it
+/// receives it (nullopt when there is none: not converged, or the re-simulation threw).
 template <Scene S>
 nlohmann::ordered_json ocp_report(const S& scene, const timefreezing::TimeFreezingOcpResult<S>& r,
-                                  const OcpFeasibility& f) {
+                                  const OcpFeasibility& f, std::optional<PolishResult<S>>* resim_out = nullptr) {
   using namespace saltus::timefreezing;
   nlohmann::ordered_json j;
   j["converged"] = r.converged();
@@ -104,9 +108,10 @@ nlohmann::ordered_json ocp_report(const S& scene, const timefreezing::TimeFreezi
   j["resim_max_error_at"] = nullptr;
   j["resim_event_time_error"] = nullptr;
   j["resim_events"] = nlohmann::ordered_json::array();
+  if (resim_out) resim_out->reset();
   if (r.converged()) {
     try {
-      const PolishResult<S> resim = polish(scene, r.reference);
+      PolishResult<S> resim = polish(scene, r.reference, SimulationOptions{});
       j["resim_max_error"] = resim.state_distance;
       j["resim_max_error_at"] = {{"t", resim.worst_sample_time}, {"state_component", resim.worst_component}};
       if (std::isfinite(resim.event_time_distance)) j["resim_event_time_error"] = resim.event_time_distance;
@@ -115,6 +120,7 @@ nlohmann::ordered_json ocp_report(const S& scene, const timefreezing::TimeFreezi
                                      {"guards", ev.guards().size()},
                                      {"x_minus", as_vector(ev.x_minus)},
                                      {"x_plus", as_vector(ev.x_plus)}});
+      if (resim_out) *resim_out = std::move(resim);
     } catch (const Error& e) {
       j["resim_failure"] = e.what();
     }
