@@ -3,6 +3,7 @@
 //
 //   hopper_ocp [--one-hole] [--json] [--only NAME] [--max-steps K] [--lift] [--integrated-gap]
 //              [--velocity-cross] [--composed-kinematics] [--elastic] [--gap-scale K] [--contact-side W]
+//              [--element-length-freedom G]
 //              [--warm-start primal|primal-dual] [--polish-below S] [--polish-max-iter K] [--max-iter K]
 //              [--kappa K] [--ipopt NAME=VALUE]...
 //
@@ -61,7 +62,8 @@ struct Variant {
   MpccSolverOptions::Relaxation relaxation = MpccSolverOptions::Relaxation::Smoothing;
   bool velocity_switch_detection = false;
   bool hole_continuation = true;
-  int control_intervals = 0;  ///< N; 0: the scene's own (20 for the flagship, 8 for --one-hole)
+  /// N; 0: the scene's own (20 for the flagship, 8 for --one-hole); -2: half the scene's
+  int control_intervals = 0;
   bool hop_guess = false;  ///< start from Ocp::hop_guess (the second initialisation) instead
   /// > 0: the default's homotopy runs this many steps (no polish), then `then` continues from its
   /// primal-dual solution from sigma = then_sigma_0 (< 0: the sigma the first homotopy stopped
@@ -107,6 +109,9 @@ std::vector<Variant> variants() {
       {"an-continuation-100", "the default with a continuation on a_n at sigma = 1: holes at a_n = 100, then 200",
        R::Smoothing, false, true, 0, false, 0, 0.0, 0.0, 2, R::Penalty, 0.0, 100.0},
       {"stages-3", "the default with Radau IIA n_s = 3", R::Smoothing, false, true, 0, false, 0, 0.0, 0.0, 3},
+      {"stages-1", "the default with Radau IIA n_s = 1 (implicit Euler)", R::Smoothing, false, true, 0, false, 0, 0.0, 0.0, 1},
+      {"half-intervals", "the default on half the scene's control intervals (twice as long each)", R::Smoothing, false,
+       true, -2},
       {"smoothing-then-scholtes-side",
        "the default's continuation and first 4 steps (sigma 1 .. 1e-3), then Scholtes with the contact-side selection "
        "1e-2 from sigma = 1e-4",
@@ -219,7 +224,11 @@ int run(const std::optional<bench::OcpBenchArgs>& args) {
       s.max_homotopy_steps = v.smoothing_steps;
       s.polish = false;
     }
-    FesdOptions grid = Ocp::grid(v.control_intervals > 0 ? v.control_intervals : Ocp::grid().control_intervals, 3, v.stages);
+    const int scene_intervals = Ocp::grid().control_intervals;
+    FesdOptions grid = Ocp::grid(v.control_intervals > 0 ? v.control_intervals
+                                 : v.control_intervals == -2 ? scene_intervals / 2
+                                                             : scene_intervals,
+                                 3, v.stages);
     grid.velocity_switch_detection = v.velocity_switch_detection;
     // A variant without the selection keeps the scene's (the flagship: none; --one-hole: 1e-2).
     if (v.contact_side_weight > 0.0) grid.contact_side_weight = v.contact_side_weight;
@@ -250,7 +259,7 @@ int run(const std::optional<bench::OcpBenchArgs>& args) {
     for (const MpccHomotopyStep& st : r.solution.steps) per_step.push_back(st.ipopt_iterations);
     const std::size_t solves = per_step.size();
     if (json)
-      rows.push_back({{"variant", v.name}, {"what", v.what}, {"lifted_step_functions", args->lift}, {"elastic_infinity", args->elastic}, {"gap_scale", grid.switching_scale[0]}, {"contact_side_weight", grid.contact_side_weight}, {"warm_start", s.warm_start}, {"control_intervals", grid.control_intervals},
+      rows.push_back({{"variant", v.name}, {"what", v.what}, {"lifted_step_functions", args->lift}, {"elastic_infinity", args->elastic}, {"gap_scale", grid.switching_scale[0]}, {"contact_side_weight", grid.contact_side_weight}, {"element_length_freedom", grid.element_length_freedom}, {"warm_start", s.warm_start}, {"control_intervals", grid.control_intervals},
                       {"converged", r.converged()}, {"solves", solves},
                       {"ipopt_iterations", r.solution.ipopt_iterations}, {"iterations_per_solve", per_step},
                       {"complementarity", r.solution.complementarity}, {"max_path_violation", f.path_violation},

@@ -3,7 +3,7 @@
 //
 //   NAME [--json] [--only VARIANT] [--max-steps K] [--lift] [--integrated-gap] [--velocity-cross]
 //        [--composed-kinematics] [--elastic] [--gap-scale K] [--contact-side W]
-//        [--warm-start primal|primal-dual] [--kappa K]
+//        [--element-length-freedom G] [--warm-start primal|primal-dual] [--kappa K]
 //        [--polish-below S] [--polish-max-iter K] [--max-iter K] [--ipopt OPTION=VALUE]...
 //
 // --max-steps K overrides the homotopy's step budget; --lift solves every variant with the lifted
@@ -16,6 +16,8 @@
 // --gap-scale K sets the gaps' switching-function scale K_gap in (0, 1e6] [1/m]
 // (FesdOptions::switching_scale[0]); --contact-side W sets the contact-side selection's weight
 // rho_c in [0, 1e3] (FesdOptions::contact_side_weight; 0 switches it off) for every variant;
+// --element-length-freedom G sets gamma_h in [0, 1] (FesdOptions::element_length_freedom: every
+// element length in [(1 - G) h0, (1 + G) h0]; the default 1 lets an element shrink to length 0);
 // --kappa K sets the homotopy's decrease factor in (0, 1) (MpccSolverOptions::kappa);
 // --warm-start says what every solve after the first
 // (continuation stages, homotopy steps, retries, polishes) starts from (MpccSolverOptions::
@@ -48,6 +50,7 @@ struct OcpBenchArgs {
   bool elastic = false;  ///< MpccSolverOptions::elastic_infinity for every Scholtes or Smoothing solve
   double gap_scale = 0.0;  ///< > 0: FesdOptions::switching_scale[0] (K_gap) for every variant
   double contact_side = -1.0;  ///< >= 0: FesdOptions::contact_side_weight (rho_c) for every variant
+  double element_length_freedom = -1.0;  ///< in [0, 1]: FesdOptions::element_length_freedom (gamma_h)
   bool integrated_gap = false;  ///< FesdOptions::integrated_gap for every variant
   bool velocity_cross = false;  ///< FesdOptions::velocity_switch_detection for every variant
   bool composed_kinematics = false;  ///< FesdOptions::composed_kinematics for every variant
@@ -72,7 +75,8 @@ struct OcpBenchArgs {
     s.ipopt_options.insert(s.ipopt_options.end(), ipopt_options.begin(), ipopt_options.end());
   }
   /// The command line's share of a variant's grid options: the lifted step functions, the
-  /// integrated gap, the velocities' switch detection, the gap scale, the contact-side weight.
+  /// integrated gap, the velocities' switch detection, the gap scale, the contact-side weight, the
+  /// element lengths' freedom.
   void apply(timefreezing::FesdOptions& grid) const {
     if (lift) grid.lift_step_functions = true;
     if (integrated_gap) grid.integrated_gap = true;
@@ -80,6 +84,7 @@ struct OcpBenchArgs {
     if (composed_kinematics) grid.composed_kinematics = true;
     if (gap_scale > 0.0) grid.switching_scale[0] = gap_scale;
     if (contact_side >= 0.0) grid.contact_side_weight = contact_side;
+    if (element_length_freedom >= 0.0) grid.element_length_freedom = element_length_freedom;
   }
 };
 
@@ -131,9 +136,9 @@ inline std::optional<OcpBenchArgs> parse_ocp_bench_args(int argc, char** argv, c
   const auto usage = [program] {
     std::fprintf(stderr,
                  "usage: %s [--json] [--only NAME] [--max-steps K] [--lift] [--integrated-gap] [--velocity-cross] [--composed-kinematics] "
-                 "[--elastic] [--gap-scale K] [--contact-side W] [--warm-start primal|primal-dual] [--kappa K] [--polish-below S] [--polish-max-iter K] [--max-iter K] [--ipopt NAME=VALUE]...\n"
+                 "[--elastic] [--gap-scale K] [--contact-side W] [--element-length-freedom G] [--warm-start primal|primal-dual] [--kappa K] [--polish-below S] [--polish-max-iter K] [--max-iter K] [--ipopt NAME=VALUE]...\n"
                  "  (NAME non-empty; --max-steps 1..1000; --max-iter, --polish-max-iter 1..100000; --gap-scale in (0, 1e6];\n"
-                 "   --contact-side in [0, 1e3]; --kappa in (0, 1); --warm-start default primal-dual; --polish-below in [0, 1])\n",
+                 "   --contact-side in [0, 1e3]; --element-length-freedom in [0, 1]; --kappa in (0, 1); --warm-start default primal-dual; --polish-below in [0, 1])\n",
                  program);
     return std::optional<OcpBenchArgs>();
   };
@@ -156,6 +161,8 @@ inline std::optional<OcpBenchArgs> parse_ocp_bench_args(int argc, char** argv, c
       if (!number_in(argv[++i], [](double k) { return k > 0.0 && k <= 1e6; }, a.gap_scale)) return usage();
     } else if (std::strcmp(argv[i], "--contact-side") == 0 && i + 1 < argc) {
       if (!number_in(argv[++i], [](double w) { return w >= 0.0 && w <= 1e3; }, a.contact_side)) return usage();
+    } else if (std::strcmp(argv[i], "--element-length-freedom") == 0 && i + 1 < argc) {
+      if (!number_in(argv[++i], [](double g) { return g >= 0.0 && g <= 1.0; }, a.element_length_freedom)) return usage();
     } else if (std::strcmp(argv[i], "--kappa") == 0 && i + 1 < argc) {
       if (!number_in(argv[++i], [](double k) { return k > 0.0 && k < 1.0; }, a.kappa)) return usage();
     } else if (std::strcmp(argv[i], "--warm-start") == 0 && i + 1 < argc) {

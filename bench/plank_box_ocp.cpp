@@ -3,6 +3,7 @@
 //
 //   plank_box_ocp [--short] [--json] [--only NAME] [--max-steps K] [--lift] [--integrated-gap] [--velocity-cross]
 //                 [--composed-kinematics] [--elastic] [--gap-scale K] [--contact-side W]
+//                 [--element-length-freedom G]
 //                 [--warm-start primal|primal-dual] [--kappa K]
 //                 [--polish-below S] [--polish-max-iter K] [--max-iter K] [--ipopt NAME=VALUE]...
 //
