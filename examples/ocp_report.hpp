@@ -46,8 +46,8 @@ std::vector<double> as_vector(const V& x) {
 /// "resim_event_time_error" (null when the event counts differ: the imported reference counts its
 /// impacts only, the re-simulation every event), "resim_events": [{t, guards (their count),
 /// x_minus, x_plus}]}.
-/// The re-simulation runs with SimulationOptions{} (polish's default); when `resim` is given it
-/// receives it (nullopt when there is none: not converged, or the re-simulation threw).
+/// The re-simulation runs with SimulationOptions{} (polish's default); when `resim_out` is given
+/// it receives the re-simulation (nullopt when there is none: not converged, or the re-simulation threw).
 template <Scene S>
 nlohmann::ordered_json ocp_report(const S& scene, const timefreezing::TimeFreezingOcpResult<S>& r,
                                   const OcpFeasibility& f, std::optional<PolishResult<S>>* resim_out = nullptr) {
