@@ -102,7 +102,8 @@ std::vector<Variant> variants() {
        R::Smoothing, false, true, 0, false, 4, 1e-3},
       {"scholtes-side", "Scholtes inequalities on every pair (no smoothed velocity pair) with the contact-side selection 1e-2",
        R::Scholtes, false, true, 0, false, 0, 0.0, 1e-2},
-      {"side", "the default with the contact-side selection 1e-2 (FesdOptions::contact_side_weight)", R::Smoothing,
+      {"side", "the default with the contact-side selection 1e-2, or --contact-side W "
+               "(FesdOptions::contact_side_weight)", R::Smoothing,
        false, true, 0, false, 0, 0.0, 1e-2},
       {"an-continuation", "the default with a continuation on a_n at sigma = 1: holes at a_n = 20, then 50, 100, 200",
        R::Smoothing, false, true, 0, false, 0, 0.0, 0.0, 2, R::Penalty, 0.0, 20.0},

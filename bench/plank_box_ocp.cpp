@@ -75,7 +75,8 @@ std::vector<Variant> variants() {
        0.0, 4, 1e-5},
       {"smoothing-then-penalty-100", "the default's first 4 smoothing steps, then the penalty from rho = 100", 0.0, 4,
        1e-2},
-      {"side", "the default with the contact-side selection 1e-2 (FesdOptions::contact_side_weight)", 0.0, 0, 0.0,
+      {"side", "the default with the contact-side selection 1e-2, or --contact-side W "
+               "(FesdOptions::contact_side_weight)", 0.0, 0, 0.0,
        false, 1e-2},
       {"scholtes-side", "Scholtes inequalities on every pair (no smoothed velocity pair) with the contact-side selection 1e-2",
        0.0, 0, 0.0, true, 1e-2},

@@ -1,16 +1,21 @@
-// The analysis of an optimal reference (`plank_box --json`): what the library's first three
-// capabilities say about the motion the time-freezing OCP produced. The OCP's own solution is a
-// discretisation; the analysis runs on its re-simulation by the event-driven simulator under the
-// optimal input (ocp_report.hpp), a HybridTrajectory with exact events:
-// - the jump gain of every event (its saltation matrix; for an event fired by several guards at
-//   once the conewise gain, all pieces built, with the orders no nearby motion realises and the
-//   measured continuity across shared cone faces);
+// The analysis of an optimal reference (`plank_box --json`): what the library's jump gains
+// (sensitivity/jump_gain.hpp, conewise_gain.hpp) and tracking tools (sensitivity/tracking.hpp) say
+// about the motion the time-freezing OCP produced. The OCP's own solution is a discretisation; the
+// analysis runs on its re-simulation by the event-driven simulator under the optimal input
+// (ocp_report.hpp), a HybridTrajectory with exact events:
+// - the jump gain of every event: its saltation matrix G_z; where the guards of an event fire at
+//   once and no single linear gain exists (LinearisedSystem throws SimultaneousActivation inside:
+//   e.g. two corners landing or lifting off together), the conewise gain, all its pieces built,
+//   with the orders no nearby motion realises and the measured continuity across shared cone
+//   faces (guards that fire together but admit one linear gain, like two corners that stop
+//   sliding together, keep a saltation matrix);
 // - a reference-spreading tracking design (time-varying LQR along the reference with cost-to-go
 //   jumps, lqr_design) and its local stability check (check_stability: bounds on the
-//   amplification of a deviation over the horizon, over the conewise pieces);
+//   amplification a(T) = |z(T)|_Wout / |z(t0)|_W of a first-order deviation over the horizon,
+//   over the conewise pieces);
 // - the check against nonlinear closed-loop simulations from perturbed initial states
 //   (monte_carlo): do the runs that keep the event sequence grow or shrink as the verdict says,
-//   and does the first-order amplification match the observed one.
+//   and does the first-order amplification of each run's perturbation match the observed one.
 #pragma once
 
 #include <saltus/sensitivity/sensitivity.hpp>
@@ -27,32 +32,44 @@ namespace saltus::examples {
 
 /// What the caller chooses: the design's weights and name, what the check and the Monte Carlo
 /// batch measure and perturb, and how far the segments are extended (reference spreading).
+/// Shapes: Q, Q_final, the check's W and W_out, the batch's W and W_out are 2nq x 2nq, R is
+/// nu x nu, the check's initial subspace E is 2nq x k, the batch's scale has 2nq entries.
 template <Scene S>
 struct ReferenceAnalysisSetup {
   std::string design;  ///< a name for the report, e.g. "LQR, box Q = (10, 1), R = 0.01 I"
   LqrWeights<S> weights;
   StabilityOptions<S> check;
+  /// Its t_final (default: the reference's end) is also the check's horizon; its progress stream
+  /// is replaced by analyse_reference's `progress`.
   MonteCarloOptions<S> monte_carlo;
   double spreading = 0.02;  ///< s, LinearisationOptions::spreading before and after each segment
 };
 
-/// Never throws for a reference the library cannot analyse: a saltus::Error of any stage (a
-/// grazing event, an impact problem without a solution, a numerical failure) ends the analysis
-/// with {"failure": its message, "failed_at": the stage} and what was computed before it.
-/// `simulation` must be the options the reference was simulated with (the conewise gains
-/// re-resolve its simultaneous events with them). JSON: {"events": [{"t", "guards", "conewise",
-/// "pieces", "unrealisable_orders", "face_discontinuity" (face_discontinuity(200): null when no
-/// face was compared), "saltation_norm" (|G_z|_2, other events)}], "linearisation_seconds",
-/// "jump_gain_seconds" (all pieces and the face samples), "design", "lqr_seconds", "verdict",
-/// "upper_bound", "lower_bound", "predicted_rate", "peak_amplification", "check_seconds" (the
-/// closed loop's linearisation and the check), "monte_carlo": {"runs", "kept_event_sequence",
-/// "failed", "failure_reasons", "grew", "shrank", "observed_rate_max", "predicted_rate_max",
-/// "max_log_discrepancy", "perturbation_size", "simulation_seconds" (the closed-loop runs),
-/// "seconds" (with the first-order predictions), "threads"}, "seconds" (the whole analysis),
-/// "agree"}; "agree" as in tracking_stability.cpp: some runs keep the event sequence, those all
-/// shrink (verdict stable) or one grows (unstable), every observed amplification is the
-/// first-order one within 5 % (|log(observed / predicted)| <= 0.05), and no observed rate exceeds
-/// the predicted bound by more than 1e-3 1/s.
+/// Catches every saltus::Error (a grazing event, an impact problem without a solution, a
+/// numerical failure, a design the library refuses): the analysis then ends with {"failure": its
+/// message, "failed_at": the stage, one of "linearisation", "jump gains", "tracking design",
+/// "stability check", "Monte Carlo"} and keeps what was computed before (the events' rows built so
+/// far among them). Other exceptions (std::bad_alloc) propagate. `simulation` must be the options
+/// the reference was simulated with (the conewise gains re-resolve its simultaneous events with
+/// them); `progress`: a few lines and Monte Carlo's per-batch lines, null for none.
+/// JSON: {"events": [{"t", "guards" (their count), "conewise", conewise events: "pieces" (all of
+/// them, ConewiseJumpGain::build_all), "unrealisable_orders" (their count),
+/// "face_discontinuity" (ConewiseJumpGain::face_discontinuity over 200 sampled directions:
+/// max |H_a(p) - H_b(p)| / |p| across shared faces; null when no face was compared); other
+/// events: "saltation_norm" (|G_z|_2)}], "linearisation_seconds", "jump_gain_seconds", "design",
+/// "lqr_seconds", "verdict" ("stable", "unstable", "undecided"), "upper_bound", "lower_bound" (of
+/// a(T)), "predicted_rate" (log(upper_bound) / (T - t0), 1/s), "peak_amplification" (the largest
+/// sampled a(t)), "check_seconds" (the closed loop's linearisation and the check), "monte_carlo":
+/// {"runs", "kept_event_sequence", "failed", "failure_reasons", "grew", "shrank" (kept runs whose
+/// observed amplification is > 1, < 1), "observed_rate_max" (max over kept runs of
+/// log(observed) / (T - t0)), "predicted_rate_max" (the same of each run's first-order
+/// amplification), "max_log_discrepancy" (max |log(observed / first order)|),
+/// "perturbation_size", "simulation_seconds" (the closed-loop runs), "seconds" (with the
+/// first-order predictions), "threads"}, "seconds" (the whole analysis), "agree"}. "agree" as in
+/// tracking_stability.cpp: some runs keep the event sequence, and those all shrink (verdict
+/// stable) or one grows (unstable; an undecided verdict passes this part), every observed
+/// amplification is the first-order one within 5 % (max_log_discrepancy <= 0.05), and no observed
+/// rate exceeds predicted_rate by more than 1e-3 1/s.
 template <Scene S>
 nlohmann::ordered_json analyse_reference(const S& scene, const HybridTrajectory<S>& reference,
                                          const SimulationOptions& simulation, const ReferenceAnalysisSetup<S>& setup,
@@ -74,7 +91,7 @@ nlohmann::ordered_json analyse_reference(const S& scene, const HybridTrajectory<
     j["linearisation_seconds"] = seconds_since(t0);
     stage = "jump gains";
     t0 = clock::now();
-    auto events = nlohmann::ordered_json::array();
+    j["events"] = nlohmann::ordered_json::array();  // filled row by row: a failure keeps the rows before it
     for (std::size_t e = 0; e < reference.events.size(); ++e) {
       const int i = static_cast<int>(e);
       nlohmann::ordered_json row{{"t", reference.events[e].t}, {"guards", reference.events[e].guards().size()},
@@ -89,9 +106,8 @@ nlohmann::ordered_json analyse_reference(const S& scene, const HybridTrajectory<
       } else {
         row["saltation_norm"] = open_loop.gains()[e].G_z.operatorNorm();
       }
-      events.push_back(row);
+      j["events"].push_back(row);
     }
-    j["events"] = events;
     j["jump_gain_seconds"] = seconds_since(t0);
     stage = "tracking design";
     if (progress) *progress << "analysis: " << reference.events.size() << " events linearised; LQR design\n";
