@@ -1,6 +1,6 @@
 // The tracking design of the plank-box's optimised landing and what its analysis measures
-// (ocp_analysis.hpp), shared by `plank_box --json` and tests/test_flagship_ocps.cpp. The same
-// design as tracking_stability's plank-box case: the box's coordinates weighted (Q = 10 on its
+// (ocp_analysis.hpp), shared by `plank_box --json`, tracking_stability (its plank-box case) and
+// tests/test_flagship_ocps.cpp: the box's coordinates weighted (Q = 10 on its
 // position and angle, 1 on their rates; the plank has no actuator and no weight), R = 0.01 I,
 // Q_final = Q; deviations of the box's initial state only (the plank starts at rest), measured on
 // the box (a semi-norm: W_out is the box's block).

@@ -19,6 +19,7 @@
 // (|log(observed / predicted)| <= 0.05), and the largest observed rate is not above the
 // predicted bound (1e-3 1/s slack).
 #include "scenes/references.hpp"
+#include "plank_box_tracking.hpp"
 
 #include <saltus/sensitivity/sensitivity.hpp>
 
@@ -190,26 +191,13 @@ int main(int argc, char** argv) {
     Mat<3, 4> Kp = Mat<3, 4>::Zero(), Kd = Mat<3, 4>::Zero();
     Kp.leftCols<3>() = Vec<3>(60.0, 60.0, 6.0).asDiagonal();
     Kd.leftCols<3>() = Vec<3>(10.0, 10.0, 1.0).asDiagonal();
-    // Deviations of the box's initial state (the plank starts at rest), measured on the box.
-    StabilityOptions<S> check;
-    Mat<8, 8> box = Mat<8, 8>::Zero();
-    Eigen::Matrix<double, 8, Eigen::Dynamic, 0, 8, 8> E = Eigen::Matrix<double, 8, 6>::Zero();
-    int c = 0;
-    for (int k : {0, 1, 2, 4, 5, 6}) {
-      box(k, k) = 1.0;
-      E(k, c++) = 1.0;
-    }
-    check.output_weight = box;
-    check.initial_subspace = E;
-    MonteCarloOptions<S> mc;
-    mc.output_weight = box;
-    mc.scale << 1, 1, 1, 0, 1, 1, 1, 0;
+    // Deviations of the box's initial state (the plank starts at rest), measured on the box; the
+    // LQR weights on the box (plank_box_tracking.hpp, shared with the optimised landing's analysis).
+    const examples::ReferenceAnalysisSetup<S> box_tracking = examples::plank_box_tracking_setup(200);
+    const StabilityOptions<S>& check = box_tracking.check;
+    const MonteCarloOptions<S>& mc = box_tracking.monte_carlo;
     const int n = ol.segment_count();
-    LqrWeights<S> w;
-    w.Q.diagonal() << 10, 10, 10, 0, 1, 1, 1, 0;
-    w.Q_final = w.Q;
-    w.R *= 1e-2;
-    const LqrDesign<S> lqr = lqr_design(ol, w);  // the cost-to-go jump through the worst piece
+    const LqrDesign<S> lqr = lqr_design(ol, box_tracking.weights);  // the cost-to-go jump through the worst piece
     add(run_case<S>("plank-box (flat landing)", "LQR, box Q = (10, 1), R = 0.01 I", ref, ol, lqr.gains, check, mc));
     add(run_case<S>("plank-box (flat landing)", "box PD (60, 10; 6, 1)", ref, ol, GainSchedule<S>(n, pd_gain<S>(Kp, Kd)),
                     check, mc));
