@@ -3,7 +3,8 @@
 //
 //   NAME [--json] [--only VARIANT] [--max-steps K] [--lift] [--integrated-gap] [--velocity-cross]
 //        [--composed-kinematics] [--elastic] [--gap-scale K] [--contact-side W]
-//        [--element-length-freedom G] [--warm-start primal|primal-dual] [--kappa K]
+//        [--element-length-freedom G] [--warm-start primal|primal-dual] [--warm-start-below S]
+//        [--kappa K]
 //        [--polish-below S] [--polish-max-iter K] [--max-iter K] [--ipopt OPTION=VALUE]...
 //
 // --max-steps K overrides the homotopy's step budget; --lift solves every variant with the lifted
@@ -21,7 +22,9 @@
 // --kappa K sets the homotopy's decrease factor in (0, 1) (MpccSolverOptions::kappa);
 // --warm-start says what every solve after the first
 // (continuation stages, homotopy steps, retries, polishes) starts from (MpccSolverOptions::
-// warm_start: the previous primal-dual solution, the default, or its x alone); --polish-below and
+// warm_start: the previous primal-dual solution, the default, or its x alone); --warm-start-below S
+// warm-starts the steps with sigma <= S from the primal-dual solution all the same
+// (MpccSolverOptions::warm_start_below); --polish-below and
 // --polish-max-iter set MpccSolverOptions::polish_below and polish_max_iter; --ipopt passes an
 // Ipopt option to every solve (an integer or a number when VALUE parses as one, else a string),
 // e.g. `--ipopt mumps_pivtol=1e-4 --ipopt print_timing_statistics=yes --ipopt output_file=ip.log
@@ -56,6 +59,7 @@ struct OcpBenchArgs {
   bool composed_kinematics = false;  ///< FesdOptions::composed_kinematics for every variant
   int warm_start = -1;  ///< 1 primal-dual, 0 primal only: MpccSolverOptions::warm_start; -1: the variant's
   double polish_below = -1.0;  ///< >= 0: MpccSolverOptions::polish_below
+  double warm_start_below = -1.0;  ///< >= 0: MpccSolverOptions::warm_start_below
   int polish_max_iter = -1;    ///< > 0: MpccSolverOptions::polish_max_iter
   int max_iter = -1;           ///< > 0: MpccSolverOptions::max_iter (Ipopt iterations per homotopy step)
   double kappa = -1.0;         ///< in (0, 1): MpccSolverOptions::kappa
@@ -67,6 +71,7 @@ struct OcpBenchArgs {
     if (max_steps > 0) s.max_homotopy_steps = max_steps;
     if (polish_below >= 0.0) s.polish_below = polish_below;
     if (warm_start >= 0) s.warm_start = warm_start == 1;
+    if (warm_start_below >= 0.0) s.warm_start_below = warm_start_below;
     // Penalty has no relaxation rows to hold the slack: its variants run without it.
     if (elastic && s.relaxation != timefreezing::MpccSolverOptions::Relaxation::Penalty) s.elastic_infinity = true;
     if (polish_max_iter > 0) s.polish_max_iter = polish_max_iter;
@@ -136,9 +141,9 @@ inline std::optional<OcpBenchArgs> parse_ocp_bench_args(int argc, char** argv, c
   const auto usage = [program] {
     std::fprintf(stderr,
                  "usage: %s [--json] [--only NAME] [--max-steps K] [--lift] [--integrated-gap] [--velocity-cross] [--composed-kinematics] "
-                 "[--elastic] [--gap-scale K] [--contact-side W] [--element-length-freedom G] [--warm-start primal|primal-dual] [--kappa K] [--polish-below S] [--polish-max-iter K] [--max-iter K] [--ipopt NAME=VALUE]...\n"
+                 "[--elastic] [--gap-scale K] [--contact-side W] [--element-length-freedom G] [--warm-start primal|primal-dual] [--warm-start-below S] [--kappa K] [--polish-below S] [--polish-max-iter K] [--max-iter K] [--ipopt NAME=VALUE]...\n"
                  "  (NAME non-empty; --max-steps 1..1000; --max-iter, --polish-max-iter 1..100000; --gap-scale in (0, 1e6];\n"
-                 "   --contact-side in [0, 1e3]; --element-length-freedom in [0, 1]; --kappa in (0, 1); --warm-start default primal-dual; --polish-below in [0, 1])\n",
+                 "   --contact-side in [0, 1e3]; --element-length-freedom in [0, 1]; --kappa in (0, 1); --warm-start default primal-dual; --polish-below, --warm-start-below in [0, 1])\n",
                  program);
     return std::optional<OcpBenchArgs>();
   };
@@ -170,6 +175,8 @@ inline std::optional<OcpBenchArgs> parse_ocp_bench_args(int argc, char** argv, c
       if (kind == "primal") a.warm_start = 0;
       else if (kind == "primal-dual") a.warm_start = 1;
       else return usage();
+    } else if (std::strcmp(argv[i], "--warm-start-below") == 0 && i + 1 < argc) {
+      if (!number_in(argv[++i], [](double s) { return s >= 0.0 && s <= 1.0; }, a.warm_start_below)) return usage();
     } else if (std::strcmp(argv[i], "--polish-max-iter") == 0 && i + 1 < argc) {
       if (!integer_in(argv[++i], 1, 100000, a.polish_max_iter)) return usage();
     } else if (std::strcmp(argv[i], "--max-iter") == 0 && i + 1 < argc) {

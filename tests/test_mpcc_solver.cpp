@@ -914,6 +914,42 @@ TEST(MpccSolver, WarmStartNeedsNoMoreIterationsThanColdStarts) {
   EXPECT_LE(w.ipopt_iterations, c.ipopt_iterations);
 }
 
+// MpccSolverOptions::warm_start_below: primal-only starts down to a sigma, primal-dual below it.
+// The steps above the threshold are the cold run's to the iteration (the same starts); those below
+// start from the previous primal-dual solution and need no more iterations than the cold run's.
+TEST(MpccSolver, WarmStartBelowASigmaWarmStartsOnlyTheLaterSteps) {
+  SmallMpcc problem;
+  MpccSolverOptions cold;
+  cold.polish = false;
+  cold.warm_start = false;
+  MpccSolverOptions mixed = cold;
+  mixed.warm_start_below = 1e-4;
+  const MpccSolution c = solve_mpcc(problem, cold);
+  const MpccSolution m = solve_mpcc(problem, mixed);
+  print_steps("cold (primal only)", c);
+  print_steps("primal only above sigma = 1e-4, primal-dual from it on", m);
+  ASSERT_TRUE(c.converged) << c.message;
+  ASSERT_TRUE(m.converged) << m.message;
+  ASSERT_EQ(m.steps.size(), c.steps.size());
+  int later = 0;
+  for (std::size_t k = 0; k < m.steps.size(); ++k) {
+    ASSERT_EQ(m.steps[k].sigma, c.steps[k].sigma) << k;
+    if (m.steps[k].sigma > mixed.warm_start_below) {
+      EXPECT_EQ(m.steps[k].ipopt_iterations, c.steps[k].ipopt_iterations) << k;
+    } else {
+      EXPECT_LE(m.steps[k].ipopt_iterations, c.steps[k].ipopt_iterations) << k;
+      ++later;
+    }
+  }
+  EXPECT_GE(later, 2);
+  EXPECT_LT(m.ipopt_iterations, c.ipopt_iterations);
+  for (const double bad_value : {-1e-6, std::numeric_limits<double>::quiet_NaN()}) {
+    MpccSolverOptions bad;
+    bad.warm_start_below = bad_value;
+    EXPECT_THROW(solve_mpcc(problem, bad), InvalidArgument);
+  }
+}
+
 // ---- Polishing (branch NLP) and row pruning
 
 TEST(MpccSolver, PolishingMakesSmallMpccExactlyComplementary) {
@@ -1110,7 +1146,9 @@ TEST(MpccSolver, FailedPolishKeepsTheHomotopyGoing) {
       infeasible_polishes += infeasible ? 1 : 0;
       EXPECT_EQ(line.find("worst: ") != std::string::npos, infeasible && !s.steps[k].worst_violation.empty()) << line;
     }
-    if (!by_bound) EXPECT_GE(infeasible_polishes, 1);  // Ipopt's end point of an infeasible branch
+    if (!by_bound) {
+      EXPECT_GE(infeasible_polishes, 1);  // Ipopt's end point of an infeasible branch
+    }
     int total = 0;
     for (const MpccHomotopyStep& st : s.steps) total += st.ipopt_iterations;
     EXPECT_EQ(total, s.ipopt_iterations);

@@ -444,7 +444,8 @@ MpccSolution solve_from(const Mpcc& problem, const MpccStart& start, bool with_m
   for (int k = 0; k < options.max_homotopy_steps && (!converged || refining) && stop_message.empty(); ++k) {
     for (int retry = 0;; ++retry) {
       const Iterate& from = success ? *success : initial;
-      const bool warm = options.warm_start && (success.has_value() || user_multipliers);
+      const bool warm = (options.warm_start || sigma <= options.warm_start_below) &&
+                        (success.has_value() || user_multipliers);
       if (warm) nlp->set_start(from.x, from.lambda, from.z_lower, from.z_upper);
       else nlp->set_start(from.x);
       nlp->set_slack_start(from.slack, from.slack_z_lower, from.slack_z_upper);
@@ -624,6 +625,8 @@ void MpccSolverOptions::validate() const {
                  "MpccSolverOptions::bound_relax_factor must be >= 0 and finite, got ", bound_relax_factor);
   SALTUS_REQUIRE(warm_start_bound_push > 0.0 && std::isfinite(warm_start_bound_push),
                  "MpccSolverOptions::warm_start_bound_push must be > 0 and finite, got ", warm_start_bound_push);
+  SALTUS_REQUIRE(warm_start_below >= 0.0 && std::isfinite(warm_start_below),
+                 "MpccSolverOptions::warm_start_below must be >= 0 and finite, got ", warm_start_below);
   SALTUS_REQUIRE(warm_start_mult_bound_push > 0.0 && std::isfinite(warm_start_mult_bound_push),
                  "MpccSolverOptions::warm_start_mult_bound_push must be > 0 and finite, got ",
                  warm_start_mult_bound_push);

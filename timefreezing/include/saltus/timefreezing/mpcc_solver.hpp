@@ -214,6 +214,16 @@ struct MpccSolverOptions {
   /// own initialisation of the multipliers and its default push away from the bounds (NOSNOC's
   /// default, warm_start_duals = false).
   bool warm_start = true;
+  /// With warm_start = false: the steps with sigma <= this are warm-started from the previous
+  /// primal-dual solution all the same (>= 0; 0: never). Why: a primal-only start lets Ipopt push
+  /// the iterate 1e-2 from its bounds and initialise the multipliers afresh, which is what carries
+  /// the hopper's homotopy past its wall near 1e-4 (bench/README.md, "Warm starts"), but once the
+  /// contact modes are settled every step repeats that excursion. Measured on the one-hole bed
+  /// (bench/README.md, "Warm starts below a sigma"): with 1e-6 the five steps 1e-6 .. 1e-10 took
+  /// 576 Ipopt iterations instead of 1,950 (the homotopy 3,999 instead of 5,373), converged to
+  /// another local solution (objective 20.36 against 20.66); with 1e-5 the step at 1e-5 failed.
+  /// Not used by the scenes' settings (that page says why).
+  double warm_start_below = 0.0;
   /// Ipopt's warm_start_bound_push, warm_start_bound_frac, warm_start_slack_bound_push and
   /// warm_start_slack_bound_frac (> 0, frac capped at 0.5). Small: the previous solution sits on
   /// its active bounds and Ipopt's default (1e-3) would push it away from them, undoing most of
