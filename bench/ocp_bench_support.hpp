@@ -23,8 +23,8 @@
 // --warm-start says what every solve after the first
 // (continuation stages, homotopy steps, retries, polishes) starts from (MpccSolverOptions::
 // warm_start: the previous primal-dual solution, the default, or its x alone); --warm-start-below S
-// warm-starts the steps with sigma <= S from the primal-dual solution all the same
-// (MpccSolverOptions::warm_start_below); --polish-below and
+// (with primal-only starts only) starts the homotopy's solves with sigma <= S from the previous
+// primal-dual solution instead (MpccSolverOptions::warm_start_below); --polish-below and
 // --polish-max-iter set MpccSolverOptions::polish_below and polish_max_iter; --ipopt passes an
 // Ipopt option to every solve (an integer or a number when VALUE parses as one, else a string),
 // e.g. `--ipopt mumps_pivtol=1e-4 --ipopt print_timing_statistics=yes --ipopt output_file=ip.log

@@ -176,9 +176,9 @@ TEST(HopperOverOneHole, TargetGridAndRowsAreTheShortTask) {
 // event comes at t = 0.05, where the reference still sticks), bench/README.md says more.
 // Known weakness of this check (bench/README.md, "Warm starts below a sigma"): the landing beyond
 // the hole ends its element with the foot on the ground moving up (J_n v = +0.52 m/s after -3.6
-// inside the element), a coarse-grid artefact; this optimum's recovery reads it as a touchdown,
-// another optimum of the bed (MpccSolverOptions::warm_start_below = 1e-6) as an impact without a
-// guard, which fails the one-guard assertion below.
+// inside the element, a leg swing the coarse grid does not resolve); this optimum's recovery
+// reads it as a touchdown, another optimum of the bed (MpccSolverOptions::warm_start_below =
+// 1e-6) as an impact without a guard, which fails the one-guard assertion below.
 TEST(HopperOverOneHole, CoarseGridConvergesAndJumpsTheHole) {
 #if defined(SALTUS_TESTS_UNDER_SANITIZERS)
   GTEST_SKIP() << "about 2.5 minutes in Release: run in the release stage only";

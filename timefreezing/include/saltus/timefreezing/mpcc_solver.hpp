@@ -214,8 +214,10 @@ struct MpccSolverOptions {
   /// own initialisation of the multipliers and its default push away from the bounds (NOSNOC's
   /// default, warm_start_duals = false).
   bool warm_start = true;
-  /// With warm_start = false: the steps with sigma <= this are warm-started from the previous
-  /// primal-dual solution all the same (>= 0; 0: never). Why: a primal-only start lets Ipopt push
+  /// Only with warm_start = false (no effect otherwise): every homotopy solve with sigma <= this,
+  /// a step or a retry, starts from the previous successful step's primal-dual solution as with
+  /// warm_start = true; the solves above it, and every polish, start from x alone (>= 0; 0:
+  /// never). Why: a primal-only start lets Ipopt push
   /// the iterate 1e-2 from its bounds and initialise the multipliers afresh, which is what carries
   /// the hopper's homotopy past its wall near 1e-4 (bench/README.md, "Warm starts"), but once the
   /// contact modes are settled every step repeats that excursion. Measured on the one-hole bed
@@ -309,7 +311,8 @@ struct MpccSolverOptions {
 
 /// A starting point other than problem.initial_point(): x (size n), and optionally the
 /// multipliers of a previous solution of the same problem (sizes m, n, n; all three or none).
-/// With multipliers (and options.warm_start) the first step is warm-started too; the first
+/// With multipliers (and options.warm_start, or options.sigma_0 <= options.warm_start_below) the
+/// first step is warm-started too; the first
 /// step's relaxation rows start with zero multipliers.
 struct MpccStart {
   Eigen::VectorXd x;
