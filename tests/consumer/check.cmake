@@ -1,7 +1,8 @@
 # Installs the Saltus build tree into a scratch prefix, then configures, builds and runs the
 # consumer project against it, and prints how long each consumer program took to compile (the
 # README's compile-time figure for a user's scene). Arguments: -DSALTUS_BINARY_DIR=...
-# -DCONSUMER_SOURCE_DIR=... -DWORK_DIR=...
+# -DCONSUMER_SOURCE_DIR=... -DWORK_DIR=... [-DCONSUMER_CXX_COMPILER=...: the compiler Saltus was
+# built with, so that a clang build is consumed by clang and a GCC build by GCC]
 file(REMOVE_RECURSE "${WORK_DIR}")
 execute_process(COMMAND "${CMAKE_COMMAND}" --install "${SALTUS_BINARY_DIR}" --prefix "${WORK_DIR}/prefix"
                 RESULT_VARIABLE rc OUTPUT_QUIET)
@@ -10,9 +11,13 @@ if(rc)
 endif()
 # SUNDIALS is hidden from the consumer: find_package(Saltus) without the component cvode must not
 # need it (the consumer's programs use Dormand-Prince, and check that CVODE is refused clearly).
+set(consumer_compiler "")
+if(CONSUMER_CXX_COMPILER)
+  set(consumer_compiler "-DCMAKE_CXX_COMPILER=${CONSUMER_CXX_COMPILER}")
+endif()
 execute_process(COMMAND "${CMAKE_COMMAND}" -S "${CONSUMER_SOURCE_DIR}" -B "${WORK_DIR}/build"
                         -DCMAKE_PREFIX_PATH=${WORK_DIR}/prefix -DCMAKE_BUILD_TYPE=Release
-                        -DCMAKE_DISABLE_FIND_PACKAGE_SUNDIALS=TRUE RESULT_VARIABLE rc)
+                        -DCMAKE_DISABLE_FIND_PACKAGE_SUNDIALS=TRUE ${consumer_compiler} RESULT_VARIABLE rc)
 if(rc)
   message(FATAL_ERROR "configuring the consumer project failed (${rc})")
 endif()
