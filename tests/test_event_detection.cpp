@@ -25,7 +25,6 @@ constexpr double g = 9.81;
 class RockingBlock {
  public:
   static constexpr int nq = 3, nu = 0, nc = 2;
-  [[maybe_unused]] static constexpr const char* name = "rocking_block";
   RockingBlock(double width, double height, double mu)
       : w_(width), h_(height), corners_{ContactSpec{"left", Friction::Planar, mu, 0.0},
                                         ContactSpec{"right", Friction::Planar, mu, 0.0}} {}
@@ -89,7 +88,6 @@ class RockingBlock {
 class PainleveRod {
  public:
   static constexpr int nq = 3, nu = 0, nc = 1;
-  [[maybe_unused]] static constexpr const char* name = "painleve_rod";
   explicit PainleveRod(double mu) : end_{"end", Friction::Planar, mu, 0.0} {}
   const ContactSpec& contact(int) const { return end_; }
   template <class T>
