@@ -104,9 +104,9 @@
 #include "ocp_bench_support.hpp"
 #include "scenes/time_freezing_examples.hpp"
 
-#include <saltus/timefreezing/fesd.hpp>
-#include <saltus/timefreezing/mpcc_solver.hpp>
-#include <saltus/timefreezing/simulation.hpp>
+#include <saltus/timefreezing/discretisation/fesd.hpp>
+#include <saltus/timefreezing/mpcc/mpcc_solver.hpp>
+#include <saltus/timefreezing/drivers/optimal_control.hpp>
 
 #include <nlohmann/json.hpp>
 

@@ -18,7 +18,7 @@
 
 #include "mpcc_support.hpp"  // tests/: the derivative tests' interior_point
 
-#include <saltus/timefreezing/fesd.hpp>
+#include <saltus/timefreezing/discretisation/fesd.hpp>
 
 #include <benchmark/benchmark.h>
 

@@ -31,8 +31,8 @@
 // --ipopt file_print_level=5`.
 #pragma once
 
-#include <saltus/timefreezing/fesd.hpp>
-#include <saltus/timefreezing/mpcc_solver.hpp>
+#include <saltus/timefreezing/discretisation/fesd.hpp>
+#include <saltus/timefreezing/mpcc/mpcc_solver.hpp>
 
 #include <algorithm>
 #include <cstdio>

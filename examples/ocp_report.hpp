@@ -5,7 +5,7 @@
 #pragma once
 
 #include <saltus/hybrid/reference/resimulation.hpp>
-#include <saltus/timefreezing/simulation.hpp>
+#include <saltus/timefreezing/drivers/optimal_control.hpp>
 
 #include <nlohmann/json.hpp>
 

@@ -2,7 +2,7 @@
 // initial guess (where derivative checks would see the special values of the start).
 #pragma once
 
-#include <saltus/timefreezing/mpcc.hpp>
+#include <saltus/timefreezing/mpcc/mpcc.hpp>
 
 #include <Eigen/Core>
 

@@ -11,9 +11,9 @@
 #include "scenes/references.hpp"
 
 #include <saltus/hybrid/reference/resimulation.hpp>
-#include <saltus/timefreezing/fesd.hpp>
-#include <saltus/timefreezing/mpcc_solver.hpp>
-#include <saltus/timefreezing/simulation.hpp>
+#include <saltus/timefreezing/discretisation/fesd.hpp>
+#include <saltus/timefreezing/mpcc/mpcc_solver.hpp>
+#include <saltus/timefreezing/drivers/optimal_control.hpp>
 
 #include "mpcc_support.hpp"
 #include "plank_box_tracking.hpp"

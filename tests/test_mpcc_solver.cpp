@@ -4,7 +4,7 @@
 // with pairs and repeated structure entries, and on deliberately wrong derivatives; an infeasible
 // problem reported, not thrown; bad problem statements refused by name; warm against cold starts.
 #include <saltus/hybrid/vocabulary/errors.hpp>
-#include <saltus/timefreezing/mpcc_solver.hpp>
+#include <saltus/timefreezing/mpcc/mpcc_solver.hpp>
 
 #include <gtest/gtest.h>
 

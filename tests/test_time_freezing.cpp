@@ -11,9 +11,9 @@
 #include <saltus/hybrid/simulation/simulator.hpp>
 #include <saltus/hybrid/vocabulary/trajectory_report.hpp>
 #include <saltus/sensitivity/jump_gain.hpp>
-#include <saltus/timefreezing/fesd.hpp>
-#include <saltus/timefreezing/mpcc_solver.hpp>
-#include <saltus/timefreezing/simulation.hpp>
+#include <saltus/timefreezing/discretisation/fesd.hpp>
+#include <saltus/timefreezing/mpcc/mpcc_solver.hpp>
+#include <saltus/timefreezing/drivers/optimal_control.hpp>
 
 #include "mpcc_support.hpp"
 

@@ -1,7 +1,7 @@
 // The FESD grid the flagship OCPs share (scenes/hopper_holes.hpp, scenes/plank_box_landing.hpp).
 #pragma once
 
-#include <saltus/timefreezing/fesd.hpp>
+#include <saltus/timefreezing/discretisation/fesd.hpp>
 
 #include <Eigen/Core>
 

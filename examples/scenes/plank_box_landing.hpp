@@ -26,9 +26,9 @@
 #include "scenes/ocp_grid.hpp"
 #include "scenes/plank_box.hpp"
 
-#include <saltus/timefreezing/fesd.hpp>
-#include <saltus/timefreezing/mpcc_solver.hpp>
-#include <saltus/timefreezing/time_freezing_system.hpp>
+#include <saltus/timefreezing/discretisation/fesd.hpp>
+#include <saltus/timefreezing/mpcc/mpcc_solver.hpp>
+#include <saltus/timefreezing/formulation/time_freezing_system.hpp>
 
 #include <algorithm>
 #include <array>

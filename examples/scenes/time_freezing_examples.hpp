@@ -7,9 +7,9 @@
 #include "scenes/point_mass.hpp"
 
 #include <saltus/hybrid/vocabulary/scene.hpp>
-#include <saltus/timefreezing/fesd.hpp>
-#include <saltus/timefreezing/mpcc_solver.hpp>
-#include <saltus/timefreezing/time_freezing_system.hpp>
+#include <saltus/timefreezing/discretisation/fesd.hpp>
+#include <saltus/timefreezing/mpcc/mpcc_solver.hpp>
+#include <saltus/timefreezing/formulation/time_freezing_system.hpp>
 
 #include <cmath>
 

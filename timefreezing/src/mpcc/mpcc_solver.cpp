@@ -1,4 +1,4 @@
-#include <saltus/timefreezing/mpcc_solver.hpp>
+#include <saltus/timefreezing/mpcc/mpcc_solver.hpp>
 
 #include "relaxed_nlp.hpp"
 

@@ -2,7 +2,7 @@
 // the sources of saltus_timefreezing include this header (it includes Ipopt's).
 #pragma once
 
-#include <saltus/timefreezing/mpcc.hpp>
+#include <saltus/timefreezing/mpcc/mpcc.hpp>
 
 #include <IpTNLP.hpp>
 

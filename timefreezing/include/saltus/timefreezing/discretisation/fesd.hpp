@@ -112,9 +112,9 @@
 
 #include <saltus/ad/autodiff.hpp>
 #include <saltus/hybrid/vocabulary/errors.hpp>
-#include <saltus/timefreezing/mpcc.hpp>
-#include <saltus/timefreezing/radau.hpp>
-#include <saltus/timefreezing/time_freezing_system.hpp>
+#include <saltus/timefreezing/mpcc/mpcc.hpp>
+#include <saltus/timefreezing/discretisation/radau.hpp>
+#include <saltus/timefreezing/formulation/time_freezing_system.hpp>
 
 #include <Eigen/Core>
 

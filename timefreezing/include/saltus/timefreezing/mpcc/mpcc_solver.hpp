@@ -102,7 +102,7 @@
 // no later polish succeeds.
 #pragma once
 
-#include <saltus/timefreezing/mpcc.hpp>
+#include <saltus/timefreezing/mpcc/mpcc.hpp>
 
 #include <Eigen/Core>
 

@@ -1,0 +1,4 @@
+// Forwarding header, kept for one release (0.2): the header moved to its stage folder.
+// Include <saltus/timefreezing/discretisation/radau.hpp> instead.
+#pragma once
+#include <saltus/timefreezing/discretisation/radau.hpp>
