@@ -1,0 +1,261 @@
+// The refinement NLP: a smooth multi-phase OCP whose mode schedule is FIXED (mode_schedule.hpp),
+// built on the hybrid core's own flows, guards and jump maps, collocated with Radau IIA.
+//
+// PHASES. Phase p = 0..P-1 runs in the mode m_p of the schedule from t_p to t_{p+1}
+// (t_0 = t0 and t_P = T fixed, the event times t_1..t_{P-1} variables with t_{p+1} - t_p >=
+// min_phase_duration >= 0). It has N_p elements of equal length h_p = (t_{p+1} - t_p) / N_p, each
+// a Radau IIA step with n_s stages and one piecewise-constant input (decision) u_e. The flow is
+// the hybrid core's flow of the mode (dynamics/flow.hpp: the contact forces of the closed contacts
+// from the Delassus system, so that a closed contact is held at the ACCELERATION level,
+// J a + kappa = 0): with f_m the flow of mode m,
+//     X_{e,r} - X_{e,start} - h_p sum_l a_rl f_m(X_{e,l}, u(t_{e,l}, u_e)) = 0     (collocation)
+// for every stage r of element e; X_{e,start} is the previous element's last stage or, for the
+// phase's first element, the phase's start state X_p (a variable). The closed contacts' position
+// and velocity conditions are NOT imposed at the stage points: they hold at the phase's start
+// (the event before it imposes the gap, its jump map puts the velocity on the contact) and the
+// flow keeps them to the collocation's accuracy. (Imposing them at every stage point as well
+// over-determines a discretisation of a gap nonlinear in q, the cause of the rank-deficient branch
+// NLPs of FESD: fesd.hpp, "INTEGRATED GAP".)
+//
+// MODE VALIDITY at every stage point (inequality rows >= 0), from the flow's contact forces:
+//     open contact:             h_n(q)                    (no penetration)
+//     closed contact:           lambda_n                  (no pull)
+//     sticking planar contact:  mu lambda_n - lambda_t,  mu lambda_n + lambda_t   (in the cone)
+//     slipping planar contact:  s zeta_t                  (the slip keeps its sign s)
+// With these and the events below, the refined motion satisfies the complementarity conditions of
+// contact and Coulomb friction EXACTLY at every stage point, by construction: each contact is in
+// one branch (open: lambda = 0 by the flow; closed: gap = 0 by the phase start and the flow), and
+// the branch's sign conditions are these rows. mode_validity_violation reports their largest
+// violation at the solution.
+//
+// EVENTS (the boundary between phase p and p + 1, at x- = the last stage of phase p, u- = its last
+// input, t = t_{p+1}), with the hybrid core's event physics:
+//     touchdown of i:   h_n,i(q-) = 0 and zeta_n,i(x-) <= 0 (approaching)
+//     release of i:     lambda_n,i(x-, u-) = 0   (the flow of m_p)
+//     stop of i:        zeta_t,i(x-) = 0
+//     slip onset of i:  lambda_t,i(x-, u-) + s mu lambda_n,i(x-, u-) = 0   (s: the slip sign of
+//                       m_{p+1}; friction opposes the slip)
+//     state:            X_{p+1} = Delta(x-)   (the jump map of the impulse mode of m_{p+1} at an
+//                       event with a touchdown, dynamics/jump_map.hpp; identity otherwise)
+//     at an impact:     Lambda_n,i >= 0 for every contact taking an impulse; a sticking impulse in
+//                       the cone, mu Lambda_n -+ Lambda_t >= 0; a slipping contact leaves with its
+//                       sign, s zeta_t(x+) >= 0; a contact closed before and open after separates,
+//                       zeta_n(x+) >= 0.
+// A simultaneous event has all its guards at one boundary.
+//
+// IMPLIED ROWS. A row that the others imply must not be imposed twice (LICQ, and with
+// discretisation drift even feasibility): (a) an equality path row whose gradient, at the guess's
+// middle of a phase, lies in the span of the gap gradients of the phase's closed contacts and that
+// depends on neither v nor u (the plank-box's theta - phi = 0 while both corners are closed) is
+// not imposed inside that phase; (b) a guard whose gradient in (x-, u-), at the guess's x-, lies
+// in the span of the rows already imposed there (the equality path rows at x-, the guards before
+// it) is not imposed (the plank-box's second corner touching down while theta - phi = 0 holds).
+// "In the span": relative least-squares residual <= RefinementOptions::implied_row_tolerance.
+// implied_rows() lists them.
+//
+// COST AND CONSTRAINTS of the OCP struct (the one the time-freezing solver takes,
+// formulation/ocp concepts in fesd.hpp): the running cost in physical time by the Radau
+// quadrature, sum_e h_p sum_l b_l l(x_{e,l}, u_e[, t_{e,l}]); the terminal cost and terminal rows
+// at (X_final, T); path rows at every stage point; input bounds on every u_e.
+//
+// DERIVATIVES. Three local blocks carry all nonlinearity: the stage block at a stage point,
+// w = (x, u_e, t_p, t_{p+1}) -> (h f, h l, validity, path); the event block, w = (x-, u-, t) ->
+// (guards, approach, x+, impulse validity, separation); the terminal block, w = (x_P, T) ->
+// (terminal rows, terminal cost). Their Jacobians are forward AD (ad::Dual over w), their
+// Hessians weighted by the multipliers forward-over-forward AD, through the hybrid core's flow,
+// Delassus solve and jump map (linear_solve.hpp: derivatives reuse the value's factorisation).
+// Everything else is linear and written out.
+#pragma once
+
+#include <saltus/ad/autodiff.hpp>
+#include <saltus/hybrid/dynamics/flow.hpp>
+#include <saltus/hybrid/dynamics/jump_map.hpp>
+#include <saltus/timefreezing/discretisation/fesd.hpp>
+#include <saltus/timefreezing/discretisation/radau.hpp>
+#include <saltus/timefreezing/mpcc/mpcc.hpp>
+#include <saltus/timefreezing/refinement/refinement_options.hpp>
+#include <saltus/timefreezing/refinement/schedule_guess.hpp>
+
+#include <Eigen/Core>
+
+#include <string>
+#include <vector>
+
+namespace saltus::timefreezing {
+
+/// A row that the refinement does not impose because the others imply it (file comment).
+struct ImpliedRow {
+  int phase = -1;           ///< (a) the phase of an implied path row; -1 for a guard
+  int event = -1;           ///< (b) the event of an implied guard; -1 for a path row
+  int index = 0;            ///< the path row's index, or the guard's position in the event
+  std::string description;  ///< e.g. "path row 0 in phase 1", "touchdown C_R at event 0"
+  double residual = 0.0;    ///< the relative least-squares residual that decided it
+};
+
+/// The refinement NLP of one schedule (file comment). Immutable after construction except for its
+/// derivative caches (mutable: not to be shared between threads).
+template <Scene S, class Ocp>
+class ScheduleRefinementNlp final : public Mpcc {
+ public:
+  static constexpr int nq = S::nq, nu = S::nu, nc = S::nc, nx = 2 * S::nq;
+  static constexpr int np = detail::path_count<Ocp>();
+  static constexpr int nt = detail::terminal_count<Ocp>();
+  static constexpr int max_validity = 3 * nc;
+  /// Stage block: w = (x, u, t_p, t_{p+1}); outputs (h f [nx], h l [1], validity, path [np]).
+  static constexpr int nw = nx + nu + 2;
+  static constexpr int stage_outputs = nx + 1 + max_validity + np;
+  /// Event block: w = (x-, u-, t); outputs (guards, approach, x+, impulse validity, separation).
+  static constexpr int nwe = nx + nu + 1;
+  static constexpr int event_outputs = 2 * nc + nc + nx + 3 * nc + nc;
+  /// Terminal block: w = (x, T); outputs (terminal rows [nt], terminal cost [1]).
+  static constexpr int nwt = nx + 1;
+  static constexpr int terminal_outputs = nt + 1;
+
+  /// @throws InvalidArgument for a schedule that is not one of the scene (validated()), a horizon
+  ///   that does not validate, bad options, a guess with non-finite values or event times outside
+  ///   [t0, T] or decreasing, an initial state that contradicts the first phase's mode (a closed
+  ///   contact not at gap 0 and normal velocity 0 within options.initial_state_tolerance, an open
+  ///   one penetrating), naming the phase and the condition.
+  ScheduleRefinementNlp(const S& scene, const Ocp& ocp, const OcpHorizon<S>& horizon, const ScheduleGuess<S>& guess,
+                        const RefinementOptions& options);
+
+  // ---- Mpcc (a plain NLP: no pairs) ------------------------------------------------------------
+  int variable_count() const override { return n_; }
+  int constraint_count() const override { return m_; }
+  void bounds(Eigen::Ref<Eigen::VectorXd> x_lower, Eigen::Ref<Eigen::VectorXd> x_upper,
+              Eigen::Ref<Eigen::VectorXd> g_lower, Eigen::Ref<Eigen::VectorXd> g_upper) const override;
+  void initial_point(Eigen::Ref<Eigen::VectorXd> x) const override;
+  double objective(const Eigen::Ref<const Eigen::VectorXd>& x) const override;
+  void objective_gradient(const Eigen::Ref<const Eigen::VectorXd>& x, Eigen::Ref<Eigen::VectorXd> gradient) const override;
+  void constraints(const Eigen::Ref<const Eigen::VectorXd>& x, Eigen::Ref<Eigen::VectorXd> g) const override;
+  const std::vector<SparseEntry>& jacobian_structure() const override { return jacobian_structure_; }
+  void jacobian_values(const Eigen::Ref<const Eigen::VectorXd>& x, Eigen::Ref<Eigen::VectorXd> values) const override;
+  const std::vector<SparseEntry>& hessian_structure() const override { return hessian_structure_; }
+  void hessian_values(const Eigen::Ref<const Eigen::VectorXd>& x, double objective_factor,
+                      const Eigen::Ref<const Eigen::VectorXd>& multipliers,
+                      Eigen::Ref<Eigen::VectorXd> values) const override;
+  const std::vector<ComplementarityPair>& complementarity_pairs() const override { return no_pairs_; }
+  std::string variable_name(int i) const override;
+  std::string constraint_name(int j) const override;
+
+  // ---- layout --------------------------------------------------------------------------------
+  int phase_count() const { return static_cast<int>(schedule_.phases.size()); }
+  int element_count() const { return static_cast<int>(element_phase_.size()); }
+  int stages() const { return tableau_.stages; }
+  int elements_in(int p) const { return phase_elements_[static_cast<std::size_t>(p)]; }
+  int first_element(int p) const { return phase_first_element_[static_cast<std::size_t>(p)]; }
+  int phase_of(int e) const { return element_phase_[static_cast<std::size_t>(e)]; }
+  int time_index(int p) const { return p; }  ///< t_p, p = 0..P
+  int start_index(int p) const { return phase_count() + 1 + p * nx; }
+  int control_index(int e) const { return element_base_ + e * (nu + tableau_.stages * nx); }
+  int stage_index(int e, int r) const { return control_index(e) + nu + r * nx; }
+  int element_start_index(int e) const;
+  int phase_end_index(int p) const { return stage_index(first_element(p) + elements_in(p) - 1, tableau_.stages - 1); }
+  const ModeSchedule<nc>& schedule() const { return schedule_; }
+  const RadauIIA& tableau() const { return tableau_; }
+  const std::vector<ImpliedRow>& implied_rows() const { return implied_; }
+  /// The path rows imposed at the stage points of phase p (all np of them unless some are implied).
+  const std::vector<int>& imposed_path_rows(int p) const { return phase_path_rows_[static_cast<std::size_t>(p)]; }
+
+  // ---- reading a solution ---------------------------------------------------------------------
+  /// The largest violation of the mode-validity rows (stages and impacts) at x (file comment), >= 0.
+  double mode_validity_violation(const Eigen::Ref<const Eigen::VectorXd>& x) const;
+  /// The largest violation of the path rows (all of them, the implied ones included) and of the
+  /// terminal rows at x.
+  double path_violation(const Eigen::Ref<const Eigen::VectorXd>& x) const;
+  double terminal_violation(const Eigen::Ref<const Eigen::VectorXd>& x) const;
+  /// The validity values of stage (e, r) at x in the order of the file comment (count: validity_count).
+  std::vector<double> validity_values(const Eigen::Ref<const Eigen::VectorXd>& x, int e, int r) const;
+  int validity_count(int p) const { return validity_count_[static_cast<std::size_t>(p)]; }
+  /// The row of validity entry k at stage (e, r).
+  int validity_row(int e, int r, int k) const { return stage_row(e, r) + nx + k; }
+  /// The applied input of element e (after the OCP's input law, at the element's start).
+  VecT<double, S::nu> applied_input(const Eigen::Ref<const Eigen::VectorXd>& x, int e) const;
+  /// The contact forces of stage (e, r) at x (the flow of the phase's mode).
+  std::array<ContactForce<double>, S::nc> contact_forces(const Eigen::Ref<const Eigen::VectorXd>& x, int e, int r) const;
+  /// The impulses of event b at x (zero without an impact).
+  std::array<ContactForce<double>, S::nc> impulses(const Eigen::Ref<const Eigen::VectorXd>& x, int b) const;
+
+ private:
+  struct EventRows {  // the rows of event b and what they mean
+    ImpactMode<nc> impulse_mode{};
+    bool impact = false;
+    std::vector<Guard> imposed_guards;   // after dropping the implied ones
+    std::vector<int> approach_contacts;  // touchdowns: zeta_n <= 0
+    std::vector<int> separating_contacts;
+    int impulse_rows = 0;
+    int first_row = 0;
+    int row_count() const {
+      return static_cast<int>(imposed_guards.size() + approach_contacts.size() + separating_contacts.size()) + nx +
+             impulse_rows;
+    }
+  };
+
+  // construction (refinement_nlp_build.hxx)
+  void build_grid(const ScheduleGuess<S>& guess);
+  void check_initial_state() const;
+  void find_implied_rows(const ScheduleGuess<S>& guess);
+  void build_rows();
+  void build_structures();
+  int count_validity(const Mode<nc>& mode) const;
+  int count_impulse_rows(const EventRows& ev) const;
+
+  // the local blocks (refinement_nlp_blocks.hxx)
+  template <class T>
+  VecT<T, stage_outputs> stage_block(int p, double theta, const VecT<T, nw>& w, FlowWorkspace<S, T>& ws) const;
+  template <class T>
+  VecT<T, event_outputs> event_block(int b, const VecT<T, nwe>& w, FlowWorkspace<S, T>& fws,
+                                     JumpWorkspace<S, T>& jws) const;
+  template <class T>
+  VecT<T, terminal_outputs> terminal_block(const VecT<T, nwt>& w) const;
+  template <class T>
+  VecT<T, S::nu> input_law(const T& t, const VecT<T, S::nu>& decision) const;
+  template <class T>
+  void write_validity(const Mode<nc>& mode, const FlowWorkspace<S, T>& ws, VecT<T, stage_outputs>& out) const;
+
+  // local vectors and their globals
+  VecT<double, nw> stage_local(const Eigen::Ref<const Eigen::VectorXd>& x, int e, int r) const;
+  int stage_global(int e, int r, int a) const;
+  VecT<double, nwe> event_local(const Eigen::Ref<const Eigen::VectorXd>& x, int b) const;
+  int event_global(int b, int a) const;
+  VecT<double, nwt> terminal_local(const Eigen::Ref<const Eigen::VectorXd>& x) const;
+  int terminal_global(int a) const;
+  double stage_theta(int e, int r) const;  // (j + c_r) / N_p
+  int stage_row(int e, int r) const { return stage_row_[static_cast<std::size_t>(e * tableau_.stages + r)]; }
+
+  // derivative caches (refinement_nlp_eval.hxx)
+  void update(const Eigen::Ref<const Eigen::VectorXd>& x) const;
+  template <class Emit>
+  void walk_jacobian(Emit&& emit) const;
+  template <class Emit>
+  void walk_hessian(const Eigen::Ref<const Eigen::VectorXd>& x, double sigma,
+                    const Eigen::Ref<const Eigen::VectorXd>& lambda, Emit&& emit) const;
+
+  S scene_;
+  Ocp ocp_;
+  OcpHorizon<S> horizon_;
+  ModeSchedule<nc> schedule_;
+  RefinementOptions options_;
+  RadauIIA tableau_;
+  int n_ = 0, m_ = 0, element_base_ = 0;
+  std::vector<int> phase_elements_, phase_first_element_, element_phase_, validity_count_;
+  std::vector<std::vector<int>> phase_path_rows_;  // per phase: the path rows imposed at its stage points
+  std::vector<int> stage_row_;
+  std::vector<EventRows> events_;
+  int duration_row_ = 0, terminal_row_ = 0;
+  std::vector<ImpliedRow> implied_;
+  Eigen::VectorXd guess_x_;  // the initial point, built from the guess
+  std::vector<SparseEntry> jacobian_structure_, hessian_structure_;
+  std::vector<ComplementarityPair> no_pairs_;
+  // caches at the last x
+  mutable Eigen::VectorXd cached_x_;
+  mutable bool cache_valid_ = false;
+  mutable std::vector<VecT<double, stage_outputs>> stage_value_;
+  mutable std::vector<MatT<double, stage_outputs, nw>> stage_jacobian_;
+  mutable std::vector<VecT<double, event_outputs>> event_value_;
+  mutable std::vector<MatT<double, event_outputs, nwe>> event_jacobian_;
+  mutable VecT<double, terminal_outputs> terminal_value_;
+  mutable MatT<double, terminal_outputs, nwt> terminal_jacobian_;
+};
+
+}  // namespace saltus::timefreezing

@@ -1,0 +1,133 @@
+// The local blocks of the refinement NLP (refinement_nlp.hpp, "DERIVATIVES"): templated on the
+// scalar, evaluated at double, first-order and second-order dual numbers.
+#pragma once
+
+#include <saltus/hybrid/dynamics/flow.hxx>
+#include <saltus/hybrid/dynamics/kinematics.hxx>
+#include <saltus/hybrid/dynamics/jump_map.hxx>
+#include <saltus/timefreezing/refinement/refinement_nlp.hpp>
+
+namespace saltus::timefreezing {
+
+template <Scene S, class Ocp>
+template <class T>
+VecT<T, S::nu> ScheduleRefinementNlp<S, Ocp>::input_law(const T& t, const VecT<T, S::nu>& decision) const {
+  if constexpr (detail::HasInputLaw<Ocp, T, nu>) return ocp_.template input<T>(t, decision);
+  else return decision;
+}
+
+/// The validity values of a mode at a flow evaluation, in the order of the file comment, written
+/// from out[nx + 1] on.
+template <Scene S, class Ocp>
+template <class T>
+void ScheduleRefinementNlp<S, Ocp>::write_validity(const Mode<nc>& mode, const FlowWorkspace<S, T>& ws,
+                                                   VecT<T, stage_outputs>& out) const {
+  int k = nx + 1;
+  for (int i = 0; i < nc; ++i) {
+    const ContactState& c = mode[i];
+    if (!c.closed()) {
+      out[k++] = ws.kin.contacts[i].gap;
+      continue;
+    }
+    const T& lambda_n = ws.force[i].normal;
+    out[k++] = lambda_n;
+    if (scene_.contact(i).tangents() == 0) continue;
+    const T mu_lambda = T(scene_.contact(i).mu) * lambda_n;
+    if (c.mode == ContactMode::Stick) {
+      out[k++] = mu_lambda - ws.force[i].tangent[0];
+      out[k++] = mu_lambda + ws.force[i].tangent[0];
+    } else {
+      out[k++] = T(c.slip_direction[0]) * ws.kin.contacts[i].zeta_t[0];
+    }
+  }
+}
+
+template <Scene S, class Ocp>
+template <class T>
+VecT<T, ScheduleRefinementNlp<S, Ocp>::stage_outputs> ScheduleRefinementNlp<S, Ocp>::stage_block(
+    int p, double theta, const VecT<T, nw>& w, FlowWorkspace<S, T>& ws) const {
+  const VecT<T, nx> x = w.template head<nx>();
+  const T& t_begin = w[nx + nu];
+  const T& t_end = w[nx + nu + 1];
+  const T h = (t_end - t_begin) / T(double(elements_in(p)));
+  const T t = t_begin + T(theta) * (t_end - t_begin);
+  const VecT<T, nu> u = input_law<T>(t, VecT<T, nu>(w.template segment<nu>(nx)));
+  const Mode<nc>& mode = schedule_.phases[static_cast<std::size_t>(p)];
+  evaluate_flow<S, T>(scene_, mode, x, u, ws);
+  VecT<T, stage_outputs> out = VecT<T, stage_outputs>::Zero();
+  out.template head<nx>() = h * ws.xdot;
+  T running(0.0);
+  if constexpr (detail::HasTimedRunningCost<Ocp, T, nx, nu>) running = ocp_.template running_cost<T>(x, u, t);
+  else if constexpr (detail::HasRunningCost<Ocp, T, nx, nu>) running = ocp_.template running_cost<T>(x, u);
+  out[nx] = h * running;
+  write_validity<T>(mode, ws, out);
+  if constexpr (np > 0) out.template segment<np>(nx + 1 + max_validity) = ocp_.template path_constraints<T>(x, u);
+  return out;
+}
+
+template <Scene S, class Ocp>
+template <class T>
+VecT<T, ScheduleRefinementNlp<S, Ocp>::event_outputs> ScheduleRefinementNlp<S, Ocp>::event_block(
+    int b, const VecT<T, nwe>& w, FlowWorkspace<S, T>& fws, JumpWorkspace<S, T>& jws) const {
+  const EventRows& ev = events_[static_cast<std::size_t>(b)];
+  const Mode<nc>& before = schedule_.phases[static_cast<std::size_t>(b)];
+  const Mode<nc>& after = schedule_.phases[static_cast<std::size_t>(b + 1)];
+  const VecT<T, nx> x_minus = w.template head<nx>();
+  const VecT<T, nu> u = input_law<T>(w[nx + nu], VecT<T, nu>(w.template segment<nu>(nx)));
+  evaluate_flow<S, T>(scene_, before, x_minus, u, fws);  // the forces of the ending phase, and ws.kin at x-
+  VecT<T, event_outputs> out = VecT<T, event_outputs>::Zero();
+  int k = 0;
+  for (const Guard& g : ev.imposed_guards) {
+    const auto& c = fws.kin.contacts[g.contact];
+    const ContactForce<T>& f = fws.force[g.contact];
+    switch (g.kind) {
+      case GuardKind::Touchdown: out[k] = c.gap; break;
+      case GuardKind::Release: out[k] = f.normal; break;
+      case GuardKind::Stop: out[k] = c.zeta_t[0]; break;
+      case GuardKind::SlipOnset:
+        out[k] = f.tangent[0] + T(after[g.contact].slip_direction[0] * scene_.contact(g.contact).mu) * f.normal;
+        break;
+    }
+    ++k;
+  }
+  k = 2 * nc;
+  for (int i : ev.approach_contacts) out[k++] = fws.kin.contacts[i].zeta_n;
+  VecT<T, nx> x_plus = x_minus;
+  if (ev.impact) apply_jump_map<S, T>(scene_, ev.impulse_mode, x_minus, jws, x_plus);
+  out.template segment<nx>(3 * nc) = x_plus;
+  if (!ev.impact) return out;
+  // jws.kin holds the kinematics at x- (q is continuous): zeta at x+ from the Jacobians there.
+  const VecT<T, nq> v_plus = x_plus.template tail<nq>();
+  k = 3 * nc + nx;
+  for (int i = 0; i < nc; ++i) {
+    const ImpulseMode& role = ev.impulse_mode[i];
+    if (role.role == ImpulseRole::None) continue;
+    const ContactForce<T>& impulse = jws.impulse[i];
+    out[k++] = impulse.normal;
+    if (scene_.contact(i).tangents() == 0) continue;
+    const T mu_impulse = T(scene_.contact(i).mu) * impulse.normal;
+    if (role.role == ImpulseRole::Stick) {
+      out[k++] = mu_impulse - impulse.tangent[0];
+      out[k++] = mu_impulse + impulse.tangent[0];
+    } else {
+      out[k++] = T(role.slip_direction[0]) * T(jws.kin.contacts[i].Wt.col(0).dot(v_plus));
+    }
+  }
+  (void)before;
+  k = 6 * nc + nx;
+  for (int i : ev.separating_contacts) out[k++] = jws.kin.contacts[i].wn.dot(v_plus);
+  return out;
+}
+
+template <Scene S, class Ocp>
+template <class T>
+VecT<T, ScheduleRefinementNlp<S, Ocp>::terminal_outputs> ScheduleRefinementNlp<S, Ocp>::terminal_block(
+    const VecT<T, nwt>& w) const {
+  VecT<T, terminal_outputs> out = VecT<T, terminal_outputs>::Zero();
+  const VecT<T, nx> x = w.template head<nx>();
+  if constexpr (nt > 0) out.template head<nt>() = ocp_.template terminal_constraints<T>(x, w[nx]);
+  if constexpr (detail::HasTerminalCost<Ocp, T, nx>) out[nt] = ocp_.template terminal_cost<T>(x, w[nx]);
+  return out;
+}
+
+}  // namespace saltus::timefreezing

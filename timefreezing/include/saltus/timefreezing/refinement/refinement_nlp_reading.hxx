@@ -1,0 +1,111 @@
+// Readings of a refinement NLP's point: mode validity, path and terminal violations, forces,
+// impulses, inputs.
+#pragma once
+
+#include <saltus/timefreezing/refinement/refinement_nlp_rows.hxx>
+
+namespace saltus::timefreezing {
+
+inline void RefinementOptions::validate() const {
+  SALTUS_REQUIRE(grid.stages >= 1 && grid.stages <= 3, "refinement: grid.stages must be 1, 2 or 3, got ", grid.stages);
+  SALTUS_REQUIRE(std::isfinite(grid.max_element_duration) && grid.max_element_duration > 0.0,
+                 "refinement: grid.max_element_duration must be finite and > 0, got ", grid.max_element_duration);
+  SALTUS_REQUIRE(grid.min_elements >= 1, "refinement: grid.min_elements must be >= 1, got ", grid.min_elements);
+  SALTUS_REQUIRE(std::isfinite(ipopt.tol) && ipopt.tol > 0.0, "refinement: ipopt.tol must be > 0, got ", ipopt.tol);
+  SALTUS_REQUIRE(ipopt.max_iter >= 0, "refinement: ipopt.max_iter must be >= 0, got ", ipopt.max_iter);
+  SALTUS_REQUIRE(edits.max_edits >= 0, "refinement: edits.max_edits must be >= 0, got ", edits.max_edits);
+  SALTUS_REQUIRE(std::isfinite(edits.active_tolerance) && edits.active_tolerance >= 0.0,
+                 "refinement: edits.active_tolerance must be >= 0, got ", edits.active_tolerance);
+  SALTUS_REQUIRE(std::isfinite(edits.multiplier_threshold) && edits.multiplier_threshold >= 0.0,
+                 "refinement: edits.multiplier_threshold must be >= 0, got ", edits.multiplier_threshold);
+  SALTUS_REQUIRE(std::isfinite(edits.vanishing_duration) && edits.vanishing_duration >= 0.0,
+                 "refinement: edits.vanishing_duration must be >= 0, got ", edits.vanishing_duration);
+  SALTUS_REQUIRE(std::isfinite(min_phase_duration) && min_phase_duration >= 0.0,
+                 "refinement: min_phase_duration must be >= 0, got ", min_phase_duration);
+  SALTUS_REQUIRE(implied_row_tolerance > 0.0 && implied_row_tolerance < 1.0,
+                 "refinement: implied_row_tolerance must lie in (0, 1), got ", implied_row_tolerance);
+  SALTUS_REQUIRE(std::isfinite(initial_state_tolerance) && initial_state_tolerance >= 0.0,
+                 "refinement: initial_state_tolerance must be >= 0, got ", initial_state_tolerance);
+}
+
+template <Scene S, class Ocp>
+std::vector<double> ScheduleRefinementNlp<S, Ocp>::validity_values(const Eigen::Ref<const Eigen::VectorXd>& x, int e,
+                                                                   int r) const {
+  update(x);
+  const auto& phi = stage_value_[static_cast<std::size_t>(e * tableau_.stages + r)];
+  const int nv = validity_count(phase_of(e));
+  return std::vector<double>(phi.data() + nx + 1, phi.data() + nx + 1 + nv);
+}
+
+template <Scene S, class Ocp>
+double ScheduleRefinementNlp<S, Ocp>::mode_validity_violation(const Eigen::Ref<const Eigen::VectorXd>& x) const {
+  update(x);
+  double worst = 0.0;
+  for (int e = 0; e < element_count(); ++e)
+    for (int r = 0; r < tableau_.stages; ++r)
+      for (double v : validity_values(x, e, r)) worst = std::max(worst, -v);
+  for (std::size_t b = 0; b < events_.size(); ++b) {
+    const EventRows& ev = events_[b];
+    const auto& phi = event_value_[b];
+    for (std::size_t k = 0; k < ev.approach_contacts.size(); ++k) worst = std::max(worst, phi[2 * nc + static_cast<int>(k)]);
+    for (int k = 0; k < ev.impulse_rows; ++k) worst = std::max(worst, -phi[3 * nc + nx + k]);
+    for (std::size_t k = 0; k < ev.separating_contacts.size(); ++k)
+      worst = std::max(worst, -phi[6 * nc + nx + static_cast<int>(k)]);
+  }
+  return worst;
+}
+
+template <Scene S, class Ocp>
+double ScheduleRefinementNlp<S, Ocp>::path_violation(const Eigen::Ref<const Eigen::VectorXd>& x) const {
+  double worst = 0.0;
+  if constexpr (np > 0) {
+    update(x);
+    const VecT<double, np> lo = ocp_.path_lower(), hi = ocp_.path_upper();
+    for (const auto& phi : stage_value_)
+      for (int k = 0; k < np; ++k) {
+        const double v = phi[nx + 1 + max_validity + k];
+        worst = std::max({worst, lo[k] - v, v - hi[k]});
+      }
+  }
+  return worst;
+}
+
+template <Scene S, class Ocp>
+double ScheduleRefinementNlp<S, Ocp>::terminal_violation(const Eigen::Ref<const Eigen::VectorXd>& x) const {
+  double worst = 0.0;
+  if constexpr (nt > 0) {
+    update(x);
+    const VecT<double, nt> lo = ocp_.terminal_lower(), hi = ocp_.terminal_upper();
+    for (int k = 0; k < nt; ++k) worst = std::max({worst, lo[k] - terminal_value_[k], terminal_value_[k] - hi[k]});
+  }
+  return worst;
+}
+
+template <Scene S, class Ocp>
+VecT<double, S::nu> ScheduleRefinementNlp<S, Ocp>::applied_input(const Eigen::Ref<const Eigen::VectorXd>& x, int e) const {
+  const int p = phase_of(e);
+  const double t = x[time_index(p)] + (x[time_index(p + 1)] - x[time_index(p)]) * double(e - first_element(p)) /
+                                          double(elements_in(p));
+  return input_law<double>(t, VecT<double, nu>(x.template segment<nu>(control_index(e))));
+}
+
+template <Scene S, class Ocp>
+std::array<ContactForce<double>, S::nc> ScheduleRefinementNlp<S, Ocp>::contact_forces(
+    const Eigen::Ref<const Eigen::VectorXd>& x, int e, int r) const {
+  FlowWorkspace<S, double> ws;
+  (void)stage_block<double>(phase_of(e), stage_theta(e, r), stage_local(x, e, r), ws);
+  return ws.force;
+}
+
+template <Scene S, class Ocp>
+std::array<ContactForce<double>, S::nc> ScheduleRefinementNlp<S, Ocp>::impulses(const Eigen::Ref<const Eigen::VectorXd>& x,
+                                                                               int b) const {
+  std::array<ContactForce<double>, nc> out{};
+  if (!events_[static_cast<std::size_t>(b)].impact) return out;
+  FlowWorkspace<S, double> fws;
+  JumpWorkspace<S, double> jws;
+  (void)event_block<double>(b, event_local(x, b), fws, jws);
+  return jws.impulse;
+}
+
+}  // namespace saltus::timefreezing

@@ -1,0 +1,64 @@
+// Options of the mode-schedule refinement (refinement.hpp), nested by concern: the collocation
+// grid, Ipopt, the schedule edits, and the implied-row test.
+#pragma once
+
+#include <saltus/timefreezing/mpcc/mpcc_solver.hpp>
+
+#include <iosfwd>
+#include <vector>
+
+namespace saltus::timefreezing {
+
+/// The collocation grid of the refinement: per phase, N_p elements of equal length d_p / N_p
+/// (d_p the phase's duration, a variable), each a Radau IIA step (discretisation/radau.hpp).
+struct RefinementGrid {
+  int stages = 3;                      ///< n_s of Radau IIA (1, 2, 3; order 2 n_s - 1)
+  /// N_p = max(min_elements, ceil(d_p,guess / max_element_duration)) [s], > 0.
+  double max_element_duration = 0.02;
+  int min_elements = 2;                ///< >= 1
+};
+
+/// Ipopt on the refinement NLP (a plain NLP: no complementarity pairs).
+struct RefinementIpopt {
+  double tol = 1e-10;    ///< Ipopt `tol`, > 0
+  int max_iter = 500;    ///< Ipopt `max_iter` per solve, >= 0
+  int print_level = 0;   ///< Ipopt `print_level` (0..12)
+  /// Ipopt's own options by name, applied last (e.g. {"hessian_approximation", "limited-memory"}).
+  std::vector<IpoptOption> options;
+};
+
+/// The schedule edits after a solve (refinement.hpp, "Schedule edits").
+struct RefinementEdits {
+  int max_edits = 4;                 ///< solves after the first, >= 0 (0: no edit, only the check)
+  /// A validity row (lambda_n >= 0 of a closed contact, gap >= 0 of an open one) counts as active
+  /// at a stage point where its value is <= active_tolerance (scene units) ...
+  double active_tolerance = 1e-7;
+  /// ... and its multiplier is >= multiplier_threshold (objective units per row unit).
+  double multiplier_threshold = 1e-6;
+  /// A phase wants to vanish when its duration is <= vanishing_duration [s] at the optimum.
+  double vanishing_duration = 1e-6;
+};
+
+struct RefinementOptions {
+  RefinementGrid grid;
+  RefinementIpopt ipopt;
+  RefinementEdits edits;
+  /// d_p >= min_phase_duration [s] for every phase (>= 0; 0: a phase may shrink to a point).
+  double min_phase_duration = 0.0;
+  /// An equality path row of a phase whose gradient lies in the span of the closed contacts' gap
+  /// gradients (relative least-squares residual <= this, and no dependence on v and u) is implied
+  /// by the mode and is not imposed inside the phase; a guard whose gradient lies in the span of
+  /// the rows already imposed at its event is implied the same way (refinement_nlp.hpp,
+  /// "IMPLIED ROWS"). In (0, 1).
+  double implied_row_tolerance = 1e-4;
+  /// The state x0 must satisfy the first phase's closed contacts (gap and normal velocity) and
+  /// open contacts (gap >= -tolerance) to this tolerance [scene units].
+  double initial_state_tolerance = 1e-8;
+  /// One line per solve and per edit when not null; not owned.
+  std::ostream* progress = nullptr;
+
+  /// Throws InvalidArgument naming the first field out of its domain.
+  void validate() const;
+};
+
+}  // namespace saltus::timefreezing
