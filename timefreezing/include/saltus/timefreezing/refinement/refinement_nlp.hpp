@@ -17,7 +17,8 @@
 // over-determines a discretisation of a gap nonlinear in q, the cause of the rank-deficient branch
 // NLPs of FESD: fesd.hpp, "INTEGRATED GAP".)
 //
-// MODE VALIDITY at every stage point (inequality rows >= 0), from the flow's contact forces:
+// MODE VALIDITY at every stage point and at every element's start under the element's input (the
+// input jumps there; inequality rows >= 0), from the flow's contact forces:
 //     open contact:             h_n(q)                    (no penetration)
 //     closed contact:           lambda_n                  (no pull)
 //     sticking planar contact:  mu lambda_n - lambda_t,  mu lambda_n + lambda_t   (in the cone)
@@ -50,8 +51,27 @@
 // not imposed inside that phase; (b) a guard whose gradient in (x-, u-), at the guess's x-, lies
 // in the span of the rows already imposed there (the equality path rows at x-, the guards before
 // it) is not imposed (the plank-box's second corner touching down while theta - phi = 0 holds).
+// (d) closed frictional contacts of one sub-mode whose tangent rows W_t' are parallel at the guess
+// (the plank-box's two corners on the plank) form a friction group: their slip-sign rows are one
+// condition (only the first contact's is imposed), and the flow splits a sticking group's friction
+// by equal utilisation (flow.hpp), so its per-contact cones are one condition too: the first
+// contact's cone rows read the group's totals, mu sum lambda_n -+ sum lambda_t >= 0 (slip starts
+// when no split is left), and the others' cone rows are implied.
+// (c) the gap >= 0 row of an open contact whose gap gradient lies in the span of the closed
+// contacts' gap gradients and the gradients of the equality path rows (no v, u dependence) is
+// implied as gap = 0 (the plank-box's corner kept on the plank by theta - phi = 0 while the other
+// corner is closed): not imposed, it would be weakly active at every stage point.
 // "In the span": relative least-squares residual <= RefinementOptions::implied_row_tolerance.
-// implied_rows() lists them.
+// implied_rows() lists them; the readings (mode_validity_violation, path_violation) include them.
+//
+// EVENT ENDS. At a phase's last stage point the guard of an event replaces the validity row it
+// makes active (touchdown: gap = 0 for gap >= 0; release: lambda_n = 0 for lambda_n >= 0 and the
+// cone; stop: zeta_t = 0 for s zeta_t >= 0; slip onset: the cone); at the next phase's start point
+// (its first element's start under its input) the rows that continuity or the impulse rows already
+// fix go (after a release the gap, after a slip onset the slip sign, after an impact the slip sign
+// of the contacts taking an impulse and the gap of the contacts it throws off); at the very first
+// point the gaps of x0, which no variable moves. Otherwise each would be a second, dependent row
+// active at the same point (LICQ), and a drift of the collocation could make it infeasible.
 //
 // COST AND CONSTRAINTS of the OCP struct (the one the time-freezing solver takes,
 // formulation/ocp concepts in fesd.hpp): the running cost in physical time by the Radau
@@ -152,26 +172,43 @@ class ScheduleRefinementNlp final : public Mpcc {
   int element_start_index(int e) const;
   int phase_end_index(int p) const { return stage_index(first_element(p) + elements_in(p) - 1, tableau_.stages - 1); }
   const ModeSchedule<nc>& schedule() const { return schedule_; }
+  const Ocp& ocp() const { return ocp_; }
+  const S& scene() const { return scene_; }
   const RadauIIA& tableau() const { return tableau_; }
   const std::vector<ImpliedRow>& implied_rows() const { return implied_; }
   /// The path rows imposed at the stage points of phase p (all np of them unless some are implied).
   const std::vector<int>& imposed_path_rows(int p) const { return phase_path_rows_[static_cast<std::size_t>(p)]; }
 
   // ---- reading a solution ---------------------------------------------------------------------
-  /// The largest violation of the mode-validity rows (stages and impacts) at x (file comment), >= 0.
+  /// The largest violation of the mode-validity conditions at x, >= 0: every condition of the mode
+  /// at every collocation point (the implied ones included), the imposed ones at every element's
+  /// start under its input, and the impact rows (file comment).
   double mode_validity_violation(const Eigen::Ref<const Eigen::VectorXd>& x) const;
   /// The largest violation of the path rows (all of them, the implied ones included) and of the
   /// terminal rows at x.
   double path_violation(const Eigen::Ref<const Eigen::VectorXd>& x) const;
   double terminal_violation(const Eigen::Ref<const Eigen::VectorXd>& x) const;
-  /// The validity values of stage (e, r) at x in the order of the file comment (count: validity_count).
+  /// The largest |h_n| and |zeta_n| of the closed contacts over every point of x: how far the
+  /// collocation drifts from the contact manifold that the flow holds at the acceleration level
+  /// (file comment: the position and velocity conditions are imposed once, at the phase's start);
+  /// of the order of the collocation's error, h^(2 n_s - 1).
+  double contact_drift(const Eigen::Ref<const Eigen::VectorXd>& x) const;
+  /// The validity values at point (e, r) of x in the order of the file comment (count:
+  /// validity_count); r = -1 is the element's start under its input, r = 0..n_s-1 its stages.
   std::vector<double> validity_values(const Eigen::Ref<const Eigen::VectorXd>& x, int e, int r) const;
   int validity_count(int p) const { return validity_count_[static_cast<std::size_t>(p)]; }
-  /// The row of validity entry k at stage (e, r).
-  int validity_row(int e, int r, int k) const { return stage_row(e, r) + nx + k; }
+  /// How many validity values contact i has in `mode` (open 1; closed 1, + 2 sticking, + 1 slipping
+  /// with friction).
+  int count_validity_of(const Mode<nc>& mode, int contact) const;
+  /// The validity values imposed as rows at point (e, r): the phase's (all of them unless some are
+  /// implied), less, at the phase's start and end points, those of the contacts whose guard fires
+  /// at the event there (file comment, "EVENT ENDS").
+  const std::vector<int>& imposed_validity(int e, int r) const;
+  /// The row of validity value k at point (e, r), or -1 when that value is implied (not a row).
+  int validity_row(int e, int r, int k) const;
   /// The applied input of element e (after the OCP's input law, at the element's start).
   VecT<double, S::nu> applied_input(const Eigen::Ref<const Eigen::VectorXd>& x, int e) const;
-  /// The contact forces of stage (e, r) at x (the flow of the phase's mode).
+  /// The contact forces of point (e, r) at x (the flow of the phase's mode).
   std::array<ContactForce<double>, S::nc> contact_forces(const Eigen::Ref<const Eigen::VectorXd>& x, int e, int r) const;
   /// The impulses of event b at x (zero without an impact).
   std::array<ContactForce<double>, S::nc> impulses(const Eigen::Ref<const Eigen::VectorXd>& x, int b) const;
@@ -194,7 +231,8 @@ class ScheduleRefinementNlp final : public Mpcc {
   // construction (refinement_nlp_build.hxx)
   void build_grid(const ScheduleGuess<S>& guess);
   void check_initial_state() const;
-  void find_implied_rows(const ScheduleGuess<S>& guess);
+  void find_implied_phase_rows();
+  void find_implied_guards();
   void build_rows();
   void build_structures();
   int count_validity(const Mode<nc>& mode) const;
@@ -211,22 +249,29 @@ class ScheduleRefinementNlp final : public Mpcc {
   template <class T>
   VecT<T, S::nu> input_law(const T& t, const VecT<T, S::nu>& decision) const;
   template <class T>
-  void write_validity(const Mode<nc>& mode, const FlowWorkspace<S, T>& ws, VecT<T, stage_outputs>& out) const;
+  void write_validity(int p, const FlowWorkspace<S, T>& ws, VecT<T, stage_outputs>& out) const;
 
-  // local vectors and their globals
-  VecT<double, nw> stage_local(const Eigen::Ref<const Eigen::VectorXd>& x, int e, int r) const;
-  int stage_global(int e, int r, int a) const;
+  // local vectors and their globals. A point (e, r): r = -1 the element's start (its start state
+  // under its own input: validity rows only), r = 0..n_s-1 its stages.
+  VecT<double, nw> point_local(const Eigen::Ref<const Eigen::VectorXd>& x, int e, int r) const;
+  int point_global(int e, int r, int a) const;
+  int point_state_index(int e, int r) const { return r < 0 ? element_start_index(e) : stage_index(e, r); }
+  std::size_t point_slot(int e, int r) const { return static_cast<std::size_t>(e * (tableau_.stages + 1) + r + 1); }
   VecT<double, nwe> event_local(const Eigen::Ref<const Eigen::VectorXd>& x, int b) const;
   int event_global(int b, int a) const;
   VecT<double, nwt> terminal_local(const Eigen::Ref<const Eigen::VectorXd>& x) const;
   int terminal_global(int a) const;
-  double stage_theta(int e, int r) const;  // (j + c_r) / N_p
-  int stage_row(int e, int r) const { return stage_row_[static_cast<std::size_t>(e * tableau_.stages + r)]; }
+  double point_theta(int e, int r) const;  // (j + c_r) / N_p, j / N_p for the start
+  /// The first row of point (e, r): a start's validity rows; a stage's collocation, validity, path rows.
+  int point_row(int e, int r) const { return point_row_[point_slot(e, r)]; }
+  int validity_offset_in_rows(int r) const { return r < 0 ? 0 : nx; }
 
   // derivative caches (refinement_nlp_eval.hxx)
   void update(const Eigen::Ref<const Eigen::VectorXd>& x) const;
   template <class Emit>
   void walk_jacobian(Emit&& emit) const;
+  VecT<double, stage_outputs> point_weights(int e, int l, double sigma, const Eigen::Ref<const Eigen::VectorXd>& lambda) const;
+  VecT<double, event_outputs> event_weights(int b, const Eigen::Ref<const Eigen::VectorXd>& lambda) const;
   template <class Emit>
   void walk_hessian(const Eigen::Ref<const Eigen::VectorXd>& x, double sigma,
                     const Eigen::Ref<const Eigen::VectorXd>& lambda, Emit&& emit) const;
@@ -239,8 +284,17 @@ class ScheduleRefinementNlp final : public Mpcc {
   RadauIIA tableau_;
   int n_ = 0, m_ = 0, element_base_ = 0;
   std::vector<int> phase_elements_, phase_first_element_, element_phase_, validity_count_;
-  std::vector<std::vector<int>> phase_path_rows_;  // per phase: the path rows imposed at its stage points
-  std::vector<int> stage_row_;
+  std::vector<std::vector<int>> phase_path_rows_;      // per phase: the path rows imposed at its stages
+  struct PhaseValidity {  // the validity values imposed as rows: inside the phase, at its start, at its end
+    std::vector<int> interior, at_start, at_end;
+  };
+  std::vector<PhaseValidity> phase_validity_rows_;
+  // per phase and contact: the leader of its friction group (itself when alone; -1 when open or
+  // frictionless): closed frictional contacts of one sub-mode whose tangent rows are parallel
+  std::vector<std::array<int, nc>> friction_leader_;
+  void restrict_event_ends();
+  void find_friction_groups(int p, const Kinematics<S, double>& kin);
+  std::vector<int> point_row_;
   std::vector<EventRows> events_;
   int duration_row_ = 0, terminal_row_ = 0;
   std::vector<ImpliedRow> implied_;
@@ -250,8 +304,8 @@ class ScheduleRefinementNlp final : public Mpcc {
   // caches at the last x
   mutable Eigen::VectorXd cached_x_;
   mutable bool cache_valid_ = false;
-  mutable std::vector<VecT<double, stage_outputs>> stage_value_;
-  mutable std::vector<MatT<double, stage_outputs, nw>> stage_jacobian_;
+  mutable std::vector<VecT<double, stage_outputs>> point_value_;       // per point slot
+  mutable std::vector<MatT<double, stage_outputs, nw>> point_jacobian_;
   mutable std::vector<VecT<double, event_outputs>> event_value_;
   mutable std::vector<MatT<double, event_outputs, nwe>> event_jacobian_;
   mutable VecT<double, terminal_outputs> terminal_value_;

@@ -16,12 +16,14 @@ VecT<T, S::nu> ScheduleRefinementNlp<S, Ocp>::input_law(const T& t, const VecT<T
   else return decision;
 }
 
-/// The validity values of a mode at a flow evaluation, in the order of the file comment, written
-/// from out[nx + 1] on.
+/// The validity values of phase p's mode at a flow evaluation, in the order of the file comment,
+/// written from out[nx + 1] on. The cone rows of a sticking group's leader read the group's totals
+/// (refinement_nlp.hpp, "IMPLIED ROWS" (d)).
 template <Scene S, class Ocp>
 template <class T>
-void ScheduleRefinementNlp<S, Ocp>::write_validity(const Mode<nc>& mode, const FlowWorkspace<S, T>& ws,
-                                                   VecT<T, stage_outputs>& out) const {
+void ScheduleRefinementNlp<S, Ocp>::write_validity(int p, const FlowWorkspace<S, T>& ws, VecT<T, stage_outputs>& out) const {
+  const Mode<nc>& mode = schedule_.phases[static_cast<std::size_t>(p)];
+  const std::array<int, nc>& leader = friction_leader_[static_cast<std::size_t>(p)];
   int k = nx + 1;
   for (int i = 0; i < nc; ++i) {
     const ContactState& c = mode[i];
@@ -29,16 +31,21 @@ void ScheduleRefinementNlp<S, Ocp>::write_validity(const Mode<nc>& mode, const F
       out[k++] = ws.kin.contacts[i].gap;
       continue;
     }
-    const T& lambda_n = ws.force[i].normal;
-    out[k++] = lambda_n;
+    out[k++] = ws.force[i].normal;
     if (scene_.contact(i).tangents() == 0) continue;
-    const T mu_lambda = T(scene_.contact(i).mu) * lambda_n;
-    if (c.mode == ContactMode::Stick) {
-      out[k++] = mu_lambda - ws.force[i].tangent[0];
-      out[k++] = mu_lambda + ws.force[i].tangent[0];
-    } else {
+    if (c.mode == ContactMode::Slip) {
       out[k++] = T(c.slip_direction[0]) * ws.kin.contacts[i].zeta_t[0];
+      continue;
     }
+    T mu_lambda = T(scene_.contact(i).mu) * ws.force[i].normal, lambda_t = ws.force[i].tangent[0];
+    if (leader[i] == i)
+      for (int j = i + 1; j < nc; ++j)
+        if (leader[j] == i) {
+          mu_lambda += T(scene_.contact(j).mu) * ws.force[j].normal;
+          lambda_t += ws.force[j].tangent[0];
+        }
+    out[k++] = mu_lambda - lambda_t;
+    out[k++] = mu_lambda + lambda_t;
   }
 }
 
@@ -60,7 +67,7 @@ VecT<T, ScheduleRefinementNlp<S, Ocp>::stage_outputs> ScheduleRefinementNlp<S, O
   if constexpr (detail::HasTimedRunningCost<Ocp, T, nx, nu>) running = ocp_.template running_cost<T>(x, u, t);
   else if constexpr (detail::HasRunningCost<Ocp, T, nx, nu>) running = ocp_.template running_cost<T>(x, u);
   out[nx] = h * running;
-  write_validity<T>(mode, ws, out);
+  write_validity<T>(p, ws, out);
   if constexpr (np > 0) out.template segment<np>(nx + 1 + max_validity) = ocp_.template path_constraints<T>(x, u);
   return out;
 }

@@ -58,7 +58,9 @@ ScheduleRefinementNlp<S, Ocp>::ScheduleRefinementNlp(const S& scene, const Ocp& 
   }
   check_initial_state();
   build_grid(guess);
-  find_implied_rows(guess);
+  find_implied_phase_rows();
+  restrict_event_ends();
+  find_implied_guards();
   build_rows();
   build_structures();
 }
@@ -110,7 +112,7 @@ void ScheduleRefinementNlp<S, Ocp>::build_grid(const ScheduleGuess<S>& guess) {
         if (horizon_.control_upper.size() == nu) u[k] = std::min(u[k], horizon_.control_upper[k]);
       }
       guess_x_.template segment<nu>(control_index(e)) = u;
-      for (int r = 0; r < ns; ++r) guess_x_.template segment<nx>(stage_index(e, r)) = guess.state(p, t0 + (t1 - t0) * stage_theta(e, r));
+      for (int r = 0; r < ns; ++r) guess_x_.template segment<nx>(stage_index(e, r)) = guess.state(p, t0 + (t1 - t0) * point_theta(e, r));
     }
   }
   for (int p = 0; p < P; ++p)
@@ -122,12 +124,15 @@ void ScheduleRefinementNlp<S, Ocp>::build_grid(const ScheduleGuess<S>& guess) {
 }
 
 template <Scene S, class Ocp>
+int ScheduleRefinementNlp<S, Ocp>::count_validity_of(const Mode<nc>& mode, int i) const {
+  if (!mode[i].closed()) return 1;
+  return 1 + (scene_.contact(i).tangents() == 0 ? 0 : (mode[i].mode == ContactMode::Stick ? 2 : 1));
+}
+
+template <Scene S, class Ocp>
 int ScheduleRefinementNlp<S, Ocp>::count_validity(const Mode<nc>& mode) const {
   int n = 0;
-  for (int i = 0; i < nc; ++i) {
-    if (!mode[i].closed()) ++n;
-    else n += 1 + (scene_.contact(i).tangents() == 0 ? 0 : (mode[i].mode == ContactMode::Stick ? 2 : 1));
-  }
+  for (int i = 0; i < nc; ++i) n += count_validity_of(mode, i);
   return n;
 }
 

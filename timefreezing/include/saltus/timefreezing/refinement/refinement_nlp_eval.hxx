@@ -40,9 +40,9 @@ void local_hessian(F&& f, const Eigen::Matrix<double, N, 1>& w, const Eigen::Mat
 }  // namespace detail
 
 template <Scene S, class Ocp>
-double ScheduleRefinementNlp<S, Ocp>::stage_theta(int e, int r) const {
+double ScheduleRefinementNlp<S, Ocp>::point_theta(int e, int r) const {
   const int p = phase_of(e);
-  return (double(e - first_element(p)) + tableau_.c[r]) / double(elements_in(p));
+  return (double(e - first_element(p)) + (r < 0 ? 0.0 : tableau_.c[r])) / double(elements_in(p));
 }
 
 template <Scene S, class Ocp>
@@ -52,18 +52,35 @@ int ScheduleRefinementNlp<S, Ocp>::element_start_index(int e) const {
 }
 
 template <Scene S, class Ocp>
-VecT<double, ScheduleRefinementNlp<S, Ocp>::nw> ScheduleRefinementNlp<S, Ocp>::stage_local(
+const std::vector<int>& ScheduleRefinementNlp<S, Ocp>::imposed_validity(int e, int r) const {
+  const int p = phase_of(e);
+  const PhaseValidity& v = phase_validity_rows_[static_cast<std::size_t>(p)];
+  if (r < 0 && e == first_element(p)) return v.at_start;
+  if (r == tableau_.stages - 1 && e == first_element(p) + elements_in(p) - 1) return v.at_end;
+  return v.interior;
+}
+
+template <Scene S, class Ocp>
+int ScheduleRefinementNlp<S, Ocp>::validity_row(int e, int r, int k) const {
+  const std::vector<int>& imposed = imposed_validity(e, r);
+  const auto it = std::find(imposed.begin(), imposed.end(), k);
+  if (it == imposed.end()) return -1;
+  return point_row(e, r) + validity_offset_in_rows(r) + static_cast<int>(it - imposed.begin());
+}
+
+template <Scene S, class Ocp>
+VecT<double, ScheduleRefinementNlp<S, Ocp>::nw> ScheduleRefinementNlp<S, Ocp>::point_local(
     const Eigen::Ref<const Eigen::VectorXd>& x, int e, int r) const {
   VecT<double, nw> w;
   const int p = phase_of(e);
-  w << x.template segment<nx>(stage_index(e, r)), x.template segment<nu>(control_index(e)), x[time_index(p)],
+  w << x.template segment<nx>(point_state_index(e, r)), x.template segment<nu>(control_index(e)), x[time_index(p)],
       x[time_index(p + 1)];
   return w;
 }
 
 template <Scene S, class Ocp>
-int ScheduleRefinementNlp<S, Ocp>::stage_global(int e, int r, int a) const {
-  if (a < nx) return stage_index(e, r) + a;
+int ScheduleRefinementNlp<S, Ocp>::point_global(int e, int r, int a) const {
+  if (a < nx) return point_state_index(e, r) + a;
   if (a < nx + nu) return control_index(e) + (a - nx);
   return time_index(phase_of(e) + (a - nx - nu));
 }
@@ -103,15 +120,13 @@ void ScheduleRefinementNlp<S, Ocp>::update(const Eigen::Ref<const Eigen::VectorX
   thread_local FlowWorkspace<S, detail::Ad1<nw>> stage_ws;
   thread_local FlowWorkspace<S, detail::Ad1<nwe>> event_ws;
   thread_local JumpWorkspace<S, detail::Ad1<nwe>> jump_ws;
-  const int ns = tableau_.stages;
   for (int e = 0; e < element_count(); ++e)
-    for (int r = 0; r < ns; ++r) {
+    for (int r = -1; r < tableau_.stages; ++r) {
       const int p = phase_of(e);
-      const double theta = stage_theta(e, r);
-      const std::size_t k = static_cast<std::size_t>(e * ns + r);
-      detail::local_jacobian<nw, stage_outputs>(
-          [&](const auto& w) { return stage_block(p, theta, w, stage_ws); }, stage_local(x, e, r), stage_value_[k],
-          stage_jacobian_[k]);
+      const double theta = point_theta(e, r);
+      detail::local_jacobian<nw, stage_outputs>([&](const auto& w) { return stage_block(p, theta, w, stage_ws); },
+                                                point_local(x, e, r), point_value_[point_slot(e, r)],
+                                                point_jacobian_[point_slot(e, r)]);
     }
   for (int b = 0; b + 1 < phase_count(); ++b)
     detail::local_jacobian<nwe, event_outputs>([&](const auto& w) { return event_block(b, w, event_ws, jump_ws); },
@@ -127,9 +142,8 @@ template <Scene S, class Ocp>
 double ScheduleRefinementNlp<S, Ocp>::objective(const Eigen::Ref<const Eigen::VectorXd>& x) const {
   update(x);
   double f = terminal_value_[nt];
-  const int ns = tableau_.stages;
   for (int e = 0; e < element_count(); ++e)
-    for (int l = 0; l < ns; ++l) f += tableau_.b[l] * stage_value_[static_cast<std::size_t>(e * ns + l)][nx];
+    for (int l = 0; l < tableau_.stages; ++l) f += tableau_.b[l] * point_value_[point_slot(e, l)][nx];
   return f;
 }
 
@@ -138,11 +152,9 @@ void ScheduleRefinementNlp<S, Ocp>::objective_gradient(const Eigen::Ref<const Ei
                                                        Eigen::Ref<Eigen::VectorXd> gradient) const {
   update(x);
   gradient.setZero();
-  const int ns = tableau_.stages;
   for (int e = 0; e < element_count(); ++e)
-    for (int l = 0; l < ns; ++l)
-      for (int a = 0; a < nw; ++a)
-        gradient[stage_global(e, l, a)] += tableau_.b[l] * stage_jacobian_[static_cast<std::size_t>(e * ns + l)](nx, a);
+    for (int l = 0; l < tableau_.stages; ++l)
+      for (int a = 0; a < nw; ++a) gradient[point_global(e, l, a)] += tableau_.b[l] * point_jacobian_[point_slot(e, l)](nx, a);
   for (int a = 0; a < nwt; ++a) gradient[terminal_global(a)] += terminal_jacobian_(nt, a);
 }
 
@@ -153,18 +165,20 @@ void ScheduleRefinementNlp<S, Ocp>::constraints(const Eigen::Ref<const Eigen::Ve
   const int ns = tableau_.stages;
   for (int e = 0; e < element_count(); ++e) {
     const int p = phase_of(e);
-    for (int r = 0; r < ns; ++r) {
-      const int row = stage_row(e, r);
-      const auto& phi = stage_value_[static_cast<std::size_t>(e * ns + r)];
-      for (int i = 0; i < nx; ++i) {
-        double s = x[stage_index(e, r) + i] - x[element_start_index(e) + i];
-        for (int l = 0; l < ns; ++l) s -= tableau_.a(r, l) * stage_value_[static_cast<std::size_t>(e * ns + l)][i];
-        g[row + i] = s;
-      }
-      const int nv = validity_count(p);
-      for (int k = 0; k < nv; ++k) g[row + nx + k] = phi[nx + 1 + k];
-      const std::vector<int>& path = imposed_path_rows(p);
-      for (std::size_t k = 0; k < path.size(); ++k) g[row + nx + nv + static_cast<int>(k)] = phi[nx + 1 + max_validity + path[k]];
+    const std::vector<int>& path = imposed_path_rows(p);
+    for (int r = -1; r < ns; ++r) {
+      const std::vector<int>& validity = imposed_validity(e, r);
+      int row = point_row(e, r);
+      const auto& phi = point_value_[point_slot(e, r)];
+      if (r >= 0)
+        for (int i = 0; i < nx; ++i, ++row) {
+          double s = x[stage_index(e, r) + i] - x[element_start_index(e) + i];
+          for (int l = 0; l < ns; ++l) s -= tableau_.a(r, l) * point_value_[point_slot(e, l)][i];
+          g[row] = s;
+        }
+      for (int k : validity) g[row++] = phi[nx + 1 + k];
+      if (r >= 0)
+        for (int k : path) g[row++] = phi[nx + 1 + max_validity + k];
     }
   }
   for (int b = 0; b + 1 < phase_count(); ++b) {
@@ -188,24 +202,26 @@ template <class Emit>
 void ScheduleRefinementNlp<S, Ocp>::walk_jacobian(Emit&& emit) const {
   const int ns = tableau_.stages;
   for (int e = 0; e < element_count(); ++e) {
-    const int p = phase_of(e), nv = validity_count(p);
-    for (int r = 0; r < ns; ++r) {
-      const int row = stage_row(e, r);
-      const auto& jr = stage_jacobian_[static_cast<std::size_t>(e * ns + r)];
-      for (int i = 0; i < nx; ++i) {
-        emit(row + i, stage_index(e, r) + i, 1.0);
-        emit(row + i, element_start_index(e) + i, -1.0);
-        for (int l = 0; l < ns; ++l)
-          for (int a = 0; a < nw; ++a)
-            emit(row + i, stage_global(e, l, a),
-                 -tableau_.a(r, l) * stage_jacobian_[static_cast<std::size_t>(e * ns + l)](i, a));
+    const int p = phase_of(e);
+    for (int r = -1; r < ns; ++r) {
+      int row = point_row(e, r);
+      const auto& jr = point_jacobian_[point_slot(e, r)];
+      if (r >= 0)
+        for (int i = 0; i < nx; ++i, ++row) {
+          emit(row, stage_index(e, r) + i, 1.0);
+          emit(row, element_start_index(e) + i, -1.0);
+          for (int l = 0; l < ns; ++l)
+            for (int a = 0; a < nw; ++a) emit(row, point_global(e, l, a), -tableau_.a(r, l) * point_jacobian_[point_slot(e, l)](i, a));
+        }
+      for (int k : imposed_validity(e, r)) {
+        for (int a = 0; a < nw; ++a) emit(row, point_global(e, r, a), jr(nx + 1 + k, a));
+        ++row;
       }
-      for (int k = 0; k < nv; ++k)
-        for (int a = 0; a < nw; ++a) emit(row + nx + k, stage_global(e, r, a), jr(nx + 1 + k, a));
-      const std::vector<int>& path = imposed_path_rows(p);
-      for (std::size_t k = 0; k < path.size(); ++k)
-        for (int a = 0; a < nw; ++a)
-          emit(row + nx + nv + static_cast<int>(k), stage_global(e, r, a), jr(nx + 1 + max_validity + path[k], a));
+      if (r >= 0)
+        for (int k : imposed_path_rows(p)) {
+          for (int a = 0; a < nw; ++a) emit(row, point_global(e, r, a), jr(nx + 1 + max_validity + k, a));
+          ++row;
+        }
     }
   }
   for (int b = 0; b + 1 < phase_count(); ++b) {
@@ -239,8 +255,42 @@ void ScheduleRefinementNlp<S, Ocp>::jacobian_values(const Eigen::Ref<const Eigen
   walk_jacobian([&](int, int, double v) { values[k++] = v; });
 }
 
+/// The weights of point (e, l)'s outputs in the Lagrangian sigma f + lambda' g.
+template <Scene S, class Ocp>
+VecT<double, ScheduleRefinementNlp<S, Ocp>::stage_outputs> ScheduleRefinementNlp<S, Ocp>::point_weights(
+    int e, int l, double sigma, const Eigen::Ref<const Eigen::VectorXd>& lambda) const {
+  VecT<double, stage_outputs> weight = VecT<double, stage_outputs>::Zero();
+  const int p = phase_of(e), ns = tableau_.stages;
+  int row = point_row(e, l);
+  if (l >= 0) {
+    for (int i = 0; i < nx; ++i)
+      for (int r = 0; r < ns; ++r) weight[i] -= tableau_.a(r, l) * lambda[point_row(e, r) + i];
+    weight[nx] = sigma * tableau_.b[l];
+    row += nx;
+  }
+  for (int k : imposed_validity(e, l)) weight[nx + 1 + k] = lambda[row++];
+  if (l >= 0)
+    for (int k : imposed_path_rows(p)) weight[nx + 1 + max_validity + k] = lambda[row++];
+  return weight;
+}
+
+/// The weights of event b's outputs in the Lagrangian.
+template <Scene S, class Ocp>
+VecT<double, ScheduleRefinementNlp<S, Ocp>::event_outputs> ScheduleRefinementNlp<S, Ocp>::event_weights(
+    int b, const Eigen::Ref<const Eigen::VectorXd>& lambda) const {
+  const EventRows& ev = events_[static_cast<std::size_t>(b)];
+  VecT<double, event_outputs> weight = VecT<double, event_outputs>::Zero();
+  int row = ev.first_row;
+  for (std::size_t k = 0; k < ev.imposed_guards.size(); ++k) weight[static_cast<int>(k)] = lambda[row++];
+  for (std::size_t k = 0; k < ev.approach_contacts.size(); ++k) weight[2 * nc + static_cast<int>(k)] = lambda[row++];
+  for (int i = 0; i < nx; ++i) weight[3 * nc + i] = -lambda[row++];
+  for (int k = 0; k < ev.impulse_rows; ++k) weight[3 * nc + nx + k] = lambda[row++];
+  for (std::size_t k = 0; k < ev.separating_contacts.size(); ++k) weight[6 * nc + nx + static_cast<int>(k)] = lambda[row++];
+  return weight;
+}
+
 /// emit(row, column, value) for every lower-triangle Hessian entry of the blocks, in a fixed order.
-/// With sigma and lambda empty (size 0), the structure walk: no AD, zero values.
+/// With lambda empty (size 0), the structure walk: no AD, zero values.
 template <Scene S, class Ocp>
 template <class Emit>
 void ScheduleRefinementNlp<S, Ocp>::walk_hessian(const Eigen::Ref<const Eigen::VectorXd>& x, double sigma,
@@ -256,41 +306,22 @@ void ScheduleRefinementNlp<S, Ocp>::walk_hessian(const Eigen::Ref<const Eigen::V
         emit(std::max(ga, gc), std::min(ga, gc), H(a, c));
       }
   };
-  const int ns = tableau_.stages;
   MatT<double, nw, nw> Hs = MatT<double, nw, nw>::Zero();
-  for (int e = 0; e < element_count(); ++e) {
-    const int p = phase_of(e), nv = validity_count(p);
-    for (int l = 0; l < ns; ++l) {
+  for (int e = 0; e < element_count(); ++e)
+    for (int l = -1; l < tableau_.stages; ++l) {
       if (values) {
-        VecT<double, stage_outputs> weight = VecT<double, stage_outputs>::Zero();
-        for (int i = 0; i < nx; ++i)
-          for (int r = 0; r < ns; ++r) weight[i] -= tableau_.a(r, l) * lambda[stage_row(e, r) + i];
-        weight[nx] = sigma * tableau_.b[l];
-        for (int k = 0; k < nv; ++k) weight[nx + 1 + k] = lambda[stage_row(e, l) + nx + k];
-        const std::vector<int>& path = imposed_path_rows(p);
-        for (std::size_t k = 0; k < path.size(); ++k)
-          weight[nx + 1 + max_validity + path[k]] = lambda[stage_row(e, l) + nx + nv + static_cast<int>(k)];
-        const double theta = stage_theta(e, l);
+        const int p = phase_of(e);
+        const double theta = point_theta(e, l);
         detail::local_hessian<nw, stage_outputs>([&](const auto& w) { return stage_block(p, theta, w, stage_ws); },
-                                                 stage_local(x, e, l), weight, Hs);
+                                                 point_local(x, e, l), point_weights(e, l, sigma, lambda), Hs);
       }
-      emit_lower(Hs, [&](int a) { return stage_global(e, l, a); });
+      emit_lower(Hs, [&](int a) { return point_global(e, l, a); });
     }
-  }
   MatT<double, nwe, nwe> He = MatT<double, nwe, nwe>::Zero();
   for (int b = 0; b + 1 < phase_count(); ++b) {
-    if (values) {
-      const EventRows& ev = events_[static_cast<std::size_t>(b)];
-      VecT<double, event_outputs> weight = VecT<double, event_outputs>::Zero();
-      int row = ev.first_row;
-      for (std::size_t k = 0; k < ev.imposed_guards.size(); ++k) weight[static_cast<int>(k)] = lambda[row++];
-      for (std::size_t k = 0; k < ev.approach_contacts.size(); ++k) weight[2 * nc + static_cast<int>(k)] = lambda[row++];
-      for (int i = 0; i < nx; ++i) weight[3 * nc + i] = -lambda[row++];
-      for (int k = 0; k < ev.impulse_rows; ++k) weight[3 * nc + nx + k] = lambda[row++];
-      for (std::size_t k = 0; k < ev.separating_contacts.size(); ++k) weight[6 * nc + nx + static_cast<int>(k)] = lambda[row++];
+    if (values)
       detail::local_hessian<nwe, event_outputs>([&](const auto& w) { return event_block(b, w, event_ws, jump_ws); },
-                                                event_local(x, b), weight, He);
-    }
+                                                event_local(x, b), event_weights(b, lambda), He);
     emit_lower(He, [&](int a) { return event_global(b, a); });
   }
   MatT<double, nwt, nwt> Ht = MatT<double, nwt, nwt>::Zero();

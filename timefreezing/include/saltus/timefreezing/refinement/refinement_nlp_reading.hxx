@@ -32,7 +32,7 @@ template <Scene S, class Ocp>
 std::vector<double> ScheduleRefinementNlp<S, Ocp>::validity_values(const Eigen::Ref<const Eigen::VectorXd>& x, int e,
                                                                    int r) const {
   update(x);
-  const auto& phi = stage_value_[static_cast<std::size_t>(e * tableau_.stages + r)];
+  const auto& phi = point_value_[point_slot(e, r)];
   const int nv = validity_count(phase_of(e));
   return std::vector<double>(phi.data() + nx + 1, phi.data() + nx + 1 + nv);
 }
@@ -42,8 +42,13 @@ double ScheduleRefinementNlp<S, Ocp>::mode_validity_violation(const Eigen::Ref<c
   update(x);
   double worst = 0.0;
   for (int e = 0; e < element_count(); ++e)
-    for (int r = 0; r < tableau_.stages; ++r)
-      for (double v : validity_values(x, e, r)) worst = std::max(worst, -v);
+    for (int r = -1; r < tableau_.stages; ++r) {
+      const std::vector<double> v = validity_values(x, e, r);
+      if (r >= 0)  // a collocation point: every condition of the mode, implied or imposed
+        for (double value : v) worst = std::max(worst, -value);
+      else  // an element's start under its input: the conditions imposed there
+        for (int k : imposed_validity(e, r)) worst = std::max(worst, -v[static_cast<std::size_t>(k)]);
+    }
   for (std::size_t b = 0; b < events_.size(); ++b) {
     const EventRows& ev = events_[b];
     const auto& phi = event_value_[b];
@@ -56,12 +61,28 @@ double ScheduleRefinementNlp<S, Ocp>::mode_validity_violation(const Eigen::Ref<c
 }
 
 template <Scene S, class Ocp>
+double ScheduleRefinementNlp<S, Ocp>::contact_drift(const Eigen::Ref<const Eigen::VectorXd>& x) const {
+  double worst = 0.0;
+  Kinematics<S, double> kin;
+  for (int e = 0; e < element_count(); ++e) {
+    const Mode<nc>& mode = schedule_.phases[static_cast<std::size_t>(phase_of(e))];
+    for (int r = -1; r < tableau_.stages; ++r) {
+      const VecT<double, nx> xs = x.template segment<nx>(point_state_index(e, r));
+      evaluate_kinematics<S, double>(scene_, VecT<double, nq>(xs.template head<nq>()), VecT<double, nq>(xs.template tail<nq>()), kin);
+      for (int i = 0; i < nc; ++i)
+        if (mode[i].closed()) worst = std::max({worst, std::abs(kin.contacts[i].gap), std::abs(kin.contacts[i].zeta_n)});
+    }
+  }
+  return worst;
+}
+
+template <Scene S, class Ocp>
 double ScheduleRefinementNlp<S, Ocp>::path_violation(const Eigen::Ref<const Eigen::VectorXd>& x) const {
   double worst = 0.0;
   if constexpr (np > 0) {
     update(x);
     const VecT<double, np> lo = ocp_.path_lower(), hi = ocp_.path_upper();
-    for (const auto& phi : stage_value_)
+    for (const auto& phi : point_value_)
       for (int k = 0; k < np; ++k) {
         const double v = phi[nx + 1 + max_validity + k];
         worst = std::max({worst, lo[k] - v, v - hi[k]});
@@ -93,7 +114,7 @@ template <Scene S, class Ocp>
 std::array<ContactForce<double>, S::nc> ScheduleRefinementNlp<S, Ocp>::contact_forces(
     const Eigen::Ref<const Eigen::VectorXd>& x, int e, int r) const {
   FlowWorkspace<S, double> ws;
-  (void)stage_block<double>(phase_of(e), stage_theta(e, r), stage_local(x, e, r), ws);
+  (void)stage_block<double>(phase_of(e), point_theta(e, r), point_local(x, e, r), ws);
   return ws.force;
 }
 

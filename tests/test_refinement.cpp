@@ -1,0 +1,232 @@
+// The mode-schedule refinement (timefreezing/refinement/): the schedule's consistency rules and bad
+// inputs, Ipopt's derivative checker on a small refinement NLP, the guiding example's OCP and the
+// plank-box short landing refined from their time-freezing solutions (exact events, mode validity,
+// per-phase re-simulation), a schedule edit on a stance built to want a lift-off, and a schedule
+// that cannot reach its target.
+#include "scenes/plank_box_landing.hpp"
+#include "scenes/time_freezing_examples.hpp"
+
+#include <saltus/timefreezing/drivers/optimal_control.hpp>
+#include <saltus/timefreezing/refinement/refinement.hpp>
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+
+namespace saltus::timefreezing {
+namespace {
+
+using scenes::PointMass;
+
+/// Expects InvalidArgument whose message contains every one of `parts`.
+template <class F>
+void expect_invalid(F&& f, std::initializer_list<std::string> parts) {
+  try {
+    f();
+    ADD_FAILURE() << "no InvalidArgument thrown";
+  } catch (const InvalidArgument& e) {
+    for (const std::string& p : parts) EXPECT_NE(std::string(e.what()).find(p), std::string::npos) << e.what();
+  }
+}
+
+Mode<1> open_mode() { return Mode<1>{}; }
+Mode<1> closed_mode(int slip_sign = 0) {
+  Mode<1> m;
+  m[0] = slip_sign == 0 ? ContactState::stick() : ContactState::slip_planar(slip_sign);
+  return m;
+}
+
+PointMass frictional_mass() { return PointMass(scenes::PointMassToTheTarget::parameters()); }
+
+TEST(ModeSchedule, ConsistentScheduleIsNormalisedAndDescribed) {
+  ModeSchedule<1> s;
+  s.phases = {open_mode(), closed_mode(1)};
+  s.events = {ScheduleEvent{{Guard{0, GuardKind::Touchdown}}}};
+  const auto v = validated(frictional_mass(), s);
+  EXPECT_EQ(describe(frictional_mass(), v), "table:open [touchdown table] table:slip+");
+  EXPECT_TRUE(v.events[0].impact());
+  const ImpactMode<1> m = impulse_mode_after(frictional_mass(), v.phases[1]);
+  EXPECT_EQ(m[0].role, ImpulseRole::Slip);
+  // A frictionless closed contact is stored as slip with no direction, as the simulator stores it.
+  ModeSchedule<1> f = s;
+  f.phases[1] = closed_mode(0);
+  EXPECT_EQ(validated(PointMass{}, f).phases[1][0], ContactState::slip(Eigen::Vector2d::Zero()));
+}
+
+TEST(ModeSchedule, InconsistentSchedulesNameTheEventAndTheCondition) {
+  const PointMass mass = frictional_mass();
+  ModeSchedule<1> empty;
+  expect_invalid([&] { (void)validated(mass, empty); }, {"no phase"});
+  ModeSchedule<1> s;
+  s.phases = {closed_mode(1), closed_mode(0)};
+  s.events = {ScheduleEvent{{Guard{0, GuardKind::Touchdown}}}};
+  expect_invalid([&] { (void)validated(mass, s); }, {"event 0", "touchdown table", "already closed"});
+  s.events = {ScheduleEvent{{Guard{0, GuardKind::SlipOnset}}}};
+  expect_invalid([&] { (void)validated(mass, s); }, {"event 0", "slip-onset table", "does not stick"});
+  s.events = {ScheduleEvent{}};
+  expect_invalid([&] { (void)validated(mass, s); }, {"event 0", "no guard"});
+  s.phases = {open_mode(), closed_mode(1), open_mode()};
+  s.events = {ScheduleEvent{{Guard{0, GuardKind::Touchdown}}}};
+  expect_invalid([&] { (void)validated(mass, s); }, {"3 phases need 2 events"});
+  s.events.push_back(ScheduleEvent{{Guard{0, GuardKind::Stop}}});
+  expect_invalid([&] { (void)validated(mass, s); }, {"event 1", "stop table", "needs the contact to stick"});
+  ModeSchedule<1> silent;
+  silent.phases = {closed_mode(1), closed_mode(0)};
+  silent.events = {ScheduleEvent{{Guard{0, GuardKind::Release}}}};
+  expect_invalid([&] { (void)validated(mass, silent); }, {"release table", "leaves the contact closed"});
+}
+
+/// The guiding example's OCP (scenes::PointMassToTheTarget) on a coarse hand-made guess: a drop,
+/// a touchdown at t = 0.5 and a slide to the target.
+ScheduleGuess<PointMass> hand_guess() {
+  ScheduleGuess<PointMass> g;
+  g.schedule.phases = {open_mode(), closed_mode(1)};
+  g.schedule.events = {ScheduleEvent{{Guard{0, GuardKind::Touchdown}}}};
+  g.event_times = {0.5};
+  g.state = [](int p, double t) {
+    return p == 0 ? Vec<4>(0.5 * t, 1 - 2 * t, 1.0, -2.0) : Vec<4>(0.25 + 1.83 * (t - 0.5), 0.0, 1.0, 0.0);
+  };
+  g.input = [](double) { return Vec<2>(0, 5); };
+  return g;
+}
+
+OcpHorizon<PointMass> guiding_horizon() {
+  using Case = scenes::PointMassToTheTarget;
+  OcpHorizon<PointMass> h;
+  h.x0 << Case::q0(), Case::v0();
+  h.final_time = Case::grid().physical_horizon;
+  h.control_lower = Case::grid().control_lower;
+  h.control_upper = Case::grid().control_upper;
+  return h;
+}
+
+TEST(RefinementNlp, IpoptDerivativeCheckerFindsNoError) {
+  RefinementOptions o;
+  o.grid.max_element_duration = 0.25;
+  o.grid.stages = 2;
+  const ScheduleRefinementNlp<PointMass, scenes::PointMassToTheTarget> nlp(frictional_mass(), {}, guiding_horizon(),
+                                                                           hand_guess(), o);
+  Eigen::VectorXd x(nlp.variable_count());
+  nlp.initial_point(x);
+  const DerivativeCheckReport r = check_derivatives(nlp, x, 1e-7, 1e-5);
+  EXPECT_EQ(r.errors, 0) << r.output;
+  EXPECT_TRUE(nlp.complementarity_pairs().empty());
+}
+
+void build_guiding_nlp(const PointMass& mass, const ScheduleGuess<PointMass>& guess) {
+  const ScheduleRefinementNlp<PointMass, scenes::PointMassToTheTarget> nlp(mass, {}, guiding_horizon(), guess, {});
+}
+
+TEST(RefinementNlp, BadGuessesAndStatesNameThePhase) {
+  const PointMass mass = frictional_mass();
+  ScheduleGuess<PointMass> nan_guess = hand_guess();
+  nan_guess.state = [](int p, double t) { return p == 1 ? Vec<4>::Constant(std::nan("")) : Vec<4>(0, 1 - t, 0, 0); };
+  expect_invalid([&] { build_guiding_nlp(mass, nan_guess); }, {"phase 1", "not finite"});
+  ScheduleGuess<PointMass> late = hand_guess();
+  late.event_times = {3.0};
+  expect_invalid([&] { build_guiding_nlp(mass, late); }, {"event 0", "after T"});
+  ScheduleGuess<PointMass> closed_start = hand_guess();
+  closed_start.schedule.phases = {closed_mode(1), open_mode()};
+  closed_start.schedule.events = {ScheduleEvent{{Guard{0, GuardKind::Release}}}};
+  expect_invalid([&] { build_guiding_nlp(mass, closed_start); }, {"phase 0", "closed in the first phase", "gap 1"});
+}
+
+/// The guiding example's OCP refined from its time-freezing solution (the musts: converged, mode
+/// validity <= 1e-9, the event-driven re-simulation <= 1e-8; the time-freezing reference's own
+/// re-simulation is 1.4e-4 away).
+TEST(ScheduleRefinement, GuidingExampleOcpIsExactAfterItsTimeFreezingSolution) {
+  using Case = scenes::PointMassToTheTarget;
+  const auto relaxed = solve_time_freezing_ocp(Case::system(), Case{}, Case::q0(), Case::v0(), Case::grid(), Case::solver());
+  ASSERT_TRUE(relaxed.converged());
+  const PointMass mass = frictional_mass();
+  const ExtractedSchedule<PointMass> discovered = extract_schedule(mass, relaxed.trajectory);
+  EXPECT_EQ(describe(mass, discovered.guess.schedule), "table:open [touchdown table] table:slip+");
+  const RefinementResult<PointMass> r = refine_schedule(mass, Case{}, guiding_horizon(), discovered.guess);
+  EXPECT_EQ(r.stage, "refined") << r.message;
+  EXPECT_LE(r.mode_validity_violation, 1e-9);
+  EXPECT_LE(r.terminal_violation, 1e-8);
+  EXPECT_LE(r.phase_resim_max_error, 1e-8);
+  for (const PhaseResimulation& p : r.phase_resimulation) {
+    EXPECT_TRUE(p.event_guards_match) << "phase " << p.phase << ": " << p.note;
+    EXPECT_TRUE(p.note.empty()) << p.note;
+  }
+  double until = 0.0;
+  EXPECT_LE(resimulate_open_loop(mass, r.trajectory, r.element_times, precise_simulation(), until), 1e-8);
+  EXPECT_GT(until, 1.9);
+  EXPECT_LT(r.objective, relaxed.solution.objective);  // the relaxed optimum carries its regularisation
+  EXPECT_TRUE(r.schedule_check_passed);
+  ASSERT_EQ(r.trajectory.events.size(), 1u);
+  EXPECT_TRUE(r.trajectory.events[0].impact());
+  EXPECT_NEAR(r.trajectory.events[0].x_plus[3], 0.0, 1e-12);  // the jump map's inelastic impact
+}
+
+/// A schedule that cannot reach its target: the mass stays on the table, the target is above it.
+struct AboveTheTable : scenes::PointMassToTheTarget {
+  Vec<4> terminal_lower() const { return Vec<4>(1, 0.5, 0, 0); }
+  Vec<4> terminal_upper() const { return terminal_lower(); }
+};
+
+TEST(ScheduleRefinement, AScheduleThatCannotReachItsTargetSaysSo) {
+  ScheduleGuess<PointMass> g;
+  g.schedule.phases = {closed_mode(1)};
+  g.state = [](int, double t) { return Vec<4>(t, 0, 1, 0); };
+  g.input = [](double) { return Vec<2>(1, 0); };
+  OcpHorizon<PointMass> h = guiding_horizon();
+  h.x0 << 0, 0, 1, 0;
+  RefinementOptions o;
+  o.grid.max_element_duration = 0.25;
+  o.ipopt.max_iter = 200;
+  const RefinementResult<PointMass> r = refine_schedule(frictional_mass(), AboveTheTable{}, h, g, o);
+  EXPECT_FALSE(r.converged);
+  EXPECT_EQ(r.stage, "not converged");
+  EXPECT_NE(r.message.find("Ipopt"), std::string::npos) << r.message;
+}
+
+/// A stance built to want a lift-off: a frictionless mass slides on the table to x = 1 at rest at
+/// T = 1 while the cost asks for an upward thrust u2 ~ 15 N > m g around t = 0.5. On the table
+/// lambda_n = m g - u2 >= 0 holds the thrust at m g with a positive multiplier: the edit inserts a
+/// flight (release, flight, touchdown back), and the edited schedule costs less.
+struct LiftWish {
+  static constexpr int terminal_constraint_count = 4;
+  template <class T>
+  T running_cost(const VecT<T, 4>&, const VecT<T, 2>& u, const T& t) const {
+    using std::exp;
+    const T wish = T(15.0) * exp(-T(50.0) * (t - T(0.5)) * (t - T(0.5)));
+    return u[0] * u[0] + (u[1] - wish) * (u[1] - wish);
+  }
+  template <class T>
+  VecT<T, 4> terminal_constraints(const VecT<T, 4>& x, const T&) const {
+    return x;
+  }
+  Vec<4> terminal_lower() const { return Vec<4>(1, 0, 0, 0); }
+  Vec<4> terminal_upper() const { return terminal_lower(); }
+};
+
+TEST(ScheduleRefinement, AStanceThatWantsToLiftOffIsEdited) {
+  ScheduleGuess<PointMass> g;
+  g.schedule.phases = {closed_mode(0)};
+  g.state = [](int, double t) { return Vec<4>(t, 0, 1, 0); };
+  g.input = [](double) { return Vec<2>(0, 0); };
+  OcpHorizon<PointMass> h;
+  h.x0.setZero();
+  h.final_time = 1.0;
+  RefinementOptions o;
+  o.grid.max_element_duration = 0.05;
+  const RefinementResult<PointMass> r = refine_schedule(PointMass{}, LiftWish{}, h, g, o);
+  ASSERT_EQ(r.stage, "refined") << r.message;
+  ASSERT_GE(r.edits.size(), 1u);
+  EXPECT_EQ(r.edits[0].kind, "lift-off");
+  EXPECT_GT(r.edits[0].multiplier, 0.0);
+  EXPECT_NEAR(r.edits[0].t, 0.5, 0.2);
+  ASSERT_GE(r.solves.size(), 2u);
+  EXPECT_LT(r.solves[1].objective, r.solves[0].objective);
+  bool flies = false;
+  for (const Mode<1>& m : r.schedule.phases) flies = flies || !m[0].closed();
+  EXPECT_TRUE(flies) << describe(PointMass{}, r.schedule);
+  EXPECT_LE(r.mode_validity_violation, 1e-9);
+  EXPECT_LE(r.phase_resim_max_error, 1e-8);
+}
+
+}  // namespace
+}  // namespace saltus::timefreezing

@@ -1,0 +1,130 @@
+// The mode-schedule refinement: the second stage of the optimiser. A relaxed contact-implicit
+// solution (the time-freezing homotopy) is good at discovering WHERE and WHEN contacts happen and
+// bad at being exact; a smooth OCP whose mode sequence is fixed is exact and cannot discover. The
+// refinement takes a schedule (from a relaxed solution or a user's trajectory, extraction.hpp),
+// solves the smooth multi-phase OCP of refinement_nlp.hpp on the hybrid core's own flows, guards
+// and jump maps, reads the multipliers for schedule edits, and checks the result with the
+// event-driven simulator. (Staged contact optimisation, arXiv 2304.04923, chains a contact-implicit
+// and a fixed-sequence stage the same way; hybrid iLQR, Kong et al. T-RO 2023, is the
+// saltation-matrix form of a fixed-sequence optimiser.)
+//
+// SCHEDULE EDITS. After a converged solve the multipliers and bounds say where the schedule is not
+// locally optimal:
+//   - a closed contact whose lambda_n >= 0 row is active with a positive multiplier at a stage
+//     point inside its phase wants to lift off there: the phase is split by a release, a flight of
+//     that contact, and a touchdown back into the phase's mode (a vanishing flight is removed by the
+//     next check);
+//   - an open contact whose gap >= 0 row is active with a positive multiplier inside its phase
+//     wants to touch there: the phase is split by a touchdown, a stance of that contact (slipping
+//     along its tangential velocity, or sticking when that is below the active tolerance), and a
+//     release back;
+//   - a phase whose duration is at its lower bound (d_p <= vanishing_duration) wants to vanish: it
+//     is removed and its two events become one (guards_between of the modes around it).
+//   - a slipping contact whose s zeta_t >= 0 row is active inside its phase wants to stick there
+//     (stop, stick, slip onset back), a sticking one whose cone row is active wants to slip (slip
+//     onset, slip in the direction the cone row names, stop back).
+// One edit per solve, the vanishing phases first, then the largest multiplier; each edit is
+// reported. The result says whether the final schedule passed this check (no edit proposed: no
+// better schedule by one such edit, locally); it never claims global optimality.
+#pragma once
+
+#include <saltus/hybrid/simulation/simulator.hpp>
+#include <saltus/timefreezing/refinement/refinement_nlp.hpp>
+#include <saltus/timefreezing/refinement/schedule_extraction.hpp>
+
+#include <string>
+#include <vector>
+
+namespace saltus::timefreezing {
+
+/// One schedule edit (refinement.hpp, "SCHEDULE EDITS").
+struct ScheduleEdit {
+  std::string kind;         ///< "lift-off", "touch", "stick", "slip+", "slip-", "vanish"
+  int phase = -1;           ///< the phase edited (in the schedule it was read from)
+  int contact = -1;         ///< the contact (-1 for "vanish")
+  double t = 0.0;           ///< where [s]: the stage point's time, or the vanishing phase's start
+  double multiplier = 0.0;  ///< the row's multiplier (0 for "vanish")
+  std::string schedule_after;  ///< describe() of the edited schedule
+};
+
+/// One Ipopt solve of a schedule.
+struct RefinementSolve {
+  std::string schedule;     ///< describe() of the schedule solved
+  bool succeeded = false;   ///< Ipopt accepted the solution (Solve_Succeeded or Solved_To_Acceptable_Level)
+  std::string ipopt_status;
+  double objective = 0.0, constraint_violation = 0.0;
+  int ipopt_iterations = 0;
+  double seconds = 0.0;
+};
+
+/// The event-driven re-simulation of one phase from its start state (x+ of the event before it)
+/// under the optimal input, in the phase's mode.
+struct PhaseResimulation {
+  int phase = 0;
+  /// max ||x_sim - x_refined||_inf over the phase's element boundaries (the collocation's nodes,
+  /// where Radau IIA is of order 2 n_s - 1), the phase's end included.
+  double max_error = 0.0;
+  double end_error = 0.0;      ///< the same at the phase's end (x-)
+  /// ||x_start projected - x_start||_inf: the start state brought onto the contacts it closes (its
+  /// own closed contacts, and those released at its start) before it is simulated; the size of the
+  /// collocation's drift (contact_drift), which the simulator's initial-mode check would refuse.
+  double start_projection = 0.0;
+  /// The first event the simulator finds after the phase's start (it runs past the phase's end by
+  /// a margin, with the phase's last input held): its time minus the scheduled event time [s]
+  /// (NaN when it found none, e.g. the last phase), and whether its guards are the schedule's.
+  double event_time_error = 0.0;
+  bool event_guards_match = true;
+  std::string note;            ///< why the comparison is partial, or "" (e.g. an unplanned event inside the phase)
+};
+
+template <Scene S>
+struct RefinementResult {
+  /// "refined" when the last solve converged with every check below within its tolerance of the
+  /// options, "not converged" (Ipopt failed on the schedule), or where it stopped.
+  std::string stage;
+  bool converged = false;         ///< the last solve succeeded and its constraint violation <= 1e-6
+  std::string message;
+  ModeSchedule<S::nc> schedule;   ///< the final schedule
+  std::vector<double> event_times;
+  /// The refined reference in physical time: one segment per phase (dense output: the collocation
+  /// polynomial of every element), exact events (x- the phase's end, x+ the next phase's start,
+  /// the schedule's guards, impulse mode and impulses), the optimal input law (piecewise constant
+  /// per element, right-continuous; through the OCP's input law when it has one).
+  HybridTrajectory<S> trajectory;
+  std::vector<double> element_times;  ///< the element boundaries, t0 .. T (input breakpoints)
+  double objective = 0.0;               ///< the OCP's cost (running + terminal)
+  double mode_validity_violation = 0.0; ///< refinement_nlp.hpp: largest violation of the validity rows
+  double path_violation = 0.0, terminal_violation = 0.0, constraint_violation = 0.0;
+  double contact_drift = 0.0;           ///< ScheduleRefinementNlp::contact_drift [scene units]
+  std::vector<ImpliedRow> implied_rows;
+  std::vector<ScheduleEdit> edits;
+  bool schedule_check_passed = false;   ///< no edit proposed after the last solve
+  std::vector<RefinementSolve> solves;
+  std::vector<PhaseResimulation> phase_resimulation;
+  double phase_resim_max_error = 0.0;   ///< max over the phases' max_error
+  int ipopt_iterations = 0;
+  double seconds = 0.0;
+};
+
+/// Tight tolerances for the re-simulation of refined references (relative 1e-12, absolute 1e-13).
+inline SimulationOptions precise_simulation() {
+  SimulationOptions o;
+  o.integrator.relative_tolerance = 1e-12;
+  o.integrator.absolute_tolerance = 1e-13;
+  return o;
+}
+
+/// Refines `guess` (a schedule, its event times and a motion) for the OCP `ocp` (the struct the
+/// time-freezing solver takes) on `horizon`: solves the refinement NLP, edits the schedule up to
+/// options.edits.max_edits times, assembles the trajectory and re-simulates every phase with
+/// `simulation` (its breakpoints are replaced by the element boundaries).
+/// @throws InvalidArgument as ScheduleRefinementNlp's constructor (a bad schedule, horizon, guess,
+///   options or initial state, naming the phase and the condition), and Ipopt's rejection of an
+///   option. A schedule that cannot reach the target within the bounds is not thrown: the result
+///   says "not converged" with Ipopt's status and the worst row.
+template <Scene S, class Ocp>
+RefinementResult<S> refine_schedule(const S& scene, const Ocp& ocp, const OcpHorizon<S>& horizon,
+                                    const ScheduleGuess<S>& guess, const RefinementOptions& options = {},
+                                    const SimulationOptions& simulation = precise_simulation());
+
+}  // namespace saltus::timefreezing

@@ -1,0 +1,147 @@
+// Definitions of refinement.hpp: the solve, the edits, the readings, the re-simulation. Compiled
+// once per scene and OCP (timefreezing/instantiate.hxx) or included by a program that instantiates
+// it itself.
+#pragma once
+
+#include <saltus/timefreezing/refinement/phase_resimulation.hxx>
+#include <saltus/timefreezing/refinement/schedule_edits.hxx>
+
+#include <chrono>
+#include <ostream>
+
+namespace saltus::timefreezing {
+
+namespace detail {
+
+/// One Ipopt solve of the refinement NLP from its initial point: the MPCC solver with no pairs is
+/// one Ipopt solve of the plain NLP (its homotopy has nothing to relax or polish).
+inline MpccSolution solve_refinement_nlp(const Mpcc& nlp, const RefinementIpopt& o) {
+  MpccSolverOptions s;
+  s.max_homotopy_steps = 1;
+  s.polish = false;
+  s.tol = o.tol;
+  s.max_iter = o.max_iter;
+  s.print_level = o.print_level;
+  s.ipopt_options = o.options;
+  return solve_mpcc(nlp, s);
+}
+
+template <Scene S, class Ocp>
+void read_solution(const S& scene, const ScheduleRefinementNlp<S, Ocp>& nlp, const MpccSolution& sol,
+                   RefinementResult<S>& out) {
+  const Eigen::VectorXd& x = sol.x;
+  out.schedule = nlp.schedule();
+  out.event_times.clear();
+  for (int p = 1; p < nlp.phase_count(); ++p) out.event_times.push_back(x[nlp.time_index(p)]);
+  out.trajectory = refined_trajectory(scene, nlp, x, out.element_times);
+  out.objective = sol.objective;
+  out.constraint_violation = sol.constraint_violation;
+  out.mode_validity_violation = nlp.mode_validity_violation(x);
+  out.path_violation = nlp.path_violation(x);
+  out.terminal_violation = nlp.terminal_violation(x);
+  out.contact_drift = nlp.contact_drift(x);
+  out.implied_rows = nlp.implied_rows();
+}
+
+inline RefinementSolve solve_record(const std::string& schedule, const MpccSolution& sol) {
+  RefinementSolve r;
+  r.schedule = schedule;
+  r.succeeded = !sol.steps.empty() && sol.steps.back().ipopt_succeeded;
+  r.ipopt_status = sol.steps.empty() ? "no solve" : sol.steps.back().ipopt_status;
+  r.objective = sol.objective;
+  r.constraint_violation = sol.constraint_violation;
+  r.ipopt_iterations = sol.ipopt_iterations;
+  r.seconds = sol.seconds;
+  return r;
+}
+
+inline void progress_line(std::ostream* os, const RefinementSolve& s) {
+  if (!os) return;
+  *os << "refinement: " << (s.succeeded ? "solved" : "failed") << " (" << s.ipopt_status << ", " << s.ipopt_iterations
+      << " iterations, " << s.seconds << " s), objective " << s.objective << ", violation " << s.constraint_violation
+      << ": " << s.schedule << "\n";
+}
+
+/// The solve of one schedule: builds the NLP, solves it, records it. Returns the NLP and the solution.
+template <Scene S, class Ocp>
+std::pair<std::unique_ptr<ScheduleRefinementNlp<S, Ocp>>, MpccSolution> solve_schedule(
+    const S& scene, const Ocp& ocp, const OcpHorizon<S>& horizon, const ScheduleGuess<S>& guess,
+    const RefinementOptions& options, RefinementResult<S>& out) {
+  auto nlp = std::make_unique<ScheduleRefinementNlp<S, Ocp>>(scene, ocp, horizon, guess, options);
+  MpccSolution sol = solve_refinement_nlp(*nlp, options.ipopt);
+  const RefinementSolve record = solve_record(describe(scene, nlp->schedule()), sol);
+  progress_line(options.progress, record);
+  out.solves.push_back(record);
+  out.ipopt_iterations += sol.ipopt_iterations;
+  return {std::move(nlp), std::move(sol)};
+}
+
+/// The edit loop of refinement.hpp: from a converged solve, propose an edit, solve the edited
+/// schedule, keep it when it converges to a lower cost; stop at the first edit that does not.
+template <Scene S, class Ocp>
+void edit_schedule(const S& scene, const Ocp& ocp, const OcpHorizon<S>& horizon, const RefinementOptions& options,
+                   std::unique_ptr<ScheduleRefinementNlp<S, Ocp>>& nlp, MpccSolution& sol, RefinementResult<S>& out) {
+  for (int round = 0;; ++round) {
+    const std::optional<ScheduleEdit> edit = propose_edit(*nlp, sol.x, sol.constraint_multipliers, options.edits);
+    if (!edit) {
+      out.schedule_check_passed = true;
+      return;
+    }
+    if (round >= options.edits.max_edits) {
+      out.message += "; an edit is still proposed (" + edit->kind + " in phase " + std::to_string(edit->phase) +
+                     ") after " + std::to_string(round) + " edits";
+      return;
+    }
+    const std::optional<ScheduleGuess<S>> guess = edited_guess(scene, out.trajectory, nlp->schedule(), *edit);
+    if (!guess) {
+      out.message += "; the proposed " + edit->kind + " edit of phase " + std::to_string(edit->phase) +
+                     " leaves no valid schedule, not tried";
+      return;
+    }
+    ScheduleEdit record = *edit;
+    record.schedule_after = describe(scene, guess->schedule);
+    if (options.progress) *options.progress << "refinement: edit " << record.kind << " in phase " << record.phase << " at t = " << record.t << "\n";
+    auto [edited_nlp, edited_sol] = solve_schedule(scene, ocp, horizon, *guess, options, out);
+    const bool better = out.solves.back().succeeded && edited_sol.constraint_violation <= 1e-6 &&
+                        edited_sol.objective < sol.objective - 1e-9 * std::max(1.0, std::abs(sol.objective));
+    if (!better) {
+      record.kind += " (rejected: " + (out.solves.back().succeeded ? std::string("no lower cost") : out.solves.back().ipopt_status) + ")";
+      out.edits.push_back(record);
+      out.schedule_check_passed = true;  // the edit the multipliers asked for did not lower the cost
+      return;
+    }
+    out.edits.push_back(record);
+    nlp = std::move(edited_nlp);
+    sol = std::move(edited_sol);
+    read_solution(scene, *nlp, sol, out);
+  }
+}
+
+}  // namespace detail
+
+template <Scene S, class Ocp>
+RefinementResult<S> refine_schedule(const S& scene, const Ocp& ocp, const OcpHorizon<S>& horizon,
+                                    const ScheduleGuess<S>& guess, const RefinementOptions& options,
+                                    const SimulationOptions& simulation) {
+  const auto start = std::chrono::steady_clock::now();
+  RefinementResult<S> out;
+  auto [nlp, sol] = detail::solve_schedule(scene, ocp, horizon, guess, options, out);
+  detail::read_solution(scene, *nlp, sol, out);
+  out.converged = out.solves.back().succeeded && sol.constraint_violation <= 1e-6;
+  if (!out.converged) {
+    out.stage = "not converged";
+    out.message = "Ipopt: " + out.solves.back().ipopt_status + ", worst row: " +
+                  (sol.steps.empty() ? std::string("?") : sol.steps.back().worst_violation);
+    out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    return out;
+  }
+  out.message = "converged";
+  detail::edit_schedule(scene, ocp, horizon, options, nlp, sol, out);
+  out.phase_resimulation = resimulate_phases(scene, out.trajectory, out.schedule, out.element_times, simulation);
+  for (const PhaseResimulation& r : out.phase_resimulation) out.phase_resim_max_error = std::max(out.phase_resim_max_error, r.max_error);
+  out.stage = "refined";
+  out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return out;
+}
+
+}  // namespace saltus::timefreezing
