@@ -106,7 +106,7 @@
 
 #include <saltus/timefreezing/discretisation/fesd.hpp>
 #include <saltus/timefreezing/mpcc/mpcc_solver.hpp>
-#include <saltus/timefreezing/drivers/optimal_control.hpp>
+#include <saltus/timefreezing/header_only.hpp>
 
 #include <nlohmann/json.hpp>
 

@@ -37,7 +37,7 @@
 // bench/README.md ("Hopper over three holes") has the table of a run and what it shows.
 #include "scenes/hopper_holes.hpp"
 
-#include <saltus/timefreezing/drivers/optimal_control.hpp>
+#include <saltus/timefreezing/header_only.hpp>
 
 #include "ocp_bench_support.hpp"
 

@@ -23,7 +23,7 @@
 // corners at once), box_vz_before [m/s]}; null without one.
 #include "scenes/plank_box_landing.hpp"
 
-#include <saltus/timefreezing/drivers/optimal_control.hpp>
+#include <saltus/timefreezing/header_only.hpp>
 
 #include "ocp_bench_support.hpp"
 

@@ -13,7 +13,7 @@
 #include <saltus/hybrid/reference/resimulation.hpp>
 #include <saltus/timefreezing/discretisation/fesd.hpp>
 #include <saltus/timefreezing/mpcc/mpcc_solver.hpp>
-#include <saltus/timefreezing/drivers/optimal_control.hpp>
+#include <saltus/timefreezing/header_only.hpp>
 
 #include "mpcc_support.hpp"
 #include "plank_box_tracking.hpp"

@@ -13,7 +13,7 @@
 #include <saltus/sensitivity/jump_gain.hpp>
 #include <saltus/timefreezing/discretisation/fesd.hpp>
 #include <saltus/timefreezing/mpcc/mpcc_solver.hpp>
-#include <saltus/timefreezing/drivers/optimal_control.hpp>
+#include <saltus/timefreezing/header_only.hpp>
 
 #include "mpcc_support.hpp"
 
