@@ -100,11 +100,6 @@ TEST(TimeFreezingSystem, PlankBoxRegionsGiveTheDocumentedFields) {
   // Fractional alphas: Theta is the product of the contacts' theta^free.
   const Alpha mixed = (Alpha() << 0.3, 0.4, 0.5, 0.8, 0.1, 0.2).finished();
   EXPECT_NEAR(system.ode_weight<double>(mixed), (0.3 + 0.7 * 0.4) * (0.8 + 0.2 * 0.1), 1e-15);
-  // The lifted form (closing weights beta_i = (1 - alpha_i1)(1 - alpha_i2)) is the same field.
-  const Vec<2> closing(0.7 * 0.6, 0.2 * 0.9);
-  EXPECT_NEAR(system.ode_weight_lifted<double>(closing), system.ode_weight<double>(mixed), 1e-15);
-  EXPECT_LT((system.generalised_force_lifted<double>(q, v, u, closing, mixed) -
-             system.generalised_force<double>(q, v, u, mixed)).norm(), 1e-12);
   // Switching functions: gap, J_n v, J_t v.
   const Vec<6> c = system.switching_functions<double>(q, v);
   for (int i = 0; i < 2; ++i) {
@@ -199,25 +194,18 @@ TEST(Fesd, DerivativesMatchFiniteDifferences) {
   p.friction = Friction::Planar;
   p.mu = 0.3;
   const TimeFreezingSystem<PointMass> system(PointMass(p), 10.0);
-  // FESD with the heuristic penalty, the fixed grid, FESD with the exact step equilibration (its
-  // eta rows couple the multipliers of neighbouring elements, across control intervals too) and
-  // scaled switching functions; FESD with the lifted step functions; FESD with the gap switching
-  // function read from the integrated gap (its row is linear in g; g's field Theta J_n v is not).
-  for (int variant : {0, 1, 2, 3, 4}) {
+  // FESD with the heuristic penalty, the fixed grid, FESD on three elements with scaled switching
+  // functions; FESD with the gap switching function read from the integrated gap (its row is
+  // linear in g; g's field Theta J_n v is not).
+  for (int variant : {0, 1, 2, 4}) {
     const bool fesd = variant != 1;
     FesdOptions grid = small_grid(fesd);
     if (variant == 2) {
-      grid.step_equilibration = StepEquilibration::Exact;
       grid.finite_elements = 3;
       grid.switching_scale = {3.0, 0.5, 2.0};
     }
-    grid.lift_step_functions = variant == 3;
     grid.integrated_gap = variant == 4;
     const FesdMpcc<PointMass, EveryTermOcp> problem(system, EveryTermOcp{}, Vec<2>(0.1, 0.5), Vec<2>(1.0, -0.5), grid);
-    int equilibration_rows = 0;
-    for (int row = 0; row < problem.constraint_count(); ++row)
-      equilibration_rows += problem.constraint_name(row).rfind("step equilibration", 0) == 0 ? 1 : 0;
-    EXPECT_EQ(equilibration_rows, variant == 2 ? 2 * 2 : 0);  // N (N_fe - 1)
     const int n = problem.variable_count(), m = problem.constraint_count();
     const Eigen::VectorXd x = interior_point(problem, 3);
     // Dense Jacobian against central differences of the constraints.
@@ -290,12 +278,6 @@ TEST(Fesd, IpoptDerivativeCheckerFindsNoError) {
   const FesdMpcc<PointMass, EveryTermOcp> problem(system, EveryTermOcp{}, Vec<2>(0.1, 0.5), Vec<2>(1.0, -0.5), one);
   const DerivativeCheckReport report = check_derivatives(problem, interior_point(problem, 5));
   EXPECT_EQ(report.errors, 0) << report.output;
-  // The exact step equilibration's rows (three elements: two inner boundaries).
-  one.step_equilibration = StepEquilibration::Exact;
-  one.finite_elements = 3;
-  const FesdMpcc<PointMass, EveryTermOcp> exact(system, EveryTermOcp{}, Vec<2>(0.1, 0.5), Vec<2>(1.0, -0.5), one);
-  const DerivativeCheckReport report_exact = check_derivatives(exact, interior_point(exact, 5));
-  EXPECT_EQ(report_exact.errors, 0) << report_exact.output;
   // Two contacts with friction (the plank-box), no OCP terms.
   const TimeFreezingSystem<PlankBox> plank(PlankBox(), 50.0);
   FesdOptions o = small_grid(true);
@@ -305,14 +287,8 @@ TEST(Fesd, IpoptDerivativeCheckerFindsNoError) {
   const FesdMpcc<PlankBox> two(plank, NoObjective{}, Vec<4>(0.5, 0.08, 0.01, 0.0), Vec<4>(0.2, -1.0, 0.3, 0.0), o);
   const DerivativeCheckReport report2 = check_derivatives(two, interior_point(two, 7));
   EXPECT_EQ(report2.errors, 0) << report2.output;
-  // The same lifted: Theta = (1 - beta_1)(1 - beta_2), the step-lifting rows.
-  o.lift_step_functions = true;
-  const FesdMpcc<PlankBox> two_lifted(plank, NoObjective{}, Vec<4>(0.5, 0.08, 0.01, 0.0), Vec<4>(0.2, -1.0, 0.3, 0.0), o);
-  const DerivativeCheckReport report3 = check_derivatives(two_lifted, interior_point(two_lifted, 7));
-  EXPECT_EQ(report3.errors, 0) << report3.output;
   // The integrated gaps read by the gap switching functions: g' = Theta J_n(q) v of the corners
   // on the rotating plank (a gap nonlinear in q).
-  o.lift_step_functions = false;
   o.integrated_gap = true;
   const FesdMpcc<PlankBox> two_integrated(plank, NoObjective{}, Vec<4>(0.5, 0.08, 0.01, 0.0),
                                           Vec<4>(0.2, -1.0, 0.3, 0.0), o);
@@ -321,8 +297,7 @@ TEST(Fesd, IpoptDerivativeCheckerFindsNoError) {
 }
 
 // Which pairs the smoothing relaxation may smooth: the stage-wise ones (velocity switching
-// functions when only the gaps have cross-complementarity), the tangential ones only when
-// smooth_tangential_pairs.
+// functions when only the gaps have cross-complementarity).
 TEST(Fesd, MarksTheStageWisePairsSmoothable) {
   scenes::PointMassParameters p;
   p.friction = Friction::Planar;
@@ -338,79 +313,8 @@ TEST(Fesd, MarksTheStageWisePairsSmoothable) {
   };
   const int stage_points = o.control_intervals * o.finite_elements * o.stages;  // 8
   EXPECT_EQ(smoothable(o), 2 * 2 * stage_points);  // J_n v and J_t v, two pairs each
-  o.smooth_tangential_pairs = false;
-  EXPECT_EQ(smoothable(o), 2 * stage_points);  // J_n v only
-  // tangential_switch_detection: J_t v's pairs become cross-complementarity pairs (one per
-  // multiplier and point: the previous element's end when there is one, then the stages), never
-  // smoothed; J_n v keeps its stage-wise ones.
-  o.smooth_tangential_pairs = true;
-  o.tangential_switch_detection = true;
-  EXPECT_EQ(smoothable(o), 2 * stage_points);
-  const FesdMpcc<PointMass> tangential(system, NoObjective{}, Vec<2>(0.1, 0.5), Vec<2>(1.0, -0.5), o);
-  int cross_tangential = 0, stagewise_normal = 0;
-  for (const ComplementarityPair& pair : tangential.complementarity_pairs()) {
-    const bool is_cross = pair.name.find("sum") != std::string::npos;
-    if (pair.name.find("[2]") != std::string::npos) {
-      EXPECT_TRUE(is_cross) << pair.name;
-      EXPECT_FALSE(pair.smoothable) << pair.name;
-      ++cross_tangential;
-    }
-    if (pair.name.find("[1]") != std::string::npos && !is_cross) ++stagewise_normal;
-  }
-  const int elements = o.control_intervals * o.finite_elements;  // 4; the first has no previous end
-  EXPECT_EQ(cross_tangential, 2 * (stage_points + elements - 1));
-  EXPECT_EQ(stagewise_normal, 2 * stage_points);
   o.velocity_switch_detection = true;
   EXPECT_EQ(smoothable(o), 0);  // every function has cross-complementarity
-}
-
-// The lifted step functions' layout: nc closing weights per stage point after the multipliers,
-// nc "step lifting" rows after the path rows, both named; the initial points satisfy those rows.
-TEST(Fesd, LiftedStepFunctionsAddOneWeightAndOneRowPerContactAndStage) {
-  const TimeFreezingSystem<PlankBox> plank(PlankBox(), 50.0);
-  FesdOptions o = small_grid(true);
-  const Vec<4> q0(0.5, 0.08, 0.01, 0.0), v0(0.2, -1.0, 0.3, 0.0);
-  const FesdMpcc<PlankBox> plain(plank, NoObjective{}, q0, v0, o);
-  o.lift_step_functions = true;
-  const FesdMpcc<PlankBox> lifted(plank, NoObjective{}, q0, v0, o);
-  const int stage_points = o.control_intervals * o.finite_elements * o.stages;  // 8
-  EXPECT_EQ(lifted.variable_count() - plain.variable_count(), 2 * stage_points);
-  EXPECT_EQ(lifted.constraint_count() - plain.constraint_count(), 2 * stage_points);
-  EXPECT_EQ(lifted.variable_name(lifted.closing_index(1, 0, 1) + 1), "beta[1,0,1][1]");
-  EXPECT_EQ(lifted.complementarity_pairs().size(), plain.complementarity_pairs().size());
-  Eigen::VectorXd x(lifted.variable_count()), g(lifted.constraint_count());
-  auto check_lifting_rows = [&](const char* which) {
-    lifted.constraints(x, g);
-    int rows = 0;
-    for (int row = 0; row < lifted.constraint_count(); ++row)
-      if (lifted.constraint_name(row).rfind("step lifting", 0) == 0) {
-        ++rows;
-        EXPECT_NEAR(g[row], 0.0, 1e-15) << which << ": " << lifted.constraint_name(row);
-      }
-    EXPECT_EQ(rows, 2 * stage_points) << which;
-  };
-  lifted.initial_point(x);
-  check_lifting_rows("initial_point");
-  // A guess that touches down: the start state is in flight, the guess crosses the plank.
-  lifted.initial_point_from_guess(x, [&](double t) {
-    Vec<8> y;
-    y << q0 + t * v0, v0;
-    return y;
-  });
-  check_lifting_rows("initial_point_from_guess");
-  // The stage dynamics agree with the plain form's where the lifting rows hold.
-  Eigen::VectorXd xp(plain.variable_count()), gp(plain.constraint_count());
-  plain.initial_point_from_guess(xp, [&](double t) {
-    Vec<8> y;
-    y << q0 + t * v0, v0;
-    return y;
-  });
-  plain.constraints(xp, gp);
-  for (int row = 0, lrow = 0; row < plain.constraint_count(); ++row, ++lrow) {
-    while (lifted.constraint_name(lrow).rfind("step lifting", 0) == 0) ++lrow;
-    ASSERT_EQ(plain.constraint_name(row), lifted.constraint_name(lrow));
-    EXPECT_NEAR(gp[row], g[lrow], 1e-12) << plain.constraint_name(row);
-  }
 }
 
 TEST(Fesd, RefusesBadOptionsAndStates) {
@@ -793,15 +697,11 @@ TEST(TimeFreezingSimulation, FrozenPhaseDriftIsRemovedBySideSelectionOrRefinemen
   const Vec<5> refined = error_at_the_end(no_side, solver, "no side selection, refined to 1e-14");
   EXPECT_LE(refined.cwiseAbs().maxCoeff(), 1e-7);
   // With the selection the end state is exact to the homotopy's tolerance; what remains is a remnant
-  // of the drift at residual 1e-9, in q2, and which of two equal discrete problems keeps it depends
-  // on Ipopt's path: the plain and the lifted step functions (the same discrete problem) measured
-  // 1.1e-11 and 1.4e-9 before the state carried the integrated gaps (time_freezing_system.hpp),
-  // 1.4e-9 and 2.7e-13 after (546 and 521 Ipopt iterations).
+  // of the drift at residual 1e-9, in q2, whose size depends on Ipopt's path (measured 1.1e-11
+  // before the state carried the integrated gaps, time_freezing_system.hpp; 1.4e-9 after, in 546
+  // Ipopt iterations).
   const Vec<5> selected = error_at_the_end(o, MpccSolverOptions{}, "side selection 1e-2");
   EXPECT_LE(selected.cwiseAbs().maxCoeff(), 1e-8);
-  o.lift_step_functions = true;
-  const Vec<5> lifted = error_at_the_end(o, MpccSolverOptions{}, "side selection 1e-2, lifted step functions");
-  EXPECT_LE(lifted.cwiseAbs().maxCoeff(), 1e-8);
 }
 
 // NOSNOC's smallest time-freezing example: the mass lands at t = sqrt(2/g) with v = (3, -sqrt(2 g)),

@@ -14,17 +14,14 @@
 //     Y (ny = 2 nq + 2 + nc: q, v, t, L, g)   the stage state (g: the integrated gaps),
 //     K (ny)                           the stage derivative,
 //     alpha (3 nc)                     the step functions of the switching functions,
-//     lambda_p, lambda_n (3 nc)        their multipliers,
-//     beta (nc)                        with FesdOptions::lift_step_functions only: the contacts'
-//                                      closing weights (time_freezing_system.hpp, lifted form).
+//     lambda_p, lambda_n (3 nc)        their multipliers.
 // The stage DERIVATIVE K is a variable (NOSNOC's "differential" representation) so that the
 // mass matrix is multiplied, never inverted: the nonlinear rows of a stage are
 //     K_q - s Theta v = 0,   M(q) K_v - s F(q, v, u, alpha) = 0,   K_t - s Theta = 0,
 //     K_L - s Theta l(x, u) = 0                                  (time_freezing_system.hpp),
 // and the collocation rows Y_r - y_start - h sum_l a_rl K_l = 0 are bilinear. Switching rows
 // (eq. 31): c(q_r, v_r) - lambda_p,r + lambda_n,r = 0 (with FesdOptions::integrated_gap, the gap
-// entries of c read the integrated gaps g_r instead of gap(q_r); below). Lifted:
-// beta_i - (1 - alpha_i1)(1 - alpha_i2) = 0 per contact, and the field reads beta where the plain form multiplies the alphas out.
+// entries of c read the integrated gaps g_r instead of gap(q_r); below).
 //
 // COMPLEMENTARITY (all sides affine). Switch detection (FESD paper, cross-complementarity in
 // NOSNOC's FE_STAGE form): for each element, each switching function m and each point p among
@@ -86,24 +83,6 @@
 // with the same error). Without the option g is still carried (its rows are cheap and keep
 // the layout one), but nothing reads it.
 //
-// EXACT STEP EQUILIBRATION (StepEquilibration::Exact; FESD paper's eta-constraints, NOSNOC's
-// "direct" mode, written here for the step DCS). Where no switch happens at the boundary between
-// elements j and j+1 of one control interval, nothing in the equations fixes the two lengths (the
-// collocation is exact for any split), so the row
-//     eta_kj (h_k,j+1 - h_kj) = 0
-// makes them equal there and leaves them free where a switch is. For each switching function m
-// with cross-complementarity and each side (p, n):
-//     sigma_B = sum of lambda over the backward element's points (its start point and stages),
-//     sigma_F = sum of lambda over the forward element's points (its start point, i.e. the
-//               backward element's last stage, and its stages),
-//     nu_m = sigma_B,p sigma_F,p + sigma_B,n sigma_F,n,      eta_kj = prod_m nu_m.
-// No switch of c_m at the boundary: c_m keeps its sign on both elements, so one of lambda_p,
-// lambda_n is positive on both sides and nu_m > 0. A switch of c_m: lambda_p vanishes on one
-// side and lambda_n on the other, so nu_m = 0, eta = 0 and the lengths are free. The
-// derivatives are written out (products of sums): d nu_m / d lambda_P = [P in B] sigma_F +
-// [P in F] sigma_B, and d2 nu_m / d lambda_P d lambda_Q = [P in B][Q in F] + [P in F][Q in B] for
-// P, Q on the same side of the same function (2 for the shared point with itself).
-//
 // DERIVATIVES: every nonlinear block is a templated function of a small local vector (the stage
 // dynamics: (s, Y, K, u, alpha); the switching functions: (q, v); path and terminal functions);
 // its Jacobian is forward AD (saltus::ad::Dual) and its Lagrangian Hessian forward-over-forward
@@ -134,15 +113,6 @@ enum class ClockConstraint {
   Stagewise,  ///< t(tau_k) = k physical_horizon / N at every control node (eq. 35f)
 };
 
-/// How FESD fixes the element lengths that no switch determines (file comment).
-enum class StepEquilibration {
-  Heuristic,  ///< rho_h sum (h_kj - h0)^2 in the objective (NOSNOC's heuristic_mean, its default)
-  /// eta_kj (h_k,j+1 - h_kj) = 0 at each inner element boundary (NOSNOC's direct). Measured: the
-  /// homotopy converges less often and needs several times the iterations (the point-mass OCP:
-  /// 4072 against 422; bench/README.md, "FESD accuracy").
-  Exact,
-};
-
 /// Options of the FESD discretisation (defaults: NOSNOC's, nosnoc_facts.md section 1).
 struct FesdOptions {
   int stages = 2;               ///< n_s of Radau IIA (1, 2, 3)
@@ -162,40 +132,6 @@ struct FesdOptions {
   /// stage-wise pairs are the ones MpccSolverOptions::Relaxation::Smoothing smooths: with this
   /// option true (and switch_detection true) Smoothing has nothing to smooth.
   bool velocity_switch_detection = true;
-  /// With switch_detection and velocity_switch_detection = false: the tangential velocities J_t v
-  /// get the cross-complementarity all the same (the normal ones keep the stage-wise pairs). Why:
-  /// a stick is then J_t v = 0 exactly at every stage point with alpha_3 free and both multipliers
-  /// zero, where the smoothed stage-wise pair makes a sticking contact creep at a speed of order
-  /// sigma (smooth_tangential_pairs); and slip-stick transitions sit on element boundaries. Cost:
-  /// a sign change of J_t v in flight must sit on a boundary too (as velocity_switch_detection's
-  /// docstring says for both velocities). No effect when velocity_switch_detection is true.
-  /// Measured (bench/README.md, variant `tangential-cross`), against the same problems with
-  /// velocity_switch_detection = false and this option off: the plank-box OCP's homotopy fails at
-  /// sigma = 1e-3 (without it: 1e-6), the hopper's stalls at 2.0e-3 (without it: 2.4e-4). NOSNOC's
-  /// frictional landing with it: stop error 7.8e-6, against 6.2e-12 with velocity_switch_detection
-  /// = true (the landing without either was not measured). Hence off; no measured case where it
-  /// helps. It is there to test the creep hypothesis above, which these runs did not support.
-  bool tangential_switch_detection = false;
-  /// Mark the tangential velocity's stage-wise pairs smoothable (Relaxation::Smoothing holds them
-  /// on lambda alpha = sigma). false: they keep the inequality relaxation. Why: in stick the
-  /// friction force is a_n mu (1 - 2 alpha_3) times the closing weight; smoothed, alpha_3 != 1/2
-  /// needs J_t v != 0, so a sticking contact creeps at a speed of order sigma and alpha_3 is a
-  /// sigmoid of width sigma in J_t v: the relaxed NLPs stiffen as sigma falls. No effect unless
-  /// MpccSolverOptions::relaxation is Smoothing and the tangential pairs are stage-wise
-  /// (velocity_switch_detection = false, or switch_detection = false). Measured
-  /// (bench/README.md): false did not help the hopper (the same wall) and made the plank-box's
-  /// first NLP fail (Restoration_Failed).
-  bool smooth_tangential_pairs = true;
-  /// Lift the step DCS (time_freezing_system.hpp, ode_weight_lifted; NOSNOC's
-  /// pss_lift_step_functions): each contact's closing weight beta_i = (1 - alpha_i1)(1 - alpha_i2)
-  /// becomes a variable per stage point with the row beta_i - (1 - alpha_i1)(1 - alpha_i2) = 0
-  /// ("step lifting"), and the stage dynamics use beta: bilinear weights instead of trilinear ones
-  /// (Theta of nc contacts: degree nc in beta instead of 2 nc in alpha). nc more variables and
-  /// rows per stage point; beta has no bounds (the row fixes it in [0, 1]; bounds would duplicate
-  /// alpha's active bounds). Same solutions as the plain form. Measured (bench/README.md, "Lifted step functions"): simulations -5 % .. +14 %
-  /// Ipopt iterations with the same solutions; the hopper's homotopy stops at complementarity 8.7e-4
-  /// (plain 2.4e-4), the plank-box's at 2.4e-4 (plain 8.4e-7). Hence off by default (NOSNOC: on).
-  bool lift_step_functions = false;
   double element_length_freedom = 1.0;  ///< gamma_h in [0, 1]: h in [(1-gamma_h) h0, (1+gamma_h) h0]
   /// The gap switching functions read the integrated gaps g [m] (the state's last nc entries,
   /// g' = s Theta J_n v, g(0) = gap(q0); time_freezing_system.hpp) instead of gap(q) at each stage
@@ -212,11 +148,6 @@ struct FesdOptions {
   /// hopper's homotopy with it stalls near 5e-3 (with gap(q): near 1e-3 .. 2.4e-4). Hence off by
   /// default and on in the plank-box flagship's grid.
   bool integrated_gap = false;
-  /// The contact kinematics of the stage fields chained in by ad::compose
-  /// (TimeFreezingSystem::set_composed_kinematics: the Hessian 1.3-2.8x cheaper (hopper to plank-box), the same
-  /// derivatives up to rounding; off by default because the flagship homotopies' paths depend on
-  /// that rounding, measured there).
-  bool composed_kinematics = false;
   /// Scales K = {gap [1/m], J_n v [s/m], J_t v [s/m]} of the switching functions, the same for
   /// every contact (function m uses entry m % 3); > 0. The rows
   /// read K c(q, v) - lambda_p + lambda_n = 0. The step functions and the switches do not change,
@@ -226,10 +157,6 @@ struct FesdOptions {
   /// a_n behind it is a phantom support of size a_n sigma / (K gap): a larger gap scale makes the
   /// loosely relaxed problems more physical (bench/README.md, "Switching-function scale").
   std::array<double, 3> switching_scale{1.0, 1.0, 1.0};
-  /// How the lengths are fixed where no switch does (file comment): the heuristic penalty
-  /// rho_h sum (h - h0)^2 in the objective, or the exact rows eta (h_j+1 - h_j) = 0 (no penalty).
-  /// Only with switch_detection.
-  StepEquilibration step_equilibration = StepEquilibration::Heuristic;
   double step_equilibration_weight = 1.0;  ///< rho_h of the heuristic penalty
   /// rho_c >= 0 (objective units per unit step function) of the contact-side selection
   /// rho_c sum alpha_gap over contacts and stage points (file comment; a reward per stage point,
@@ -247,7 +174,7 @@ struct FesdOptions {
   /// step equilibration's price of moving a boundary by h0 = horizon / (control_intervals
   /// finite_elements) (Example 3, h0 = 0.0625: 1e-3 left the frozen end inside an element, 1e-2
   /// did not; smaller weights can work when the switch falls near a grid node). With
-  /// switch_detection = false or StepEquilibration::Exact there is no such price: the term still
+  /// switch_detection = false there is no such price: the term still
   /// picks the side, which then only removes the drift (the grid cannot move). In an OCP the term
   /// is a reward of rho_c per stage point in contact and can move the optimum; it is part of the
   /// NLP's objective (MpccSolution::objective).
@@ -363,10 +290,8 @@ class FesdMpcc final : public Mpcc {
   static constexpr int nt = detail::terminal_count<Ocp>();
   /// Local variables of the stage field G (below): z = (q, v, t, u, alpha).
   static constexpr int nz = 2 * nq + 1 + nu + nsw;
-  /// Lifted closing weights per stage point (FesdOptions::lift_step_functions): nc or 0.
-  int lifted_count() const { return options_.lift_step_functions ? nc : 0; }
-  /// Variables per stage point: Y, K, alpha, lambda_p, lambda_n, then beta when lifted.
-  int stage_size() const { return 2 * ny + 3 * nsw + lifted_count(); }
+  /// Variables per stage point: Y, K, alpha, lambda_p, lambda_n.
+  int stage_size() const { return 2 * ny + 3 * nsw; }
   using Point = FesdPoint<ny, nsw, nu>;
   // The OCP's functions are differentiated by AD: each must be a member template in T taking T
   // everywhere, or the values and the derivatives would silently use different functions.
@@ -380,7 +305,6 @@ class FesdMpcc final : public Mpcc {
 
   FesdMpcc(const System& system, const Ocp& ocp, const Vec<nq>& q0, const Vec<nq>& v0, const FesdOptions& options)
       : system_(system), ocp_(ocp), options_(options), tableau_(radau_iia(options.stages)) {
-    system_.set_composed_kinematics(options.composed_kinematics);
     require_finite(q0, "FESD: initial configuration q0");
     require_finite(v0, "FESD: initial velocity v0");
     SALTUS_REQUIRE(options.control_intervals >= 1, "FESD: control_intervals must be >= 1, got ", options.control_intervals);
@@ -420,7 +344,6 @@ class FesdMpcc final : public Mpcc {
     n_ = options.control_intervals * interval_size();
     h0_ = options.horizon / (options.control_intervals * options.finite_elements);
     build_rows();
-    build_equilibration();
     build_structures();
     build_pairs();
   }
@@ -438,8 +361,6 @@ class FesdMpcc final : public Mpcc {
   int alpha_index(int k, int j, int r) const { return stage_index(k, j, r) + 2 * ny; }
   int lambda_p_index(int k, int j, int r) const { return alpha_index(k, j, r) + nsw; }
   int lambda_n_index(int k, int j, int r) const { return alpha_index(k, j, r) + 2 * nsw; }
-  /// The first closing weight beta_0 (lifted only).
-  int closing_index(int k, int j, int r) const { return alpha_index(k, j, r) + 3 * nsw; }
   /// Index of the state at the start of element (k, j): the previous element's last stage, or -1
   /// for the very first element (the fixed initial state).
   int start_state_index(int k, int j) const {
@@ -550,7 +471,6 @@ class FesdMpcc final : public Mpcc {
           x.template segment<nsw>(alpha_index(k, j, r)) = a0;
           x.template segment<nsw>(lambda_p_index(k, j, r)) = c0.cwiseMax(0.0);
           x.template segment<nsw>(lambda_n_index(k, j, r)) = (-c0).cwiseMax(0.0);
-          set_closing_weights(x, k, j, r);
         }
       }
     }
@@ -629,7 +549,6 @@ class FesdMpcc final : public Mpcc {
           x.template segment<nsw>(alpha_index(k, j, r)) = a;
           x.template segment<nsw>(lambda_p_index(k, j, r)) = c.cwiseMax(0.0);
           x.template segment<nsw>(lambda_n_index(k, j, r)) = lambda_n;
-          set_closing_weights(x, k, j, r);
         }
     }
     x_out = x;
@@ -714,17 +633,13 @@ class FesdMpcc final : public Mpcc {
     rest -= 2 * ny;
     if (rest < nsw) return "alpha" + at + "[" + std::to_string(rest) + "]";
     if (rest < 2 * nsw) return "lambda_p" + at + "[" + std::to_string(rest - nsw) + "]";
-    if (rest < 3 * nsw) return "lambda_n" + at + "[" + std::to_string(rest - 2 * nsw) + "]";
-    return "beta" + at + "[" + std::to_string(rest - 3 * nsw) + "]";
+    return "lambda_n" + at + "[" + std::to_string(rest - 2 * nsw) + "]";
   }
   std::string constraint_name(int row) const override {
     if (row >= terminal_row_) return "terminal constraint " + std::to_string(row - terminal_row_);
     for (int k = 0; k < options_.control_intervals; ++k) {
       if (row == interval_row_[k]) return "sum of element lengths [" + std::to_string(k) + "]";
       if (row == interval_row_[k] + 1 && has_clock_row(k)) return "clock [" + std::to_string(k) + "]";
-      const int er = row - equilibration_row(k);
-      if (er >= 0 && er < equilibration_count())
-        return "step equilibration [" + std::to_string(k) + "," + std::to_string(er) + "|" + std::to_string(er + 1) + "]";
     }
     const auto it = std::upper_bound(stage_row_.begin(), stage_row_.end(), row);
     const int i = static_cast<int>(it - stage_row_.begin()) - 1;
@@ -735,8 +650,7 @@ class FesdMpcc final : public Mpcc {
     if (off < ny) return "stage dynamics" + at + "[" + std::to_string(off) + "]";
     if (off < 2 * ny) return "collocation" + at + "[" + std::to_string(off - ny) + "]";
     if (off < 2 * ny + nsw) return "switching function" + at + "[" + std::to_string(off - 2 * ny) + "]";
-    if (off < 2 * ny + nsw + np) return "path constraint" + at + "[" + std::to_string(off - 2 * ny - nsw) + "]";
-    return "step lifting" + at + "[" + std::to_string(off - 2 * ny - nsw - np) + "]";
+    return "path constraint" + at + "[" + std::to_string(off - 2 * ny - nsw) + "]";
   }
 
  private:
@@ -764,18 +678,8 @@ class FesdMpcc final : public Mpcc {
     const T& t = z[2 * nq];
     const VecT<T, nu> u = input_law<T>(t, VecT<T, nu>(z.template segment<nu>(2 * nq + 1)));
     const VecT<T, nsw> alpha = z.template segment<nsw>(2 * nq + 1 + nu);
-    T theta;
-    VecT<T, nq> force;
-    if (options_.lift_step_functions) {
-      // z's slot of alpha_i1 carries beta_i (field_local); alpha_i2's slot is not read.
-      VecT<T, (nc > 0 ? nc : 1)> closing;
-      for (int i = 0; i < nc; ++i) closing[i] = alpha[3 * i];
-      theta = System::template ode_weight_lifted<T>(closing);
-      force = system_.template generalised_force_lifted<T>(q, v, u, closing, alpha);
-    } else {
-      theta = System::template ode_weight<T>(alpha);
-      force = system_.template generalised_force<T>(q, v, u, alpha);
-    }
+    const T theta = System::template ode_weight<T>(alpha);
+    const VecT<T, nq> force = system_.template generalised_force<T>(q, v, u, alpha);
     VecT<T, ny> gz;
     gz.template head<nq>() = theta * v;
     gz.template segment<nq>(nq) = force;
@@ -803,24 +707,13 @@ class FesdMpcc final : public Mpcc {
     z.template head<2 * nq + 1>() = x.template segment<2 * nq + 1>(state_index(k, j, r));
     z.template segment<nu>(2 * nq + 1) = x.template segment<nu>(control_index(k));
     z.template segment<nsw>(2 * nq + 1 + nu) = x.template segment<nsw>(alpha_index(k, j, r));
-    if (options_.lift_step_functions)
-      for (int i = 0; i < nc; ++i) z[2 * nq + 1 + nu + 3 * i] = x[closing_index(k, j, r) + i];
     return z;
   }
-  // The global variable of the field's local slot a. Lifted: the slot of alpha_i1 is beta_i; the
-  // field does not depend on alpha_i2's slot (its entries are structural zeros).
+  // The global variable of the field's local slot a.
   int field_global(int k, int j, int r, int a) const {
     if (a < 2 * nq + 1) return state_index(k, j, r) + a;
     if (a < 2 * nq + 1 + nu) return control_index(k) + (a - 2 * nq - 1);
-    const int m = a - 2 * nq - 1 - nu;
-    if (options_.lift_step_functions && m % 3 == 0) return closing_index(k, j, r) + m / 3;
-    return alpha_index(k, j, r) + m;
-  }
-  // beta_i = (1 - alpha_i1)(1 - alpha_i2) at stage (k, j, r) of x (lifted only).
-  void set_closing_weights(Eigen::Ref<Eigen::VectorXd> x, int k, int j, int r) const {
-    if (!options_.lift_step_functions) return;
-    const auto alpha = x.template segment<nsw>(alpha_index(k, j, r));
-    for (int i = 0; i < nc; ++i) x[closing_index(k, j, r) + i] = System::template closing_weight<double>(alpha, i);
+    return alpha_index(k, j, r) + (a - 2 * nq - 1 - nu);
   }
   Eigen::Matrix<double, 2 * nq, 1> mass_local(const Eigen::Ref<const Eigen::VectorXd>& x, int k, int j, int r) const {
     Eigen::Matrix<double, 2 * nq, 1> w;
@@ -854,8 +747,7 @@ class FesdMpcc final : public Mpcc {
   }
 
   // ---- rows ----------------------------------------------------------------------------------
-  // Row blocks in this order: per stage [dynamics ny][collocation ny][switching nsw][path np]
-  // [step lifting nc, lifted only];
+  // Row blocks in this order: per stage [dynamics ny][collocation ny][switching nsw][path np];
   // per control interval, after its stages: [element sum 1][clock 0 or 1]; then [terminal nt].
   int stage_row(int k, int j, int r) const { return stage_row_[(k * options_.finite_elements + j) * options_.stages + r]; }
 
@@ -867,10 +759,10 @@ class FesdMpcc final : public Mpcc {
       for (int j = 0; j < options_.finite_elements; ++j)
         for (int r = 0; r < options_.stages; ++r) {
           stage_row_.push_back(row);
-          row += 2 * ny + nsw + np + lifted_count();
+          row += 2 * ny + nsw + np;
         }
       interval_row_.push_back(row);
-      row += 1 + (has_clock_row(k) ? 1 : 0) + equilibration_count();
+      row += 1 + (has_clock_row(k) ? 1 : 0);
     }
     terminal_row_ = row;
     row += nt;
@@ -905,13 +797,7 @@ class FesdMpcc final : public Mpcc {
   }
   /// The scale of switching function m (FesdOptions::switching_scale).
   double switching_scale(int m) const { return options_.switching_scale[static_cast<std::size_t>(m % 3)]; }
-  bool exact_equilibration() const {
-    return options_.switch_detection && options_.step_equilibration == StepEquilibration::Exact;
-  }
-  double heuristic_weight() const { return exact_equilibration() ? 0.0 : options_.step_equilibration_weight; }
-  /// Rows eta (h_j+1 - h_j) = 0 per control interval: one per inner element boundary.
-  int equilibration_count() const { return exact_equilibration() ? options_.finite_elements - 1 : 0; }
-  int equilibration_row(int k) const { return interval_row_[k] + 1 + (has_clock_row(k) ? 1 : 0); }
+  double heuristic_weight() const { return options_.step_equilibration_weight; }
   /// Does switching function m switch at all (a frictionless contact's tangential one does not)?
   // Switching function m is a gap read from the integrated gap state (FesdOptions::integrated_gap).
   bool reads_integrated_gap(int m) const { return options_.integrated_gap && m % 3 == 0; }
@@ -919,96 +805,7 @@ class FesdMpcc final : public Mpcc {
   /// Does switching function m have cross-complementarity (so its switches sit on boundaries)?
   /// The other active ones get the stage-wise pairs (build_pairs).
   bool cross_complementary(int m) const {
-    return switching_active(m) && options_.switch_detection &&
-           (options_.velocity_switch_detection || m % 3 == 0 || (m % 3 == 2 && options_.tangential_switch_detection));
-  }
-
-  // ---- exact step equilibration (file comment) ------------------------------------------------
-  // One multiplier taking part in eta at a boundary: its global index, its channel 2 slot + side
-  // (slot: the index among the cross-complementary functions; side 0: lambda_p, 1: lambda_n) and
-  // whether it belongs to the backward sum, the forward sum, or both (the shared point).
-  struct EquilibrationTerm {
-    int index, channel;
-    bool backward, forward;
-  };
-  // At most 2 nsw channels, nsw slots and, per channel, n_s + 1 backward points and n_s forward
-  // ones (n_s <= 3): fixed sizes, so evaluating eta allocates nothing.
-  static constexpr int max_channels = 2 * nsw;
-  static constexpr int max_terms = max_channels * 7;
-  // The terms of boundary (k, j | j + 1), built once (build_equilibration).
-  const std::vector<EquilibrationTerm>& equilibration_terms(int k, int j) const {
-    return equilibration_terms_[static_cast<std::size_t>(k * (options_.finite_elements - 1) + j)];
-  }
-  void build_equilibration() {
-    equilibration_terms_.clear();
-    if (!exact_equilibration()) return;
-    const int ns = options_.stages;
-    for (int k = 0; k < options_.control_intervals; ++k)
-      for (int j = 0; j + 1 < options_.finite_elements; ++j) {
-        std::vector<EquilibrationTerm> terms;
-        int slot = 0;
-        for (int m = 0; m < nsw; ++m) {
-          if (!cross_complementary(m)) continue;
-          for (int side = 0; side < 2; ++side) {
-            const int offset = 2 * ny + (side == 0 ? nsw : 2 * nsw) + m;
-            const int channel = 2 * slot + side;
-            const int start = start_state_index(k, j);
-            if (start >= 0) terms.push_back({start + offset, channel, true, false});
-            for (int r = 0; r < ns; ++r) terms.push_back({stage_index(k, j, r) + offset, channel, true, r == ns - 1});
-            for (int r = 0; r < ns; ++r) terms.push_back({stage_index(k, j + 1, r) + offset, channel, false, true});
-          }
-          ++slot;
-        }
-        equilibration_terms_.push_back(std::move(terms));
-      }
-  }
-  // eta and its first and second derivatives with respect to the terms' multipliers.
-  struct EquilibrationValue {
-    double eta = 1.0;
-    std::array<double, max_terms> gradient{};  // per term
-    std::array<double, max_terms> dpi{};       // d pi_channel / d lambda_P, per term
-    std::array<double, nsw> others{};          // prod_{l != i} nu_l, per slot
-    std::array<double, nsw * nsw> others2{};   // prod_{l != i, l'} nu, slot-major (slots x slots)
-    int slots = 0;
-  };
-  EquilibrationValue equilibration_value(const Eigen::Ref<const Eigen::VectorXd>& x,
-                                         const std::vector<EquilibrationTerm>& terms) const {
-    EquilibrationValue v;
-    int channels = 0;
-    for (const auto& t : terms) channels = std::max(channels, t.channel + 1);
-    v.slots = channels / 2;
-    std::array<double, max_channels> sb{}, sf{};
-    std::array<double, nsw> nu{};
-    for (const auto& t : terms) {
-      if (t.backward) sb[t.channel] += x[t.index];
-      if (t.forward) sf[t.channel] += x[t.index];
-    }
-    for (int c = 0; c < channels; ++c) nu[c / 2] += sb[c] * sf[c];
-    for (int i = 0; i < v.slots; ++i) {
-      v.eta *= nu[i];
-      v.others[i] = 1.0;
-      for (int l = 0; l < v.slots; ++l) {
-        if (l != i) v.others[i] *= nu[l];
-        double& o2 = v.others2[i * v.slots + l];
-        o2 = 1.0;
-        for (int l2 = 0; l2 < v.slots; ++l2)
-          if (l2 != i && l2 != l) o2 *= nu[l2];
-      }
-    }
-    for (std::size_t p = 0; p < terms.size(); ++p) {
-      const auto& t = terms[p];
-      v.dpi[p] = (t.backward ? sf[t.channel] : 0.0) + (t.forward ? sb[t.channel] : 0.0);
-      v.gradient[p] = v.others[t.channel / 2] * v.dpi[p];
-    }
-    return v;
-  }
-  static double equilibration_second(const EquilibrationValue& v, const EquilibrationTerm& a, const EquilibrationTerm& b,
-                                     double dpi_a, double dpi_b) {
-    const int i = a.channel / 2, l = b.channel / 2;
-    if (i != l) return v.others2[i * v.slots + l] * dpi_a * dpi_b;
-    if (a.channel != b.channel) return 0.0;  // nu = pi_p + pi_n: no cross term between sides
-    const double d2 = (a.backward && b.forward ? 1.0 : 0.0) + (a.forward && b.backward ? 1.0 : 0.0);
-    return v.others[i] * d2;
+    return switching_active(m) && options_.switch_detection && (options_.velocity_switch_detection || m % 3 == 0);
   }
 
   // One pass over the constraint rows: values into g, Jacobian values into jac (in structure
@@ -1117,17 +914,6 @@ class FesdMpcc final : public Mpcc {
                 put(prow + i, b < ny ? state_index(k, j, r) + b : control_index(k) + (b - ny), p[i].derivatives()[b]);
             }
           }
-          // step lifting: beta_i - (1 - alpha_i1)(1 - alpha_i2)
-          if (options_.lift_step_functions) {
-            const int lrow = row + 2 * ny + nsw + np, a = alpha_index(k, j, r), b = closing_index(k, j, r);
-            for (int i = 0; i < nc; ++i) {
-              const double open1 = 1.0 - x[a + 3 * i], open2 = 1.0 - x[a + 3 * i + 1];
-              if (g) (*g)[lrow + i] = x[b + i] - open1 * open2;
-              put(lrow + i, b + i, 1.0);
-              put(lrow + i, a + 3 * i, open2);
-              put(lrow + i, a + 3 * i + 1, open1);
-            }
-          }
         }
       }
       // sum of element lengths, clock
@@ -1142,16 +928,6 @@ class FesdMpcc final : public Mpcc {
         const int yk = state_index(k, options_.finite_elements - 1, ns - 1) + System::clock_index;
         if (g) (*g)[ir + 1] = x[yk];
         put(ir + 1, yk, 1.0);
-      }
-      for (int j = 0; j < equilibration_count(); ++j) {
-        const int erow = equilibration_row(k) + j;
-        const auto& terms = equilibration_terms(k, j);
-        const EquilibrationValue v = equilibration_value(x, terms);
-        const double dh = x[length_index(k, j + 1)] - x[length_index(k, j)];
-        if (g) (*g)[erow] = v.eta * dh;
-        put(erow, length_index(k, j + 1), v.eta);
-        put(erow, length_index(k, j), -v.eta);
-        for (std::size_t p = 0; p < terms.size(); ++p) put(erow, terms[p].index, dh * v.gradient[p]);
       }
     }
     if constexpr (nt > 0) {
@@ -1252,37 +1028,12 @@ class FesdMpcc final : public Mpcc {
             for (int a = 0; a < npw; ++a)
               for (int b = 0; b <= a; ++b) put(global(a), global(b), hl(a, b));
           }
-          // step lifting: d2/dalpha_i1 dalpha_i2 of -(1 - alpha_i1)(1 - alpha_i2) = -1
-          if (options_.lift_step_functions) {
-            const int lrow = row + 2 * ny + nsw + np, a = alpha_index(k, j, r);
-            for (int i = 0; i < nc; ++i) put(a + 3 * i + 1, a + 3 * i, values ? -mu[lrow + i] : 0.0);
-          }
         }
       }
       put(speed_index(k), speed_index(k), sigma * 2.0 * options_.speed_of_time_weight);
       if (options_.switch_detection)
         for (int j = 0; j < options_.finite_elements; ++j)
           put(length_index(k, j), length_index(k, j), sigma * 2.0 * heuristic_weight());
-      if (exact_equilibration())
-        for (int j = 0; j + 1 < options_.finite_elements; ++j) {
-          const int erow = equilibration_row(k) + j;
-          const auto& terms = equilibration_terms(k, j);
-          const double w = values ? mu[erow] : 0.0;
-          EquilibrationValue v;
-          double dh = 0.0;
-          if (values) {
-            v = equilibration_value(x, terms);
-            dh = x[length_index(k, j + 1)] - x[length_index(k, j)];
-          }
-          for (std::size_t p = 0; p < terms.size(); ++p) {
-            const double gp = values ? v.gradient[p] : 0.0;
-            put(length_index(k, j + 1), terms[p].index, w * gp);
-            put(length_index(k, j), terms[p].index, -w * gp);
-            for (std::size_t q = 0; q <= p; ++q)
-              put(terms[p].index, terms[q].index,
-                  values ? w * dh * equilibration_second(v, terms[p], terms[q], v.dpi[p], v.dpi[q]) : 0.0);
-          }
-        }
     }
     // terminal constraints and terminal cost on (x, t) of the final state
     {
@@ -1332,12 +1083,11 @@ class FesdMpcc final : public Mpcc {
           if (!cross_complementary(m)) {
             // Stage-wise pairs: with c = lambda_p - lambda_n given, their equalities
             // lambda_n alpha = sigma, lambda_p (1 - alpha) = sigma determine alpha (smoothable).
-            const bool smoothable = m % 3 != 2 || options_.smooth_tangential_pairs;
             for (int r = 0; r < ns; ++r) {
               const int a = alpha_index(k, j, r) + m;
               const std::string at = el + "[stage " + std::to_string(r) + "]" + sw;
-              pairs_.push_back({{{{lambda_n_index(k, j, r) + m, 1.0}}, 0.0}, {{{a, 1.0}}, 0.0}, "lambda_n" + at + " _|_ alpha", smoothable});
-              pairs_.push_back({{{{lambda_p_index(k, j, r) + m, 1.0}}, 0.0}, {{{a, -1.0}}, 1.0}, "lambda_p" + at + " _|_ 1 - alpha", smoothable});
+              pairs_.push_back({{{{lambda_n_index(k, j, r) + m, 1.0}}, 0.0}, {{{a, 1.0}}, 0.0}, "lambda_n" + at + " _|_ alpha", true});
+              pairs_.push_back({{{{lambda_p_index(k, j, r) + m, 1.0}}, 0.0}, {{{a, -1.0}}, 1.0}, "lambda_p" + at + " _|_ 1 - alpha", true});
             }
             continue;
           }
@@ -1378,7 +1128,6 @@ class FesdMpcc final : public Mpcc {
   std::vector<BoundRow> inequality_rows_;
   std::vector<SparseEntry> jacobian_structure_, hessian_structure_;
   std::vector<ComplementarityPair> pairs_;
-  std::vector<std::vector<EquilibrationTerm>> equilibration_terms_;  ///< per inner boundary (Exact)
 };
 
 }  // namespace saltus::timefreezing
