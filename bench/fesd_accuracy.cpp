@@ -8,7 +8,7 @@
 // --finite-elements replaces the default N_fe = 1, 2, 4, 8 (the budget rule drops the last one).
 // --refine sets MpccSolverOptions::complementarity_refinement (in (0, 1e-9)) for the guiding
 // example: each control interval's converged homotopy goes on towards that residual.
-// --contact-side sets FesdOptions::contact_side_weight (>= 0; scheme "fesd+side" when > 0) for both
+// --contact-side sets FesdOptions::regularisation.contact_side (>= 0; scheme "fesd+side" when > 0) for both
 // examples (default: 0 for the guiding example, the landing's own 1e-2); --landing-only runs the
 // frictional landing alone. --ipopt passes an Ipopt option to
 // every solve of both examples (as in hopper_ocp), --kappa K (in (0, 1)) and --sigma0 S (> 0) set
@@ -28,9 +28,9 @@
 // intervals of 0.25 (tau = 2, where the input has its kink, is a control node), simulated with
 // simulate_time_freezing (one MPCC per control interval) for n_s = 1, 2, 3 Radau IIA stages,
 // N_fe = 1, 2, 4, 8 finite elements per control interval (h = 0.25 / N_fe) and two schemes:
-//   fesd   switch_detection = true: free element lengths and cross-complementarity, the
+//   fesd   switching.detection = true: free element lengths and cross-complementarity, the
 //          heuristic step equilibration (rho_h sum (h - h0)^2, NOSNOC's default);
-//   fixed  switch_detection = false: the same Radau IIA collocation on the uniform grid.
+//   fixed  switching.detection = false: the same Radau IIA collocation on the uniform grid.
 //
 // Closed form (derivation). Free fall: q2 = 1 - g t^2 / 2, touchdown at t = sqrt(2/g) (= tau,
 // the clock has run at speed 1) with v2 = -sqrt(2 g). Frozen phase: the auxiliary field
@@ -186,7 +186,7 @@ double parse_number(const char* text) {
 
 /// MpccSolverOptions::complementarity_refinement of the guiding example's runs (--refine).
 double refinement = 0.0;
-/// FesdOptions::contact_side_weight of both examples' runs (--contact-side; < 0: the example's
+/// FesdOptions::regularisation.contact_side of both examples' runs (--contact-side; < 0: the example's
 /// own, 0 for the guiding example, 1e-2 for the frictional landing).
 double contact_side = -1.0;
 /// Solver overrides of both examples' runs: --ipopt NAME=VALUE (repeatable), --kappa K, --sigma0 S,
@@ -211,7 +211,7 @@ std::string scheme_label(const std::string& scheme) {
 /// The frictional landing's scheme: FESD with its own contact-side selection unless
 /// --contact-side overrides it.
 std::string landing_label() {
-  const double side = contact_side >= 0.0 ? contact_side : scenes::FrictionalLanding::grid().contact_side_weight;
+  const double side = contact_side >= 0.0 ? contact_side : scenes::FrictionalLanding::grid().regularisation.contact_side;
   return std::string("fesd") + (side > 0.0 ? "+side" : "") + solver_suffix();
 }
 
@@ -222,12 +222,12 @@ Row run_guiding(const std::string& scheme, int stages, int finite_elements) {
   r.finite_elements = finite_elements;
   const TimeFreezingSystem<PointMass> system(PointMass(), g);
   FesdOptions o;
-  o.stages = stages;
-  o.control_intervals = control_intervals;
-  o.finite_elements = finite_elements;
-  o.horizon = horizon;
-  o.switch_detection = scheme != "fixed";
-  if (contact_side >= 0.0) o.contact_side_weight = contact_side;
+  o.grid.stages = stages;
+  o.grid.control_intervals = control_intervals;
+  o.grid.finite_elements = finite_elements;
+  o.grid.horizon = horizon;
+  o.switching.detection = scheme != "fixed";
+  if (contact_side >= 0.0) o.regularisation.contact_side = contact_side;
   const auto start = std::chrono::steady_clock::now();
   MpccSolverOptions solver;
   solver.complementarity_refinement = refinement;
@@ -302,7 +302,7 @@ Landing run_landing() {
   using Case = scenes::FrictionalLanding;
   const auto start = std::chrono::steady_clock::now();
   timefreezing::FesdOptions grid = Case::grid();
-  if (contact_side >= 0.0) grid.contact_side_weight = contact_side;
+  if (contact_side >= 0.0) grid.regularisation.contact_side = contact_side;
   MpccSolverOptions solver;
   apply_solver_flags(solver);
   const auto sim = simulate_time_freezing(Case::system(), Case::q0(), Case::v0(), grid, timefreezing::NoObjective{}, solver);
@@ -494,7 +494,7 @@ int main(int argc, char** argv) {
     auto order_list = nlohmann::ordered_json::array();
     for (const Order& o : orders)
       order_list.push_back({{"scheme", o.scheme},
-                            {"n_s", o.stages},
+                            {"n_s", o.grid.stages},
                             {"from_finite_elements", o.from},
                             {"to_finite_elements", o.to},
                             {"order", number(o.order)}});
@@ -540,7 +540,7 @@ int main(int argc, char** argv) {
   for (const Order& o : orders) {
     char span[32];
     std::snprintf(span, sizeof span, "%d -> %d", o.from, o.to);
-    std::printf("%-24s %4d %12s %8s\n", o.scheme.c_str(), o.stages, span,
+    std::printf("%-24s %4d %12s %8s\n", o.scheme.c_str(), o.grid.stages, span,
                 std::isfinite(o.order) ? std::to_string(o.order).substr(0, 5).c_str() : "-");
   }
   }

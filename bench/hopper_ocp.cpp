@@ -37,7 +37,7 @@
 // bench/README.md ("Hopper over three holes") has the table of a run and what it shows.
 #include "scenes/hopper_holes.hpp"
 
-#include <saltus/timefreezing/header_only.hpp>
+#include <saltus/timefreezing/drivers/optimal_control.hpp>
 
 #include "ocp_bench_support.hpp"
 
@@ -71,7 +71,7 @@ struct Variant {
   /// then_side_weight.
   int smoothing_steps = 0;
   double then_sigma_0 = 0.0;
-  double contact_side_weight = 0.0;  ///< > 0: FesdOptions::contact_side_weight; 0: the scene's
+  double contact_side_weight = 0.0;  ///< > 0: FesdOptions::regularisation.contact_side; 0: the scene's
   int stages = 2;                    ///< Radau IIA stages n_s
   MpccSolverOptions::Relaxation then = MpccSolverOptions::Relaxation::Penalty;
   double then_side_weight = 0.0;
@@ -81,7 +81,7 @@ struct Variant {
   /// MpccSolverOptions::polish_fallback on, with polish_max_iter = 500
   bool polish_fallback = false;
   /// With smoothing_steps: the continued homotopy reads the integrated gaps
-  /// (FesdOptions::integrated_gap; the first one reads gap(q)).
+  /// (FesdOptions::switching.integrated_gap; the first one reads gap(q)).
   bool then_integrated_gap = false;
 };
 
@@ -220,14 +220,14 @@ int run(const std::optional<bench::OcpBenchArgs>& args) {
       s.max_homotopy_steps = v.smoothing_steps;
       s.polish = false;
     }
-    const int scene_intervals = Ocp::grid().control_intervals;
+    const int scene_intervals = Ocp::grid().grid.control_intervals;
     FesdOptions grid = Ocp::grid(v.control_intervals > 0 ? v.control_intervals
                                  : v.control_intervals == -2 ? scene_intervals / 2
                                                              : scene_intervals,
                                  3, v.stages);
-    grid.velocity_switch_detection = v.velocity_switch_detection;
+    grid.switching.velocity_detection = v.velocity_switch_detection;
     // A variant without the selection keeps the scene's (the flagship: none; --one-hole: 1e-2).
-    if (v.contact_side_weight > 0.0) grid.contact_side_weight = v.contact_side_weight;
+    if (v.contact_side_weight > 0.0) grid.regularisation.contact_side = v.contact_side_weight;
     args->apply(grid);
     auto r = v.first_auxiliary_acceleration > 0.0 ? with_an_continuation(v.first_auxiliary_acceleration, ocp, grid, s)
              : v.hop_guess ? solve_time_freezing_ocp_from_guess(Ocp::system(), ocp, Ocp::q0(), Ocp::v0(), grid,
@@ -237,8 +237,8 @@ int run(const std::optional<bench::OcpBenchArgs>& args) {
                                        : solve_time_freezing_ocp(Ocp::system(), ocp, Ocp::q0(), Ocp::v0(), grid, s);
     if (v.smoothing_steps > 0 && !r.converged()) {  // r ran smoothing_steps steps without polish (above)
       FesdOptions then_grid = grid;
-      then_grid.contact_side_weight = v.then_side_weight;
-      if (v.then_integrated_gap) then_grid.integrated_gap = true;
+      then_grid.regularisation.contact_side = v.then_side_weight;
+      if (v.then_integrated_gap) then_grid.switching.integrated_gap = true;
       const FesdMpcc<scenes::Hopper, Ocp> problem(Ocp::system(), ocp, Ocp::q0(), Ocp::v0(), then_grid);
       // then_sigma_0 < 0: from where the first homotopy stopped (its complementarity, = sigma).
       const double sigma_0 = v.then_sigma_0 < 0.0 ? r.solution.complementarity : v.then_sigma_0;
@@ -254,7 +254,7 @@ int run(const std::optional<bench::OcpBenchArgs>& args) {
     for (const MpccHomotopyStep& st : r.solution.steps) per_step.push_back(st.ipopt_iterations);
     const std::size_t solves = per_step.size();
     if (json)
-      rows.push_back({{"variant", v.name}, {"what", v.what}, {"elastic_infinity", args->elastic}, {"gap_scale", grid.switching_scale[0]}, {"contact_side_weight", grid.contact_side_weight}, {"element_length_freedom", grid.element_length_freedom}, {"warm_start", s.warm_start}, {"control_intervals", grid.control_intervals},
+      rows.push_back({{"variant", v.name}, {"what", v.what}, {"elastic_infinity", args->elastic}, {"gap_scale", grid.switching.scale[0]}, {"contact_side_weight", grid.regularisation.contact_side}, {"element_length_freedom", grid.grid.element_length_freedom}, {"warm_start", s.warm_start}, {"control_intervals", grid.grid.control_intervals},
                       {"converged", r.converged()}, {"solves", solves},
                       {"ipopt_iterations", r.solution.ipopt_iterations}, {"iterations_per_solve", per_step},
                       {"complementarity", r.solution.complementarity}, {"max_path_violation", f.path_violation},

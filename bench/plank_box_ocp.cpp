@@ -23,7 +23,7 @@
 // corners at once), box_vz_before [m/s]}; null without one.
 #include "scenes/plank_box_landing.hpp"
 
-#include <saltus/timefreezing/header_only.hpp>
+#include <saltus/timefreezing/drivers/optimal_control.hpp>
 
 #include "ocp_bench_support.hpp"
 
@@ -52,12 +52,12 @@ struct Variant {
   int smoothing_steps = 0;
   double then_sigma_0 = 0.0;
   bool scholtes = false;             ///< the Scholtes inequalities instead of the smoothing
-  double contact_side_weight = 0.0;  ///< FesdOptions::contact_side_weight
+  double contact_side_weight = 0.0;  ///< FesdOptions::regularisation.contact_side
   MpccSolverOptions::Relaxation then = MpccSolverOptions::Relaxation::Penalty;
   double then_side_weight = 0.0;
   /// MpccSolverOptions::polish_fallback on, with polish_max_iter = 500
   bool polish_fallback = false;
-  /// The gap switching functions read gap(q) (FesdOptions::integrated_gap = false; the default
+  /// The gap switching functions read gap(q) (FesdOptions::switching.integrated_gap = false; the default
   /// reads the integrated gaps since 2026-12-01).
   bool gap_of_q = false;
   /// The polish of the default before 2026-12-01: only after the homotopy's last step, 100
@@ -134,8 +134,8 @@ int run(const std::optional<bench::OcpBenchArgs>& args) {
       s.polish_max_iter = 100;
     }
     FesdOptions grid = Ocp::grid();
-    if (v.gap_of_q) grid.integrated_gap = false;
-    grid.contact_side_weight = v.contact_side_weight;
+    if (v.gap_of_q) grid.switching.integrated_gap = false;
+    grid.regularisation.contact_side = v.contact_side_weight;
     args->apply(s);
     args->apply(grid);
     TimeFreezingOcpResult<scenes::PlankBox> r;
@@ -149,7 +149,7 @@ int run(const std::optional<bench::OcpBenchArgs>& args) {
       first.polish = false;
       const MpccSolution a = solve_mpcc(problem, start, first);
       FesdOptions then_grid = grid;
-      then_grid.contact_side_weight = v.then_side_weight;
+      then_grid.regularisation.contact_side = v.then_side_weight;
       const FesdMpcc<scenes::PlankBox, Ocp> then_problem(Ocp::system(), ocp, Ocp::q0(), Ocp::v0(), then_grid);
       r.solution = bench::continue_homotopy(then_problem, a, s, v.then, v.then_sigma_0,
                                             s.max_homotopy_steps - v.smoothing_steps);
@@ -162,7 +162,7 @@ int run(const std::optional<bench::OcpBenchArgs>& args) {
     // The landing as the recovered trajectory reads it (recover_trajectory): one impact whose
     // guards are both corners' touchdowns, or two, or a touchdown without impact.
     nlohmann::ordered_json landing = nullptr;
-    const HybridTrajectory<scenes::PlankBox> traj = recover_trajectory(Ocp::system(), r.points, grid.stages);
+    const HybridTrajectory<scenes::PlankBox> traj = recover_trajectory(Ocp::system(), r.points, grid.grid.stages);
     for (const auto& ev : traj.events) {
       bool touchdown = false;
       for (const Guard& g : ev.guards()) touchdown = touchdown || g.kind == GuardKind::Touchdown;

@@ -13,7 +13,7 @@
 // the gap's switch points into contact.
 #include <saltus/hybrid/reference/resimulation.hpp>
 #include <saltus/hybrid/vocabulary/trajectory_report.hpp>
-#include <saltus/timefreezing/header_only.hpp>
+#include <saltus/timefreezing/drivers/optimal_control.hpp>
 #include "scenes/all_scenes.hpp"
 #include "scenes/time_freezing_examples.hpp"
 

@@ -19,7 +19,7 @@
 // 0 only when it converged. The re-simulation needs a converged solution (null otherwise).
 #include <saltus/hybrid/reference/resimulation.hpp>
 #include <saltus/hybrid/vocabulary/trajectory_report.hpp>
-#include <saltus/timefreezing/header_only.hpp>
+#include <saltus/timefreezing/drivers/optimal_control.hpp>
 #include "scenes/all_scenes.hpp"
 #include "scenes/hopper_holes.hpp"
 #include "ocp_report.hpp"

@@ -11,7 +11,7 @@
 // tracking design along it with its stability check, and 100 perturbed closed-loop runs. The
 // analysis's outcome does not change the exit status; its failures are reported in it.
 #include <saltus/hybrid/vocabulary/trajectory_report.hpp>
-#include <saltus/timefreezing/header_only.hpp>
+#include <saltus/timefreezing/drivers/optimal_control.hpp>
 #include "scenes/all_scenes.hpp"
 #include "scenes/plank_box_landing.hpp"
 #include "plank_box_tracking.hpp"

@@ -13,7 +13,7 @@
 #include <saltus/hybrid/reference/resimulation.hpp>
 #include <saltus/timefreezing/discretisation/fesd.hpp>
 #include <saltus/timefreezing/mpcc/mpcc_solver.hpp>
-#include <saltus/timefreezing/header_only.hpp>
+#include <saltus/timefreezing/drivers/optimal_control.hpp>
 
 #include "mpcc_support.hpp"
 #include "plank_box_tracking.hpp"
@@ -123,11 +123,11 @@ TEST(HopperOverOneHole, TargetGridAndRowsAreTheShortTask) {
   EXPECT_EQ(Short{}.terminal_lower(), Short::q_target());
   EXPECT_EQ(Short{}.terminal_upper(), Short::q_target());
   const timefreezing::FesdOptions grid = Short::grid();
-  EXPECT_EQ(grid.control_intervals, 8);
-  EXPECT_EQ(grid.finite_elements, 3);
-  EXPECT_EQ(grid.horizon, 1.0);
-  EXPECT_EQ(grid.physical_horizon, 1.0);
-  EXPECT_EQ(grid.horizon / grid.control_intervals, Ocp::grid().horizon / Ocp::grid().control_intervals);
+  EXPECT_EQ(grid.grid.control_intervals, 8);
+  EXPECT_EQ(grid.grid.finite_elements, 3);
+  EXPECT_EQ(grid.grid.horizon, 1.0);
+  EXPECT_EQ(grid.clock.physical_horizon, 1.0);
+  EXPECT_EQ(grid.grid.horizon / grid.grid.control_intervals, Ocp::grid().grid.horizon / Ocp::grid().grid.control_intervals);
   const std::vector<Short> levels = Short::hole_continuation();
   ASSERT_EQ(levels.size(), Ocp::hole_continuation().size());
   EXPECT_EQ(levels.back().hole_level, 1.0);
@@ -183,7 +183,7 @@ TEST(HopperOverOneHole, CoarseGridConvergesAndJumpsTheHole) {
   GTEST_SKIP() << "about 2.5 minutes in Release: run in the release stage only";
 #endif
   using Short = HopperOverOneHole;
-  EXPECT_EQ(Short::grid().contact_side_weight, 1e-2);
+  EXPECT_EQ(Short::grid().regularisation.contact_side, 1e-2);
   EXPECT_FALSE(Short::solver().warm_start);
   const auto r = timefreezing::solve_time_freezing_ocp_by_continuation(
       Short::system(), Short::hole_continuation(), Short{}, Short::q0(), Short::v0(), Short::grid(), Short::solver());
@@ -369,9 +369,9 @@ TEST(PlankBoxShortLanding, CoarseGridConvergesWithAFlatLandingAndALiftOff) {
 #endif
   using Landing = PlankBoxShortLanding;
   const timefreezing::FesdOptions grid = Landing::grid();
-  EXPECT_EQ(grid.control_intervals, 10);
-  EXPECT_EQ(grid.horizon, 1.0);
-  EXPECT_EQ(grid.physical_horizon, 1.0);
+  EXPECT_EQ(grid.grid.control_intervals, 10);
+  EXPECT_EQ(grid.grid.horizon, 1.0);
+  EXPECT_EQ(grid.clock.physical_horizon, 1.0);
   // Its target: 5 cm above the level plank at 0.55 m from the hinge, at rest; the feasibility
   // report reads this target, not the flagship's.
   const PlankBox box;

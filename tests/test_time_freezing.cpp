@@ -4,6 +4,7 @@
 // guiding example (time-freezing paper, Example 3) and the frictional landing of a point mass;
 // a small OCP that lands the point mass and slides it to a target.
 #include "scenes/plank_box.hpp"
+#include "scenes/plank_box_landing.hpp"
 #include "scenes/point_mass.hpp"
 #include "scenes/time_freezing_examples.hpp"
 
@@ -165,25 +166,25 @@ struct ClockAsDoubleRunningCost {
     return T(u.squaredNorm() * t);
   }
 };
-static_assert(detail::HasNonTemplateRunningCost<NonTemplateRunningCost>);
-static_assert(!detail::HasNonTemplateRunningCost<EveryTermOcp>);
-static_assert(!detail::HasNonTemplateRunningCost<scenes::PointMassToTheTarget>);
-static_assert(detail::HasTimedRunningCost<ClockAsDoubleRunningCost, double, 4, 2> &&
-              !detail::HasTimedRunningCost<ClockAsDoubleRunningCost, detail::Ad2<9>, 4, 2>);
-static_assert(detail::HasTimedRunningCost<EveryTermOcp, detail::Ad2<9>, 4, 2>);
+static_assert(HasNonTemplateRunningCost<NonTemplateRunningCost>);
+static_assert(!HasNonTemplateRunningCost<EveryTermOcp>);
+static_assert(!HasNonTemplateRunningCost<scenes::PointMassToTheTarget>);
+static_assert(HasTimedRunningCost<ClockAsDoubleRunningCost, double, 4, 2> &&
+              !HasTimedRunningCost<ClockAsDoubleRunningCost, detail::Ad2<9>, 4, 2>);
+static_assert(HasTimedRunningCost<EveryTermOcp, detail::Ad2<9>, 4, 2>);
 
 FesdOptions small_grid(bool switch_detection) {
   FesdOptions o;
-  o.control_intervals = 2;
-  o.finite_elements = 2;
-  o.stages = 2;
-  o.horizon = 1.0;
-  o.speed_of_time_max = 3.0;
-  o.speed_of_time_weight = 0.5;
-  o.clock = ClockConstraint::Stagewise;
-  o.physical_horizon = 0.8;
-  o.switch_detection = switch_detection;
-  o.contact_side_weight = 0.7;  // the contact-side selection's gradient entries are checked too
+  o.grid.control_intervals = 2;
+  o.grid.finite_elements = 2;
+  o.grid.stages = 2;
+  o.grid.horizon = 1.0;
+  o.clock.speed_of_time_max = 3.0;
+  o.regularisation.speed_of_time = 0.5;
+  o.clock.constraint = ClockConstraint::Stagewise;
+  o.clock.physical_horizon = 0.8;
+  o.switching.detection = switch_detection;
+  o.regularisation.contact_side = 0.7;  // the contact-side selection's gradient entries are checked too
   return o;
 }
 
@@ -201,10 +202,10 @@ TEST(Fesd, DerivativesMatchFiniteDifferences) {
     const bool fesd = variant != 1;
     FesdOptions grid = small_grid(fesd);
     if (variant == 2) {
-      grid.finite_elements = 3;
-      grid.switching_scale = {3.0, 0.5, 2.0};
+      grid.grid.finite_elements = 3;
+      grid.switching.scale = {3.0, 0.5, 2.0};
     }
-    grid.integrated_gap = variant == 4;
+    grid.switching.integrated_gap = variant == 4;
     const FesdMpcc<PointMass, EveryTermOcp> problem(system, EveryTermOcp{}, Vec<2>(0.1, 0.5), Vec<2>(1.0, -0.5), grid);
     const int n = problem.variable_count(), m = problem.constraint_count();
     const Eigen::VectorXd x = interior_point(problem, 3);
@@ -274,22 +275,22 @@ TEST(Fesd, IpoptDerivativeCheckerFindsNoError) {
   // Ipopt's second-order check costs about one Hessian evaluation per constraint and variable: the
   // finite-difference test above covers the larger grid, this one a single control interval.
   FesdOptions one = small_grid(true);
-  one.control_intervals = 1;
+  one.grid.control_intervals = 1;
   const FesdMpcc<PointMass, EveryTermOcp> problem(system, EveryTermOcp{}, Vec<2>(0.1, 0.5), Vec<2>(1.0, -0.5), one);
   const DerivativeCheckReport report = check_derivatives(problem, interior_point(problem, 5));
   EXPECT_EQ(report.errors, 0) << report.output;
   // Two contacts with friction (the plank-box), no OCP terms.
   const TimeFreezingSystem<PlankBox> plank(PlankBox(), 50.0);
   FesdOptions o = small_grid(true);
-  o.control_intervals = 1;
-  o.finite_elements = 1;
-  o.clock = ClockConstraint::Terminal;
+  o.grid.control_intervals = 1;
+  o.grid.finite_elements = 1;
+  o.clock.constraint = ClockConstraint::Terminal;
   const FesdMpcc<PlankBox> two(plank, NoObjective{}, Vec<4>(0.5, 0.08, 0.01, 0.0), Vec<4>(0.2, -1.0, 0.3, 0.0), o);
   const DerivativeCheckReport report2 = check_derivatives(two, interior_point(two, 7));
   EXPECT_EQ(report2.errors, 0) << report2.output;
   // The integrated gaps read by the gap switching functions: g' = Theta J_n(q) v of the corners
   // on the rotating plank (a gap nonlinear in q).
-  o.integrated_gap = true;
+  o.switching.integrated_gap = true;
   const FesdMpcc<PlankBox> two_integrated(plank, NoObjective{}, Vec<4>(0.5, 0.08, 0.01, 0.0),
                                           Vec<4>(0.2, -1.0, 0.3, 0.0), o);
   const DerivativeCheckReport report4 = check_derivatives(two_integrated, interior_point(two_integrated, 7));
@@ -304,47 +305,47 @@ TEST(Fesd, MarksTheStageWisePairsSmoothable) {
   p.mu = 0.3;
   const TimeFreezingSystem<PointMass> system(PointMass(p), 10.0);
   FesdOptions o = small_grid(true);
-  o.velocity_switch_detection = false;
+  o.switching.velocity_detection = false;
   auto smoothable = [&](const FesdOptions& options) {
     const FesdMpcc<PointMass> problem(system, NoObjective{}, Vec<2>(0.1, 0.5), Vec<2>(1.0, -0.5), options);
     int n = 0;
     for (const ComplementarityPair& pair : problem.complementarity_pairs()) n += pair.smoothable ? 1 : 0;
     return n;
   };
-  const int stage_points = o.control_intervals * o.finite_elements * o.stages;  // 8
+  const int stage_points = o.grid.control_intervals * o.grid.finite_elements * o.grid.stages;  // 8
   EXPECT_EQ(smoothable(o), 2 * 2 * stage_points);  // J_n v and J_t v, two pairs each
-  o.velocity_switch_detection = true;
+  o.switching.velocity_detection = true;
   EXPECT_EQ(smoothable(o), 0);  // every function has cross-complementarity
 }
 
 TEST(Fesd, RefusesBadOptionsAndStates) {
   const TimeFreezingSystem<PointMass> system(PointMass(), 10.0);
   FesdOptions o;
-  o.finite_elements = 0;
+  o.grid.finite_elements = 0;
   EXPECT_THROW(FesdMpcc<PointMass>(system, {}, Vec<2>(0, 1), Vec<2>(0, 0), o), InvalidArgument);
   o = FesdOptions{};
-  o.horizon = -1.0;
+  o.grid.horizon = -1.0;
   EXPECT_THROW(FesdMpcc<PointMass>(system, {}, Vec<2>(0, 1), Vec<2>(0, 0), o), InvalidArgument);
   o = FesdOptions{};
-  o.contact_side_weight = -1e-3;
+  o.regularisation.contact_side = -1e-3;
   EXPECT_THROW(FesdMpcc<PointMass>(system, {}, Vec<2>(0, 1), Vec<2>(0, 0), o), InvalidArgument);
   o = FesdOptions{};
-  o.contact_side_weight = std::numeric_limits<double>::quiet_NaN();
+  o.regularisation.contact_side = std::numeric_limits<double>::quiet_NaN();
   EXPECT_THROW(FesdMpcc<PointMass>(system, {}, Vec<2>(0, 1), Vec<2>(0, 0), o), InvalidArgument);
   o = FesdOptions{};
-  o.step_equilibration_weight = std::numeric_limits<double>::infinity();  // Ipopt failed on it before
+  o.regularisation.step_equilibration = std::numeric_limits<double>::infinity();  // Ipopt failed on it before
   EXPECT_THROW(FesdMpcc<PointMass>(system, {}, Vec<2>(0, 1), Vec<2>(0, 0), o), InvalidArgument);
   o = FesdOptions{};
-  o.clock = ClockConstraint::Terminal;  // without a physical horizon
+  o.clock.constraint = ClockConstraint::Terminal;  // without a physical horizon
   EXPECT_THROW(FesdMpcc<PointMass>(system, {}, Vec<2>(0, 1), Vec<2>(0, 0), o), InvalidArgument);
   o = FesdOptions{};
-  o.stages = 4;
+  o.grid.stages = 4;
   EXPECT_THROW(FesdMpcc<PointMass>(system, {}, Vec<2>(0, 1), Vec<2>(0, 0), o), InvalidArgument);
   o = FesdOptions{};
-  o.switching_scale[1] = 0.0;
+  o.switching.scale[1] = 0.0;
   EXPECT_THROW(FesdMpcc<PointMass>(system, {}, Vec<2>(0, 1), Vec<2>(0, 0), o), InvalidArgument);
   o = FesdOptions{};
-  o.control_lower = Eigen::VectorXd::Zero(3);
+  o.bounds.control_lower = Eigen::VectorXd::Zero(3);
   EXPECT_THROW(FesdMpcc<PointMass>(system, {}, Vec<2>(0, 1), Vec<2>(0, 0), o), InvalidArgument);
   EXPECT_THROW(FesdMpcc<PointMass>(system, {}, Vec<2>(0, std::nan("")), Vec<2>(0, 0), FesdOptions{}), InvalidArgument);
   // Below the table: refused, naming the contact.
@@ -357,11 +358,11 @@ TEST(Fesd, RefusesBadOptionsAndStates) {
   // The simulation driver checks the grid before splitting it (a message with the given value,
   // not a crash on zero intervals).
   o = FesdOptions{};
-  o.control_intervals = 0;
+  o.grid.control_intervals = 0;
   EXPECT_THROW(simulate_time_freezing(system, Vec<2>(0, 1), Vec<2>(0, 0), o), InvalidArgument);
   o = FesdOptions{};
-  o.control_intervals = 10;
-  o.horizon = -1.0;
+  o.grid.control_intervals = 10;
+  o.grid.horizon = -1.0;
   try {
     simulate_time_freezing(system, Vec<2>(0, 1), Vec<2>(0, 0), o);
     ADD_FAILURE() << "a negative horizon was accepted";
@@ -380,13 +381,13 @@ TEST(Fesd, InitialPointFromAGuessOfTheMotion) {
   const scenes::PointMassParameters p;
   const TimeFreezingSystem<PointMass> system(PointMass(p), 10.0);
   FesdOptions grid;
-  grid.control_intervals = 3;
-  grid.finite_elements = 2;
-  grid.stages = 2;
-  grid.horizon = 0.5;
-  grid.speed_of_time_max = 3.0;
-  grid.clock = ClockConstraint::Stagewise;
-  grid.physical_horizon = 0.8;  // the clock runs 1.6 times numerical time: s = 1.6
+  grid.grid.control_intervals = 3;
+  grid.grid.finite_elements = 2;
+  grid.grid.stages = 2;
+  grid.grid.horizon = 0.5;
+  grid.clock.speed_of_time_max = 3.0;
+  grid.clock.constraint = ClockConstraint::Stagewise;
+  grid.clock.physical_horizon = 0.8;  // the clock runs 1.6 times numerical time: s = 1.6
   const Vec<2> q0(0.1, 5.0), v0(1.0, 0.5);
   const auto flight = [&](double t) {
     Vec<4> x;
@@ -444,19 +445,19 @@ constexpr double g_ex3 = scenes::Example3::gravity;
 TEST(TimeFreezingSimulation, GuidingExampleMatchesItsClosedForms) {
   const TimeFreezingSystem<PointMass> system(PointMass(), g_ex3);
   FesdOptions o;
-  o.stages = 2;
-  o.control_intervals = 14;  // tau = 2 (t = 1, the kink of u) is a control node
+  o.grid.stages = 2;
+  o.grid.control_intervals = 14;  // tau = 2 (t = 1, the kink of u) is a control node
   // 8 elements per control interval (112): with the contact-side selection 4 elements leave the lift-off interval's homotopy stalled at 2.4e-8 (the lift-off at
   // t = 1.5 is tangential, v2 = g (t - 1.5)^2, and sits exactly on the control node tau = 2.75).
-  o.finite_elements = 8;
-  o.contact_side_weight = 1e-2;  // fesd.hpp: the frozen phase exact, its end located
-  o.horizon = 3.5;
+  o.grid.finite_elements = 8;
+  o.regularisation.contact_side = 1e-2;  // fesd.hpp: the frozen phase exact, its end located
+  o.grid.horizon = 3.5;
 #if defined(SALTUS_TESTS_UNDER_SANITIZERS)
   // 9 s in Release, ~250 s under the sanitizers: there only the first 4 control intervals
   // (tau <= 1: free fall, touchdown, the whole frozen phase), the same driver and code paths.
-  o.control_intervals = 4;
-  o.finite_elements = 4;  // the frozen end is located at 4 too (measured 1.2e-10); half the time
-  o.horizon = 1.0;
+  o.grid.control_intervals = 4;
+  o.grid.finite_elements = 4;  // the frozen end is located at 4 too (measured 1.2e-10); half the time
+  o.grid.horizon = 1.0;
   constexpr bool whole_horizon = false;
 #else
   constexpr bool whole_horizon = true;
@@ -468,10 +469,10 @@ TEST(TimeFreezingSimulation, GuidingExampleMatchesItsClosedForms) {
   const auto sim = simulate_time_freezing(system, Vec<2>(0, 1), Vec<2>(0, 0), o, scenes::Example3{}, solver);
   ASSERT_TRUE(sim.converged()) << sim.solution.message;
   const std::string lines = progress.str();
-  EXPECT_EQ(lines.rfind("simulate_time_freezing: control interval 1 of " + std::to_string(o.control_intervals) + "\n", 0),
+  EXPECT_EQ(lines.rfind("simulate_time_freezing: control interval 1 of " + std::to_string(o.grid.control_intervals) + "\n", 0),
             0u)
       << lines.substr(0, 200);
-  EXPECT_NE(lines.find("control interval " + std::to_string(o.control_intervals) + " of "), std::string::npos);
+  EXPECT_NE(lines.find("control interval " + std::to_string(o.grid.control_intervals) + " of "), std::string::npos);
   EXPECT_NE(lines.find("mpcc step   0"), std::string::npos);
   const double t_impact = std::sqrt(2.0 / g_ex3);
   // The recovered trajectory (recover_trajectory): the impact at t = sqrt(2/g) from flight into
@@ -517,7 +518,7 @@ TEST(TimeFreezingSimulation, GuidingExampleMatchesItsClosedForms) {
   // phase after t = 1 (clock speed 1 / (2 (2 - t)), not a polynomial), order 3-4 in h; the frozen
   // phase is exact to 1e-11 with the contact-side selection (without it: a drift of 1.6e-5, and
   // 1.4e-5 at 112 elements).
-  EXPECT_LT(error, 1.2e-5);  // 7.1e-6 with contact_side_weight 1e-2 (1.05e-5 with 1e-3, 1.41e-5 without)
+  EXPECT_LT(error, 1.2e-5);  // 7.1e-6 with regularisation.contact_side 1e-2 (1.05e-5 with 1e-3, 1.41e-5 without)
   // The touchdown is a switch of the gap at t = sqrt(2/g); the frozen phase ends at
   // tau = 2 sqrt(2/g) (the normal velocity switches to 0); lift-off at tau = 2.75 (t = 1.5).
   const SwitchPoint* touchdown = nullptr;
@@ -565,15 +566,15 @@ TEST(TimeFreezingSimulation, GuidingExampleReachesTheRadauOrder) {
 #endif
   const TimeFreezingSystem<PointMass> system(PointMass(), g_ex3);
   FesdOptions o;
-  o.stages = 3;
-  o.control_intervals = 14;
-  o.horizon = 3.5;
-  o.contact_side_weight = 1e-2;
+  o.grid.stages = 3;
+  o.grid.control_intervals = 14;
+  o.grid.horizon = 3.5;
+  o.regularisation.contact_side = 1e-2;
   MpccSolverOptions solver;
   solver.complementarity_refinement = 1e-14;
   std::vector<double> errors;
   for (const int nfe : {4, 8}) {
-    o.finite_elements = nfe;
+    o.grid.finite_elements = nfe;
     const auto sim = simulate_time_freezing(system, Vec<2>(0, 1), Vec<2>(0, 0), o, scenes::Example3{}, solver);
     ASSERT_TRUE(sim.converged()) << sim.solution.message;
     errors.push_back((sim.final_state().head<5>() - scenes::Example3::final_state()).cwiseAbs().maxCoeff());
@@ -586,21 +587,21 @@ TEST(TimeFreezingSimulation, GuidingExampleReachesTheRadauOrder) {
   EXPECT_GE(order, 4.5);
 }
 
-// FesdOptions::integrated_gap on a gap linear in q (the point mass: gap = q_2): the collocated g
+// FesdOptions::switching.integrated_gap on a gap linear in q (the point mass: gap = q_2): the collocated g
 // equals q_2 at every stage point, so the discrete problems are the same and so are the
 // solutions, to Ipopt's tolerance (Example 3's first 4 control intervals: free fall, touchdown,
 // the frozen phase; 16 elements, n_s = 2, the contact-side selection as in the test above).
 TEST(TimeFreezingSimulation, IntegratedGapOfALinearGapChangesNothing) {
   const TimeFreezingSystem<PointMass> system(PointMass(), g_ex3);
   FesdOptions o;
-  o.stages = 2;
-  o.control_intervals = 4;
-  o.finite_elements = 4;
-  o.horizon = 1.0;
-  o.contact_side_weight = 1e-2;
+  o.grid.stages = 2;
+  o.grid.control_intervals = 4;
+  o.grid.finite_elements = 4;
+  o.grid.horizon = 1.0;
+  o.regularisation.contact_side = 1e-2;
   std::vector<Eigen::Matrix<double, 7, 1>> finals;
   for (const bool integrated : {false, true}) {
-    o.integrated_gap = integrated;
+    o.switching.integrated_gap = integrated;
     const auto sim = simulate_time_freezing(system, Vec<2>(0, 1), Vec<2>(0, 0), o, scenes::Example3{});
     ASSERT_TRUE(sim.converged()) << sim.solution.message;
     finals.push_back(sim.final_state());
@@ -629,18 +630,18 @@ TEST(TimeFreezingSimulation, IntegratedGapOfANonlinearGapConvergesToTheGap) {
   Vec<8> x0 = scene.flat_state(0.5, 0.3);
   x0.tail<4>() << 0.5, 0.0, 3.0, 0.0;  // sliding sideways and spinning at 3 rad/s, plank at rest
   FesdOptions o;
-  o.stages = 2;
-  o.control_intervals = 1;
-  o.horizon = 0.2;
-  o.integrated_gap = true;
+  o.grid.stages = 2;
+  o.grid.control_intervals = 1;
+  o.grid.horizon = 0.2;
+  o.switching.integrated_gap = true;
   std::vector<double> mismatch;
   for (const int nfe : {4, 8}) {
-    o.finite_elements = nfe;
+    o.grid.finite_elements = nfe;
     const auto sim = simulate_time_freezing(system, Vec<4>(x0.head<4>()), Vec<4>(x0.tail<4>()), o);
     ASSERT_TRUE(sim.converged()) << sim.solution.message;
     double worst = 0.0, lowest_gap = 1.0;
     for (const auto& p : sim.points) {
-      if (p.stage != o.stages - 1) continue;  // element ends
+      if (p.stage != o.grid.stages - 1) continue;  // element ends
       const Vec<4> q = p.y.head<4>();
       for (int i = 0; i < 2; ++i) {
         const double gap = scene.gap<double>(i, q);
@@ -661,12 +662,12 @@ TEST(TimeFreezingSimulation, IntegratedGapOfANonlinearGapConvergesToTheGap) {
 
 // The frozen phase of Example 3 against the closed form. During the frozen phase the gap's pair is
 // degenerate (gap = 0 and both multipliers 0 at the exact solution), so complementarity leaves
-// alpha_gap free. Without the contact-side selection (FesdOptions::contact_side_weight = 0) a
+// alpha_gap free. Without the contact-side selection (FesdOptions::regularisation.contact_side = 0) a
 // residual of 1e-9 lets the gap drift to about -1.6e-5 (lambda and alpha both ~1e-5..1e-4) and the
 // clock creep 5e-6 while the mass should stand still, and the drift stays in q2 for the rest of the
 // motion. Two remedies: refinement past convergence to 1e-14 (MpccSolverOptions::
 // complementarity_refinement) shrinks it below 1e-7; the contact-side selection
-// (FesdOptions::contact_side_weight = 1e-2) removes it. First 4 control intervals: free fall,
+// (FesdOptions::regularisation.contact_side = 1e-2) removes it. First 4 control intervals: free fall,
 // touchdown, the frozen phase, sliding to tau = 1 (t = 1/2: q = (0.875, 0), v = (3.5, 0)).
 TEST(TimeFreezingSimulation, FrozenPhaseDriftIsRemovedBySideSelectionOrRefinement) {
 #if defined(SALTUS_TESTS_UNDER_SANITIZERS)
@@ -675,10 +676,10 @@ TEST(TimeFreezingSimulation, FrozenPhaseDriftIsRemovedBySideSelectionOrRefinemen
 #endif
   const TimeFreezingSystem<PointMass> system(PointMass(), g_ex3);
   FesdOptions o;
-  o.stages = 2;
-  o.control_intervals = 4;
-  o.finite_elements = 4;
-  o.horizon = 1.0;
+  o.grid.stages = 2;
+  o.grid.control_intervals = 4;
+  o.grid.finite_elements = 4;
+  o.grid.horizon = 1.0;
   const Vec<5> exact = (Vec<5>() << 0.875, 0.0, 3.5, 0.0, 0.5).finished();
   auto error_at_the_end = [&](const FesdOptions& grid, const MpccSolverOptions& solver, const char* what) {
     const auto sim = simulate_time_freezing(system, Vec<2>(0, 1), Vec<2>(0, 0), grid, scenes::Example3{}, solver);
@@ -688,8 +689,8 @@ TEST(TimeFreezingSimulation, FrozenPhaseDriftIsRemovedBySideSelectionOrRefinemen
               << sim.solution.ipopt_iterations << " Ipopt iterations)\n";
     return e;
   };
-  const FesdOptions no_side = o;  // contact_side_weight 0, the default
-  o.contact_side_weight = 1e-2;
+  const FesdOptions no_side = o;  // regularisation.contact_side 0, the default
+  o.regularisation.contact_side = 1e-2;
   MpccSolverOptions solver;
   const Vec<5> plain = error_at_the_end(no_side, solver, "no side selection");
   EXPECT_GT(std::abs(plain[1]), 1e-6) << "the drift this test is about (if it vanished, update the docs)";
@@ -790,15 +791,15 @@ TEST(TimeFreezingSimulation, PlankBoxFlatLandingAgreesWithTheEventDrivenSimulato
   const Vec<8> x0 = scene.flat_state(0.6, 0.05);
   const TimeFreezingSystem<PlankBox> system(scene, 50.0);
   FesdOptions o;
-  o.stages = 2;
-  o.control_intervals = 10;
-  o.finite_elements = 4;
-  o.horizon = 0.5;
+  o.grid.stages = 2;
+  o.grid.control_intervals = 10;
+  o.grid.finite_elements = 4;
+  o.grid.horizon = 0.5;
   // The corners' gaps on the rocking plank are nonlinear in q: with gap(q) the resting box's
   // control intervals are overdetermined (fesd.hpp, "INTEGRATED GAP"; measured: interval 9's
   // homotopy stalls at 1e-9 after 3,000 iterations in one step, where it passed in 30 s in total
   // before the state carried the integrated gaps, by Ipopt's path); with them 1,449 iterations, 15 s.
-  o.integrated_gap = true;
+  o.switching.integrated_gap = true;
   MpccSolverOptions solver;
   solver.sigma_0 = 1e-3;
   const auto sim = simulate_time_freezing(system, Vec<4>(x0.head<4>()), Vec<4>(x0.tail<4>()), o,
@@ -982,7 +983,7 @@ TEST(TimeFreezingRecovery, ATangentialLiftOffIsReadWhereTheClosingWeightVanishes
 }
 
 // An impact absorbed into a flowing element (recover_trajectory's docstring; the flagships'
-// velocity_switch_detection = false): the element after the touchdown runs the clock (0.1 -> 0.12
+// switching.velocity_detection = false): the element after the touchdown runs the clock (0.1 -> 0.12
 // at its first stage) while the normal velocity goes from -1 to 0. Read as an impact at t = 0.1
 // with x+ at that stage, held over the advance, then the slide.
 TEST(TimeFreezingRecovery, AnImpactAbsorbedIntoAFlowingElementIsAnImpactEvent) {

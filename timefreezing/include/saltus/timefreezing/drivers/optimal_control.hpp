@@ -53,10 +53,10 @@ TimeFreezingOcpResult<S> solve_time_freezing_ocp(const TimeFreezingSystem<S>& sy
 /// second initialisation, e.g. a gait whose contact timing the user knows; the contact-implicit
 /// setting is solve_time_freezing_ocp. Throws InvalidArgument as solve_time_freezing_ocp and for a
 /// guess that is not finite.
-template <Scene S, class Ocp, class Guess>
+template <Scene S, class Ocp>
 TimeFreezingOcpResult<S> solve_time_freezing_ocp_from_guess(const TimeFreezingSystem<S>& system, const Ocp& ocp,
                                                             const Vec<S::nq>& q0, const Vec<S::nq>& v0,
-                                                            const FesdOptions& fesd, const Guess& guess,
+                                                            const FesdOptions& fesd, const MotionGuess& guess,
                                                             const MpccSolverOptions& solver = {});
 
 /// A continuation on the OCP's data before the homotopy: the relaxed NLP at the first relaxation

@@ -1,6 +1,7 @@
 // The definitions of the time-freezing optimal-control drivers (declared in optimal_control.hpp).
 #pragma once
 
+#include <saltus/timefreezing/discretisation/fesd.hxx>
 #include <saltus/timefreezing/drivers/optimal_control.hpp>
 #include <saltus/timefreezing/drivers/simulate.hxx>
 
@@ -55,8 +56,9 @@ void add_absorbed_impacts(ImportedReference<S>& ref, const HybridTrajectory<S>& 
 /// element's start), x+ the trajectory's x+ at x_plus_time, inserted as a sample of the next
 /// segment (with the input of the sample after it, the element's interval); when x+ falls on the
 /// next sample's time, that sample (the element's end) starts the next segment as it is. Without it the re-simulation's impact had no partner in the reference, and its
-/// samples around the landing were compared across the jump (measured: the plank-box short
-/// landing's optimum under FesdOptions::composed_kinematics, measured 2026-12-02: 0.69 in the box's vertical velocity at t = 0.3).
+/// samples around the landing were compared across the jump (measured: 0.69 in the box's vertical
+/// velocity at t = 0.3 on an optimum of the plank-box short landing whose impact was absorbed,
+/// docs/decisions/fesd-composed-kinematics.md).
 template <Scene S>
 void align_impact_samples(ImportedReference<S>& ref, const HybridTrajectory<S>& traj) {
   add_absorbed_impacts(ref, traj);
@@ -90,10 +92,10 @@ TimeFreezingOcpResult<S> solve_and_read(const Problem& problem, const MpccStart&
   out.solution = solve_mpcc(problem, start, solver);
   const auto pts = problem.points(out.solution.x);
   out.points.assign(pts.begin(), pts.end());
-  read_events<FesdMpcc<S>::ny, FesdMpcc<S>::nsw, S::nu, 2 * S::nq>(out.points, fesd.stages, out.element_lengths,
+  read_events<FesdMpcc<S>::ny, FesdMpcc<S>::nsw, S::nu, 2 * S::nq>(out.points, fesd.grid.stages, out.element_lengths,
                                                                   out.frozen_phases, out.switch_points);
-  out.reference = recover_reference<S>(out.points, fesd.stages);
-  out.trajectory = recover_trajectory<S>(problem.system(), out.points, fesd.stages);
+  out.reference = recover_reference<S>(out.points, fesd.grid.stages);
+  out.trajectory = recover_trajectory<S>(problem.system(), out.points, fesd.grid.stages);
   align_impact_samples(out.reference, out.trajectory);
   return out;
 }
@@ -110,10 +112,10 @@ TimeFreezingOcpResult<S> solve_time_freezing_ocp(const TimeFreezingSystem<S>& sy
   return detail::solve_and_read<S>(problem, start, fesd, solver);
 }
 
-template <Scene S, class Ocp, class Guess>
+template <Scene S, class Ocp>
 TimeFreezingOcpResult<S> solve_time_freezing_ocp_from_guess(const TimeFreezingSystem<S>& system, const Ocp& ocp,
                                                             const Vec<S::nq>& q0, const Vec<S::nq>& v0,
-                                                            const FesdOptions& fesd, const Guess& guess,
+                                                            const FesdOptions& fesd, const MotionGuess& guess,
                                                             const MpccSolverOptions& solver) {
   const FesdMpcc<S, Ocp> problem(system, ocp, q0, v0, fesd);
   MpccStart start;

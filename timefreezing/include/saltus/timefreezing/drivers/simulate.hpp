@@ -38,10 +38,10 @@ enum class SimulationSplit {
 };
 
 /// Simulates the time-freezing system of `system` from (q0, v0) at physical time
-/// fesd.initial_time over the numerical horizon fesd.horizon under the input law of `law` (an
+/// fesd.clock.initial_time over the numerical horizon fesd.grid.horizon under the input law of `law` (an
 /// object with `template <class T> VecT<T, nu> input(const T& t, const VecT<T, nu>& decision) const`,
 /// t the physical time; NoObjective applies u = 0).
-/// fesd.clock, speed_of_time_max and the control bounds are overridden (no clock constraint,
+/// fesd.clock (constraint, speed_of_time_max), the speed-of-time weight and the control bounds are overridden (no clock constraint,
 /// s = 1, decisions fixed at 0). The input law must be smooth inside each control interval (a kink
 /// in time belongs on a control-interval boundary, where the grid is fixed).
 /// PerControlInterval (the default) solves N small MPCCs in sequence; the cross-complementarity

@@ -1,6 +1,7 @@
 // The definition of simulate_time_freezing (declared in simulate.hpp).
 #pragma once
 
+#include <saltus/timefreezing/discretisation/fesd.hxx>
 #include <saltus/timefreezing/drivers/simulate.hpp>
 
 #include <algorithm>
@@ -19,20 +20,20 @@ TimeFreezingSimulation<S> simulate_time_freezing(const TimeFreezingSystem<S>& sy
                                                  SimulationSplit split) {
   constexpr int nq = S::nq;
   // Checked here too: the split below divides by them before FesdMpcc would see them.
-  SALTUS_REQUIRE(fesd.control_intervals >= 1, "FESD: control_intervals must be >= 1, got ", fesd.control_intervals);
-  SALTUS_REQUIRE(std::isfinite(fesd.horizon) && fesd.horizon > 0.0, "FESD: the numerical horizon must be > 0, got ",
-                 fesd.horizon);
-  fesd.clock = ClockConstraint::None;
-  fesd.speed_of_time_max = 1.0;
-  fesd.speed_of_time_weight = 0.0;
-  fesd.control_lower = Eigen::VectorXd::Zero(S::nu);
-  fesd.control_upper = Eigen::VectorXd::Zero(S::nu);
+  SALTUS_REQUIRE(fesd.grid.control_intervals >= 1, "FESD: control_intervals must be >= 1, got ", fesd.grid.control_intervals);
+  SALTUS_REQUIRE(std::isfinite(fesd.grid.horizon) && fesd.grid.horizon > 0.0, "FESD: the numerical horizon must be > 0, got ",
+                 fesd.grid.horizon);
+  fesd.clock.constraint = ClockConstraint::None;
+  fesd.clock.speed_of_time_max = 1.0;
+  fesd.regularisation.speed_of_time = 0.0;
+  fesd.bounds.control_lower = Eigen::VectorXd::Zero(S::nu);
+  fesd.bounds.control_upper = Eigen::VectorXd::Zero(S::nu);
   TimeFreezingSimulation<S> out;
-  const int pieces = split == SimulationSplit::WholeHorizon ? 1 : fesd.control_intervals;
+  const int pieces = split == SimulationSplit::WholeHorizon ? 1 : fesd.grid.control_intervals;
   FesdOptions piece = fesd;
   if (pieces > 1) {
-    piece.control_intervals = 1;
-    piece.horizon = fesd.horizon / fesd.control_intervals;
+    piece.grid.control_intervals = 1;
+    piece.grid.horizon = fesd.grid.horizon / fesd.grid.control_intervals;
   }
   Vec<nq> q = q0, v = v0;
   double tau0 = 0.0, cost0 = 0.0;
@@ -53,13 +54,13 @@ TimeFreezingSimulation<S> simulate_time_freezing(const TimeFreezingSystem<S>& sy
     const auto& end = out.points.back().y;
     q = end.template head<nq>();
     v = end.template segment<nq>(nq);
-    piece.initial_time = end[TimeFreezingSystem<S>::clock_index];
+    piece.clock.initial_time = end[TimeFreezingSystem<S>::clock_index];
     // The user's initial state was checked; a later interval starts where the previous one
     // ended, which may be below a contact by the discretisation's own drift (a frozen phase's gap
     // of -1e-5, see the issue's note): not a user error.
-    piece.gap_tolerance = std::numeric_limits<double>::infinity();
+    piece.bounds.gap_tolerance = std::numeric_limits<double>::infinity();
     cost0 = end[TimeFreezingSystem<S>::cost_index];
-    tau0 += piece.horizon;
+    tau0 += piece.grid.horizon;
     // Totals.
     MpccSolution& t = out.solution;
     t.converged = t.converged && sol.converged;
@@ -76,9 +77,9 @@ TimeFreezingSimulation<S> simulate_time_freezing(const TimeFreezingSystem<S>& sy
     if (pieces == 1) t.x = sol.x;
   }
   if (out.solution.converged) out.solution.message = "every homotopy converged";
-  detail::read_events<FesdMpcc<S>::ny, FesdMpcc<S>::nsw, S::nu, 2 * S::nq>(out.points, fesd.stages, out.element_lengths,
+  detail::read_events<FesdMpcc<S>::ny, FesdMpcc<S>::nsw, S::nu, 2 * S::nq>(out.points, fesd.grid.stages, out.element_lengths,
                                                                           out.frozen_phases, out.switch_points);
-  out.trajectory = recover_trajectory<S>(system, out.points, fesd.stages);
+  out.trajectory = recover_trajectory<S>(system, out.points, fesd.grid.stages);
   return out;
 }
 

@@ -17,7 +17,7 @@
 // the motion), so the discrete problem with both exactly zero has no solution in a moving stance
 // (derivation in fesd.hpp, "INTEGRATED GAP"). g's stage values are g_start + h sum_l a_rl s Theta_l
 // J_n v_l, which vanish whenever the stage values of J_n v do: the two conditions then agree
-// exactly, as they do for a gap linear in q. FesdOptions::integrated_gap chooses which gap the
+// exactly, as they do for a gap linear in q. FesdOptions::switching.integrated_gap chooses which gap the
 // switching functions read.
 //
 // ONE CONTACT i (eq. 25). Switching functions c_i = (gap_i(q), J_n,i(q) v, J_t,i(q) v): gap, normal
