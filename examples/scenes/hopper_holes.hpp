@@ -109,7 +109,8 @@ struct HopperOverThreeHoles {
   Vec<4> terminal_lower() const { return q_target(); }
   Vec<4> terminal_upper() const { return q_target(); }
 
-  /// The paper's discretisation (TF Section 6, NOSNOC's script: nosnoc_hopper_baseline.md section 4):
+  /// The paper's discretisation (time-freezing paper, Nurkanović, Albrecht, Brogliato, Diehl,
+  /// Automatica 2023, Section 6, as in NOSNOC's hopper script):
   /// N = 20 control intervals, 3 finite elements each, Radau IIA with n_s stages, numerical horizon
   /// T~ = T with the terminal clock constraint t(T~) = T, speed of time s in [1, 5] with
   /// rho_s = 0.01, heuristic step equilibration rho_h = 1, |u_i| <= 60; one change:

@@ -1,8 +1,8 @@
-// Finite elements with switch detection (FESD; Nurkanović, Kazi, Bonilla, Diehl, "Finite Elements
-// with Switch Detection for Direct Optimal Control of Nonsmooth Systems") for the time-freezing
-// system: the discretisation of the OCP in numerical time (time-freezing paper, Nurkanović,
-// Albrecht, Brogliato, Diehl, Automatica 2023, eq. 33, discretised as eq. 35) as an MPCC with exact
-// sparse derivatives (mpcc/mpcc.hpp), for the solver in mpcc/mpcc_solver.hpp.
+// Finite elements with switch detection (FESD; Nurkanović et al., "Finite Elements with Switch
+// Detection for Direct Optimal Control of Nonsmooth Systems") for the time-freezing system: the
+// discretisation of the OCP in numerical time (time-freezing paper, Nurkanović, Albrecht,
+// Brogliato, Diehl, Automatica 2023, eq. 33, discretised as eq. 35) as an MPCC with exact sparse
+// derivatives (mpcc/mpcc.hpp), for the solver in mpcc/mpcc_solver.hpp.
 //
 // GRID. N control intervals of equal numerical length T~/N (T~ = options.grid.horizon); each holds
 // N_fe finite elements of free lengths h_kj with sum_j h_kj = T~/N and (1 - gamma_h) h0 <= h_kj <=

@@ -31,7 +31,7 @@ struct TimeFreezingOcpResult {
   bool converged() const { return solution.converged; }
 };
 
-/// Solves the time-freezing OCP described by `ocp` (FesdMpcc's docstring lists what it may
+/// Solves the time-freezing OCP described by `ocp` (formulation/ocp.hpp lists what it may
 /// provide) from (q0, v0) with FESD, by the MPCC homotopy, and recovers its reference in physical
 /// time. Returns the result whether or not the homotopy converged (converged() says; the message
 /// says why not). Throws InvalidArgument for bad options or states.

@@ -57,7 +57,7 @@ TimeFreezingSimulation<S> simulate_time_freezing(const TimeFreezingSystem<S>& sy
     piece.clock.initial_time = end[TimeFreezingSystem<S>::clock_index];
     // The user's initial state was checked; a later interval starts where the previous one
     // ended, which may be below a contact by the discretisation's own drift (a frozen phase's gap
-    // of -1e-5, see the issue's note): not a user error.
+    // of -1e-5 under a relaxation, fesd_objective.hxx): not a user error.
     piece.bounds.gap_tolerance = std::numeric_limits<double>::infinity();
     cost0 = end[TimeFreezingSystem<S>::cost_index];
     tau0 += piece.grid.horizon;
