@@ -24,7 +24,7 @@
 #include "scenes/plank_box_landing.hpp"
 
 #include <saltus/hybrid/reference/resimulation.hpp>
-#include <saltus/timefreezing/header_only.hpp>
+#include <saltus/timefreezing/drivers/optimal_control.hpp>
 
 #include <nlohmann/json.hpp>
 
@@ -50,13 +50,7 @@ using Ocp = scenes::PlankBoxFlatLanding;
 using Scene = scenes::PlankBox;
 
 /// The input law of one control interval: the OCP's u_k, constant.
-struct ConstantInput {
-  Vec<3> u;
-  template <class T>
-  VecT<T, 3> input(const T&, const VecT<T, 3>&) const {
-    return VecT<T, 3>(T(u[0]), T(u[1]), T(u[2]));
-  }
-};
+using ConstantInput = scenes::PlankBoxConstantInput;  // compiled in the scene library
 
 /// A fixed-size vector as a JSON array.
 template <class V>

@@ -774,14 +774,8 @@ TEST(TimeFreezingSimulation, FrictionalLandingStopsAtTheClosedForm) {
 // push that interval 1 cannot undo (measured: not converged, complementarity 1.2e-2, 18,310
 // Ipopt iterations); 1e-2 and 1e-4 fail in other intervals, so this is a narrow window, not a fix
 // (timefreezing issue, open).
-/// A constant input law.
-struct ConstantInput3 {
-  Vec<3> u;
-  template <class T>
-  VecT<T, 3> input(const T&, const VecT<T, 3>&) const {
-    return VecT<T, 3>(T(u[0]), T(u[1]), T(u[2]));
-  }
-};
+/// A constant input law (the scene library's, compiled there).
+using ConstantInput3 = scenes::PlankBoxConstantInput;
 
 TEST(TimeFreezingSimulation, PlankBoxFlatLandingAgreesWithTheEventDrivenSimulator) {
 #if defined(SALTUS_TESTS_UNDER_SANITIZERS)

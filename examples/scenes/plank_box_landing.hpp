@@ -194,11 +194,23 @@ struct PlankBoxShortLanding : PlankBoxFlatLanding {
   }
 };
 
+/// A constant input u = (F_x, F_y, tau) on the box, as an input law of simulate_time_freezing (the
+/// box lowered onto the plank in tests/test_time_freezing.cpp; the piecewise-constant re-simulation
+/// of bench/plank_box_refinement.cpp).
+struct PlankBoxConstantInput {
+  Vec<3> u;
+  template <class T>
+  VecT<T, 3> input(const T&, const VecT<T, 3>&) const {
+    return VecT<T, 3>(T(u[0]), T(u[1]), T(u[2]));
+  }
+};
+
 }  // namespace saltus::scenes
 
-// Compiled once in plank_box_landing.cpp: the plank-box's recovery, its simulation without input,
-// and both landing OCPs.
+// Compiled once in plank_box_landing.cpp: the plank-box's recovery, its simulations without input
+// and under a constant input, and both landing OCPs.
 SALTUS_DECLARE_TIME_FREEZING_SCENE(saltus::scenes::PlankBox)
 SALTUS_DECLARE_TIME_FREEZING_SIMULATION(saltus::scenes::PlankBox, saltus::timefreezing::NoObjective)
+SALTUS_DECLARE_TIME_FREEZING_SIMULATION(saltus::scenes::PlankBox, saltus::scenes::PlankBoxConstantInput)
 SALTUS_DECLARE_TIME_FREEZING_OCP(saltus::scenes::PlankBox, saltus::scenes::PlankBoxFlatLanding)
 SALTUS_DECLARE_TIME_FREEZING_OCP(saltus::scenes::PlankBox, saltus::scenes::PlankBoxShortLanding)
