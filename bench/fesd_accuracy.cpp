@@ -494,7 +494,7 @@ int main(int argc, char** argv) {
     auto order_list = nlohmann::ordered_json::array();
     for (const Order& o : orders)
       order_list.push_back({{"scheme", o.scheme},
-                            {"n_s", o.grid.stages},
+                            {"n_s", o.stages},
                             {"from_finite_elements", o.from},
                             {"to_finite_elements", o.to},
                             {"order", number(o.order)}});
@@ -540,7 +540,7 @@ int main(int argc, char** argv) {
   for (const Order& o : orders) {
     char span[32];
     std::snprintf(span, sizeof span, "%d -> %d", o.from, o.to);
-    std::printf("%-24s %4d %12s %8s\n", o.scheme.c_str(), o.grid.stages, span,
+    std::printf("%-24s %4d %12s %8s\n", o.scheme.c_str(), o.stages, span,
                 std::isfinite(o.order) ? std::to_string(o.order).substr(0, 5).c_str() : "-");
   }
   }

@@ -24,7 +24,7 @@
 #include "scenes/plank_box_landing.hpp"
 
 #include <saltus/hybrid/reference/resimulation.hpp>
-#include <saltus/timefreezing/drivers/optimal_control.hpp>
+#include <saltus/timefreezing/header_only.hpp>  // detail::align_impact_samples
 
 #include <nlohmann/json.hpp>
 
