@@ -1,23 +1,19 @@
 // Accuracy of the FESD discretisation of the time-freezing system (timefreezing/) against closed
 // forms, and the same Radau IIA scheme on a fixed grid, as the grid is refined.
 //
-//   fesd_accuracy [--json] [--budget SECONDS] [--scheme fesd|fesd-exact|fixed] [--stages 1|2|3]
-//                 [--finite-elements N1,N2,...] [--refine TARGET] [--contact-side WEIGHT] [--lift]
+//   fesd_accuracy [--json] [--budget SECONDS] [--scheme fesd|fixed] [--stages 1|2|3]
+//                 [--finite-elements N1,N2,...] [--refine TARGET] [--contact-side WEIGHT]
 //                 [--landing-only] [--ipopt NAME=VALUE]... [--kappa K] [--sigma0 S] [--progress]
-//                 [--tangential-cross]
 //
 // --finite-elements replaces the default N_fe = 1, 2, 4, 8 (the budget rule drops the last one).
 // --refine sets MpccSolverOptions::complementarity_refinement (in (0, 1e-9)) for the guiding
 // example: each control interval's converged homotopy goes on towards that residual.
-// --contact-side sets FesdOptions::contact_side_weight (>= 0; scheme "fesd+side" when > 0) for both
+// --contact-side sets FesdOptions::regularisation.contact_side (>= 0; scheme "fesd+side" when > 0) for both
 // examples (default: 0 for the guiding example, the landing's own 1e-2); --landing-only runs the
-// frictional landing alone. --lift solves both with the lifted step functions
-// (FesdOptions::lift_step_functions; scheme suffix "+lift"). --ipopt passes an Ipopt option to
+// frictional landing alone. --ipopt passes an Ipopt option to
 // every solve of both examples (as in hopper_ocp), --kappa K (in (0, 1)) and --sigma0 S (> 0) set
 // the homotopy's MpccSolverOptions::kappa and sigma_0 (any of the three adds "+opts" to the scheme),
 // --progress prints one line per Ipopt solve on stderr.
-// --tangential-cross solves both with velocity_switch_detection = false and
-// tangential_switch_detection = true (scheme suffix "+tcross").
 // SALTUS_BENCH_TRACE=1 prints, per configuration, the error of every element boundary's state
 // against the closed form y(tau) (exact_state below): where along the horizon the error arises;
 // and for the element that starts there its length, its stage points' ODE weight Theta and step
@@ -31,11 +27,10 @@
 // after, a_n = g, frictionless table, numerical horizon tau in [0, 3.5] split into 14 control
 // intervals of 0.25 (tau = 2, where the input has its kink, is a control node), simulated with
 // simulate_time_freezing (one MPCC per control interval) for n_s = 1, 2, 3 Radau IIA stages,
-// N_fe = 1, 2, 4, 8 finite elements per control interval (h = 0.25 / N_fe) and three schemes:
-//   fesd   switch_detection = true: free element lengths and cross-complementarity, the
+// N_fe = 1, 2, 4, 8 finite elements per control interval (h = 0.25 / N_fe) and two schemes:
+//   fesd   switching.detection = true: free element lengths and cross-complementarity, the
 //          heuristic step equilibration (rho_h sum (h - h0)^2, NOSNOC's default);
-//   fesd-exact  the same with the exact step equilibration (eta (h_j+1 - h_j) = 0, fesd.hpp);
-//   fixed  switch_detection = false: the same Radau IIA collocation on the uniform grid.
+//   fixed  switching.detection = false: the same Radau IIA collocation on the uniform grid.
 //
 // Closed form (derivation). Free fall: q2 = 1 - g t^2 / 2, touchdown at t = sqrt(2/g) (= tau,
 // the clock has run at speed 1) with v2 = -sqrt(2 g). Frozen phase: the auxiliary field
@@ -106,7 +101,7 @@
 
 #include <saltus/timefreezing/discretisation/fesd.hpp>
 #include <saltus/timefreezing/mpcc/mpcc_solver.hpp>
-#include <saltus/timefreezing/drivers/optimal_control.hpp>
+#include <saltus/timefreezing/header_only.hpp>
 
 #include <nlohmann/json.hpp>
 
@@ -191,14 +186,9 @@ double parse_number(const char* text) {
 
 /// MpccSolverOptions::complementarity_refinement of the guiding example's runs (--refine).
 double refinement = 0.0;
-/// FesdOptions::contact_side_weight of both examples' runs (--contact-side; < 0: the example's
+/// FesdOptions::regularisation.contact_side of both examples' runs (--contact-side; < 0: the example's
 /// own, 0 for the guiding example, 1e-2 for the frictional landing).
 double contact_side = -1.0;
-/// FesdOptions::lift_step_functions of both examples' runs (--lift).
-bool lift = false;
-/// --tangential-cross: velocity_switch_detection = false with tangential_switch_detection (the
-/// normal velocities' pairs stage-wise, the tangential ones cross-complementary) in both examples.
-bool tangential_cross = false;
 /// Solver overrides of both examples' runs: --ipopt NAME=VALUE (repeatable), --kappa K, --sigma0 S,
 /// --progress (one line per Ipopt solve on stderr).
 std::vector<timefreezing::IpoptOption> ipopt_overrides;
@@ -216,15 +206,13 @@ std::string solver_suffix() {
 }
 /// The scheme's name with the options that change it.
 std::string scheme_label(const std::string& scheme) {
-  return scheme + (contact_side > 0.0 ? "+side" : "") + (refinement > 0.0 ? "+refine" : "") + (lift ? "+lift" : "") +
-         (tangential_cross ? "+tcross" : "") + solver_suffix();
+  return scheme + (contact_side > 0.0 ? "+side" : "") + (refinement > 0.0 ? "+refine" : "") + solver_suffix();
 }
 /// The frictional landing's scheme: FESD with its own contact-side selection unless
 /// --contact-side overrides it.
 std::string landing_label() {
-  const double side = contact_side >= 0.0 ? contact_side : scenes::FrictionalLanding::grid().contact_side_weight;
-  return std::string("fesd") + (side > 0.0 ? "+side" : "") + (lift ? "+lift" : "") + (tangential_cross ? "+tcross" : "") +
-         solver_suffix();
+  const double side = contact_side >= 0.0 ? contact_side : scenes::FrictionalLanding::grid().regularisation.contact_side;
+  return std::string("fesd") + (side > 0.0 ? "+side" : "") + solver_suffix();
 }
 
 Row run_guiding(const std::string& scheme, int stages, int finite_elements) {
@@ -234,18 +222,12 @@ Row run_guiding(const std::string& scheme, int stages, int finite_elements) {
   r.finite_elements = finite_elements;
   const TimeFreezingSystem<PointMass> system(PointMass(), g);
   FesdOptions o;
-  o.stages = stages;
-  o.control_intervals = control_intervals;
-  o.finite_elements = finite_elements;
-  o.horizon = horizon;
-  o.switch_detection = scheme != "fixed";
-  if (contact_side >= 0.0) o.contact_side_weight = contact_side;
-  o.lift_step_functions = lift;
-  if (tangential_cross) {
-    o.velocity_switch_detection = false;
-    o.tangential_switch_detection = true;
-  }
-  if (scheme == "fesd-exact") o.step_equilibration = StepEquilibration::Exact;
+  o.grid.stages = stages;
+  o.grid.control_intervals = control_intervals;
+  o.grid.finite_elements = finite_elements;
+  o.grid.horizon = horizon;
+  o.switching.detection = scheme != "fixed";
+  if (contact_side >= 0.0) o.regularisation.contact_side = contact_side;
   const auto start = std::chrono::steady_clock::now();
   MpccSolverOptions solver;
   solver.complementarity_refinement = refinement;
@@ -320,12 +302,7 @@ Landing run_landing() {
   using Case = scenes::FrictionalLanding;
   const auto start = std::chrono::steady_clock::now();
   timefreezing::FesdOptions grid = Case::grid();
-  if (contact_side >= 0.0) grid.contact_side_weight = contact_side;
-  grid.lift_step_functions = lift;
-  if (tangential_cross) {
-    grid.velocity_switch_detection = false;
-    grid.tangential_switch_detection = true;
-  }
+  if (contact_side >= 0.0) grid.regularisation.contact_side = contact_side;
   MpccSolverOptions solver;
   apply_solver_flags(solver);
   const auto sim = simulate_time_freezing(Case::system(), Case::q0(), Case::v0(), grid, timefreezing::NoObjective{}, solver);
@@ -376,8 +353,7 @@ int main(int argc, char** argv) {
     } else if (std::strcmp(argv[i], "--budget") == 0 && i + 1 < argc) {
       budget = std::atof(argv[++i]);
     } else if (std::strcmp(argv[i], "--scheme") == 0 && i + 1 < argc &&
-               (std::strcmp(argv[i + 1], "fesd") == 0 || std::strcmp(argv[i + 1], "fesd-exact") == 0 ||
-                std::strcmp(argv[i + 1], "fixed") == 0)) {
+               (std::strcmp(argv[i + 1], "fesd") == 0 || std::strcmp(argv[i + 1], "fixed") == 0)) {
       only_scheme = argv[++i];
     } else if (std::strcmp(argv[i], "--stages") == 0 && i + 1 < argc && std::atoi(argv[i + 1]) >= 1 &&
                std::atoi(argv[i + 1]) <= 3) {
@@ -385,8 +361,6 @@ int main(int argc, char** argv) {
     } else if (std::strcmp(argv[i], "--refine") == 0 && i + 1 < argc && parse_number(argv[i + 1]) > 0.0 &&
                parse_number(argv[i + 1]) < 1e-9) {
       refinement = parse_number(argv[++i]);
-    } else if (std::strcmp(argv[i], "--lift") == 0) {
-      lift = true;
     } else if (std::strcmp(argv[i], "--ipopt") == 0 && i + 1 < argc && parse_ipopt_option(argv[i + 1])) {
       ipopt_overrides.push_back(*parse_ipopt_option(argv[++i]));
     } else if (std::strcmp(argv[i], "--kappa") == 0 && i + 1 < argc && parse_number(argv[i + 1]) > 0.0 &&
@@ -394,8 +368,6 @@ int main(int argc, char** argv) {
       kappa_override = parse_number(argv[++i]);
     } else if (std::strcmp(argv[i], "--sigma0") == 0 && i + 1 < argc && parse_number(argv[i + 1]) > 0.0) {
       sigma0_override = parse_number(argv[++i]);
-    } else if (std::strcmp(argv[i], "--tangential-cross") == 0) {
-      tangential_cross = true;
     } else if (std::strcmp(argv[i], "--progress") == 0) {
       progress = true;
     } else if (std::strcmp(argv[i], "--landing-only") == 0) {
@@ -421,9 +393,9 @@ int main(int argc, char** argv) {
     } else {
       std::fprintf(stderr, "fesd_accuracy: \"%s\" is unknown, or its value is missing or out of range\n", argv[i]);
       std::fprintf(stderr,
-                   "usage: %s [--json] [--budget SECONDS] [--scheme fesd|fesd-exact|fixed] [--stages 1|2|3] "
-                   "[--finite-elements N1,N2,...] [--refine TARGET] [--contact-side WEIGHT] [--lift] [--landing-only] "
-                   "[--ipopt NAME=VALUE]... [--kappa K] [--sigma0 S] [--progress] [--tangential-cross]\n",
+                   "usage: %s [--json] [--budget SECONDS] [--scheme fesd|fixed] [--stages 1|2|3] "
+                   "[--finite-elements N1,N2,...] [--refine TARGET] [--contact-side WEIGHT] [--landing-only] "
+                   "[--ipopt NAME=VALUE]... [--kappa K] [--sigma0 S] [--progress]\n",
                    argv[0]);
       return 2;
     }
@@ -433,7 +405,7 @@ int main(int argc, char** argv) {
   std::vector<Dropped> dropped;
   std::vector<Order> orders;
   bool failed = false;
-  for (const std::string scheme : {"fesd", "fesd-exact", "fixed"}) {
+  for (const std::string scheme : {"fesd", "fixed"}) {
     if (landing_only || (!only_scheme.empty() && only_scheme != scheme)) continue;
     for (int ns = 1; ns <= 3; ++ns) {
       if (only_stages != 0 && ns != only_stages) continue;

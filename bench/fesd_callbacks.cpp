@@ -2,9 +2,8 @@
 // constraint Jacobian, Lagrangian Hessian) of the two flagship FESD MPCCs on their own grids: the
 // plank-box's short landing (the coarse-grid test's problem) and the hopper over three holes.
 // The Hessian is the largest share of a plank-box iteration (perf: about 60 % of the coarse-grid
-// test's time in the second-order AD); this bench measures what a change to it buys. Each problem
-// runs twice: as the library evaluates it by default and with FesdOptions::composed_kinematics
-// (the contact kinematics chained in by ad::compose).
+// test's time in the second-order AD); this bench measures what a change to it buys (the contact
+// kinematics chained in by ad::compose were measured with it: docs/decisions/fesd-composed-kinematics.md).
 //
 // Each problem is evaluated at a fixed point inside its bounds (the derivative tests'
 // interior_point, seed 7) and with fixed multipliers (Eigen's Random after std::srand(11)), so
@@ -38,8 +37,7 @@ struct Evaluation {
 };
 
 template <class Scene, class Ocp>
-Evaluation make(timefreezing::FesdOptions grid, bool composed) {
-  grid.composed_kinematics = composed;
+Evaluation make(const timefreezing::FesdOptions& grid) {
   Evaluation e;
   e.problem = std::make_unique<timefreezing::FesdMpcc<Scene, Ocp>>(Ocp::system(), Ocp{}, Ocp::q0(), Ocp::v0(), grid);
   e.x = saltus::testing::interior_point(*e.problem, 7);  // inside the bounds, away from the start
@@ -51,16 +49,14 @@ Evaluation make(timefreezing::FesdOptions grid, bool composed) {
   return e;
 }
 
-// One problem per scene and variant, built on first use.
-template <class Scene, class Ocp, bool composed>
+// One problem per scene, built on first use.
+template <class Scene, class Ocp>
 Evaluation& cached() {
-  static Evaluation e = make<Scene, Ocp>(Ocp::grid(), composed);
+  static Evaluation e = make<Scene, Ocp>(Ocp::grid());
   return e;
 }
-Evaluation& (*const plank_box)() = &cached<scenes::PlankBox, scenes::PlankBoxShortLanding, false>;
-Evaluation& (*const plank_box_composed)() = &cached<scenes::PlankBox, scenes::PlankBoxShortLanding, true>;
-Evaluation& (*const hopper)() = &cached<scenes::Hopper, scenes::HopperOverThreeHoles, false>;
-Evaluation& (*const hopper_composed)() = &cached<scenes::Hopper, scenes::HopperOverThreeHoles, true>;
+Evaluation& (*const plank_box)() = &cached<scenes::PlankBox, scenes::PlankBoxShortLanding>;
+Evaluation& (*const hopper)() = &cached<scenes::Hopper, scenes::HopperOverThreeHoles>;
 
 void constraints(benchmark::State& state, Evaluation& (*which)()) {
   Evaluation& e = which();
@@ -98,23 +94,15 @@ void print_checksums(const char* name, Evaluation& e) {
 }  // namespace
 
 BENCHMARK_CAPTURE(constraints, plank_box_short_landing, plank_box)->Unit(benchmark::kMicrosecond);
-BENCHMARK_CAPTURE(constraints, plank_box_short_landing_composed, plank_box_composed)->Unit(benchmark::kMicrosecond);
 BENCHMARK_CAPTURE(jacobian, plank_box_short_landing, plank_box)->Unit(benchmark::kMicrosecond);
-BENCHMARK_CAPTURE(jacobian, plank_box_short_landing_composed, plank_box_composed)->Unit(benchmark::kMicrosecond);
 BENCHMARK_CAPTURE(hessian, plank_box_short_landing, plank_box)->Unit(benchmark::kMicrosecond);
-BENCHMARK_CAPTURE(hessian, plank_box_short_landing_composed, plank_box_composed)->Unit(benchmark::kMicrosecond);
 BENCHMARK_CAPTURE(constraints, hopper_over_three_holes, hopper)->Unit(benchmark::kMicrosecond);
-BENCHMARK_CAPTURE(constraints, hopper_over_three_holes_composed, hopper_composed)->Unit(benchmark::kMicrosecond);
 BENCHMARK_CAPTURE(jacobian, hopper_over_three_holes, hopper)->Unit(benchmark::kMicrosecond);
-BENCHMARK_CAPTURE(jacobian, hopper_over_three_holes_composed, hopper_composed)->Unit(benchmark::kMicrosecond);
 BENCHMARK_CAPTURE(hessian, hopper_over_three_holes, hopper)->Unit(benchmark::kMicrosecond);
-BENCHMARK_CAPTURE(hessian, hopper_over_three_holes_composed, hopper_composed)->Unit(benchmark::kMicrosecond);
 
 int main(int argc, char** argv) {
   print_checksums("plank-box short landing", plank_box());
-  print_checksums("plank-box short landing, composed kinematics", plank_box_composed());
   print_checksums("hopper over three holes", hopper());
-  print_checksums("hopper over three holes, composed kinematics", hopper_composed());
   benchmark::Initialize(&argc, argv);
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
   benchmark::RunSpecifiedBenchmarks();

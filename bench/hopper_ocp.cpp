@@ -1,8 +1,8 @@
 // The flagship OCP, the hopper over three holes (scenes/hopper_holes.hpp; time-freezing paper
 // Section 6), under the solver and formulation variants the issue asks to measure one by one.
 //
-//   hopper_ocp [--one-hole] [--json] [--only NAME] [--max-steps K] [--lift] [--integrated-gap]
-//              [--velocity-cross] [--composed-kinematics] [--elastic] [--gap-scale K] [--contact-side W]
+//   hopper_ocp [--one-hole] [--json] [--only NAME] [--max-steps K] [--integrated-gap]
+//              [--velocity-cross] [--elastic] [--gap-scale K] [--contact-side W]
 //              [--element-length-freedom G]
 //              [--warm-start primal|primal-dual] [--polish-below S] [--polish-max-iter K] [--max-iter K]
 //              [--kappa K] [--ipopt NAME=VALUE]...
@@ -71,18 +71,17 @@ struct Variant {
   /// then_side_weight.
   int smoothing_steps = 0;
   double then_sigma_0 = 0.0;
-  double contact_side_weight = 0.0;  ///< > 0: FesdOptions::contact_side_weight; 0: the scene's
+  double contact_side_weight = 0.0;  ///< > 0: FesdOptions::regularisation.contact_side; 0: the scene's
   int stages = 2;                    ///< Radau IIA stages n_s
   MpccSolverOptions::Relaxation then = MpccSolverOptions::Relaxation::Penalty;
   double then_side_weight = 0.0;
   /// > 0: a continuation on a_n at sigma_0 (with_an_continuation): the hole continuation runs with
   /// this a_n, then one relaxed NLP per larger a_n of 50, 100, then the homotopy with a_n = 200.
   double first_auxiliary_acceleration = 0.0;
-  bool tangential_switch_detection = false;  ///< FesdOptions::tangential_switch_detection
   /// MpccSolverOptions::polish_fallback on, with polish_max_iter = 500
   bool polish_fallback = false;
   /// With smoothing_steps: the continued homotopy reads the integrated gaps
-  /// (FesdOptions::integrated_gap; the first one reads gap(q)).
+  /// (FesdOptions::switching.integrated_gap; the first one reads gap(q)).
   bool then_integrated_gap = false;
 };
 
@@ -129,22 +128,18 @@ std::vector<Variant> variants() {
        "as smoothing-then-side, but the selection is switched on at the last solved sigma (1e-3): that NLP is solved "
        "again with the term, then the homotopy goes on",
        R::Smoothing, false, true, 0, false, 4, 1e-3, 0.0, 2, R::Smoothing, 1e-2},
-      {"tangential-cross",
-       "the default with cross-complementarity on the tangential velocity too (FesdOptions::"
-       "tangential_switch_detection: a sticking foot is J_t v = 0 exactly, no creep)",
-       R::Smoothing, false, true, 0, false, 0, 0.0, 0.0, 2, R::Penalty, 0.0, 0.0, true},
       {"polish-fallback",
        "the default with the polish's fallback (MpccSolverOptions::polish_fallback: the biactive pairs flipped, all, "
        "then one at a time) and 500 iterations per polish attempt",
-       R::Smoothing, false, true, 0, false, 0, 0.0, 0.0, 2, R::Penalty, 0.0, 0.0, false, true},
+       R::Smoothing, false, true, 0, false, 0, 0.0, 0.0, 2, R::Penalty, 0.0, 0.0, true},
       {"then-integrated-gap",
        "the default's continuation and first 4 steps (sigma 1 .. 1e-3) reading gap(q), then the same smoothing from "
        "sigma = 1e-3 reading the integrated gaps (FesdOptions::integrated_gap), polished as --polish-below says",
-       R::Smoothing, false, true, 0, false, 4, 1e-3, 0.0, 2, R::Smoothing, 0.0, 0.0, false, false, true},
+       R::Smoothing, false, true, 0, false, 4, 1e-3, 0.0, 2, R::Smoothing, 0.0, 0.0, false, true},
       {"wall-then-integrated-gap",
        "the default's whole homotopy (10 steps) reading gap(q), then one smoothing step at the sigma it stopped at "
        "reading the integrated gaps, polished as --polish-below says (use --polish-below 1)",
-       R::Smoothing, false, true, 0, false, 10, -1.0, 0.0, 2, R::Smoothing, 0.0, 0.0, false, false, true},
+       R::Smoothing, false, true, 0, false, 10, -1.0, 0.0, 2, R::Smoothing, 0.0, 0.0, false, true},
   };
 }
 
@@ -225,15 +220,14 @@ int run(const std::optional<bench::OcpBenchArgs>& args) {
       s.max_homotopy_steps = v.smoothing_steps;
       s.polish = false;
     }
-    const int scene_intervals = Ocp::grid().control_intervals;
+    const int scene_intervals = Ocp::grid().grid.control_intervals;
     FesdOptions grid = Ocp::grid(v.control_intervals > 0 ? v.control_intervals
                                  : v.control_intervals == -2 ? scene_intervals / 2
                                                              : scene_intervals,
                                  3, v.stages);
-    grid.velocity_switch_detection = v.velocity_switch_detection;
+    grid.switching.velocity_detection = v.velocity_switch_detection;
     // A variant without the selection keeps the scene's (the flagship: none; --one-hole: 1e-2).
-    if (v.contact_side_weight > 0.0) grid.contact_side_weight = v.contact_side_weight;
-    grid.tangential_switch_detection = v.tangential_switch_detection;
+    if (v.contact_side_weight > 0.0) grid.regularisation.contact_side = v.contact_side_weight;
     args->apply(grid);
     auto r = v.first_auxiliary_acceleration > 0.0 ? with_an_continuation(v.first_auxiliary_acceleration, ocp, grid, s)
              : v.hop_guess ? solve_time_freezing_ocp_from_guess(Ocp::system(), ocp, Ocp::q0(), Ocp::v0(), grid,
@@ -243,8 +237,8 @@ int run(const std::optional<bench::OcpBenchArgs>& args) {
                                        : solve_time_freezing_ocp(Ocp::system(), ocp, Ocp::q0(), Ocp::v0(), grid, s);
     if (v.smoothing_steps > 0 && !r.converged()) {  // r ran smoothing_steps steps without polish (above)
       FesdOptions then_grid = grid;
-      then_grid.contact_side_weight = v.then_side_weight;
-      if (v.then_integrated_gap) then_grid.integrated_gap = true;
+      then_grid.regularisation.contact_side = v.then_side_weight;
+      if (v.then_integrated_gap) then_grid.switching.integrated_gap = true;
       const FesdMpcc<scenes::Hopper, Ocp> problem(Ocp::system(), ocp, Ocp::q0(), Ocp::v0(), then_grid);
       // then_sigma_0 < 0: from where the first homotopy stopped (its complementarity, = sigma).
       const double sigma_0 = v.then_sigma_0 < 0.0 ? r.solution.complementarity : v.then_sigma_0;
@@ -260,7 +254,7 @@ int run(const std::optional<bench::OcpBenchArgs>& args) {
     for (const MpccHomotopyStep& st : r.solution.steps) per_step.push_back(st.ipopt_iterations);
     const std::size_t solves = per_step.size();
     if (json)
-      rows.push_back({{"variant", v.name}, {"what", v.what}, {"lifted_step_functions", args->lift}, {"elastic_infinity", args->elastic}, {"gap_scale", grid.switching_scale[0]}, {"contact_side_weight", grid.contact_side_weight}, {"element_length_freedom", grid.element_length_freedom}, {"warm_start", s.warm_start}, {"control_intervals", grid.control_intervals},
+      rows.push_back({{"variant", v.name}, {"what", v.what}, {"elastic_infinity", args->elastic}, {"gap_scale", grid.switching.scale[0]}, {"contact_side_weight", grid.regularisation.contact_side}, {"element_length_freedom", grid.grid.element_length_freedom}, {"warm_start", s.warm_start}, {"control_intervals", grid.grid.control_intervals},
                       {"converged", r.converged()}, {"solves", solves},
                       {"ipopt_iterations", r.solution.ipopt_iterations}, {"iterations_per_solve", per_step},
                       {"complementarity", r.solution.complementarity}, {"max_path_violation", f.path_violation},

@@ -1,23 +1,22 @@
 // What the flagship-OCP benchmarks (hopper_ocp, plank_box_ocp) share: their command line and the
 // second homotopy of the variants that change the relaxation on the way ("smoothing, then ...").
 //
-//   NAME [--json] [--only VARIANT] [--max-steps K] [--lift] [--integrated-gap] [--velocity-cross]
-//        [--composed-kinematics] [--elastic] [--gap-scale K] [--contact-side W]
+//   NAME [--json] [--only VARIANT] [--max-steps K] [--integrated-gap] [--velocity-cross]
+//        [--elastic] [--gap-scale K] [--contact-side W]
 //        [--element-length-freedom G] [--warm-start primal|primal-dual] [--warm-start-below S]
 //        [--kappa K]
 //        [--polish-below S] [--polish-max-iter K] [--max-iter K] [--ipopt OPTION=VALUE]...
 //
-// --max-steps K overrides the homotopy's step budget; --lift solves every variant with the lifted
-// step functions (FesdOptions::lift_step_functions); --integrated-gap with the gap switching
-// functions read from the integrated gaps (FesdOptions::integrated_gap); --velocity-cross with
+// --max-steps K overrides the homotopy's step budget; --integrated-gap solves every variant with the gap switching
+// functions read from the integrated gaps (FesdOptions::switching.integrated_gap); --velocity-cross with
 // cross-complementarity on the velocity switching functions too
-// (FesdOptions::velocity_switch_detection); --elastic with the l-infinity elastic steering of the
+// (FesdOptions::switching.velocity_detection); --elastic with the l-infinity elastic steering of the
 // inequality-relaxed pairs (MpccSolverOptions::elastic_infinity) for every Scholtes or Smoothing
 // solve (a Penalty variant or stage runs without it: it has no relaxation rows to hold the slack);
 // --gap-scale K sets the gaps' switching-function scale K_gap in (0, 1e6] [1/m]
-// (FesdOptions::switching_scale[0]); --contact-side W sets the contact-side selection's weight
-// rho_c in [0, 1e3] (FesdOptions::contact_side_weight; 0 switches it off) for every variant;
-// --element-length-freedom G sets gamma_h in [0, 1] (FesdOptions::element_length_freedom: every
+// (FesdOptions::switching.scale[0]); --contact-side W sets the contact-side selection's weight
+// rho_c in [0, 1e3] (FesdOptions::regularisation.contact_side; 0 switches it off) for every variant;
+// --element-length-freedom G sets gamma_h in [0, 1] (FesdOptions::grid.element_length_freedom: every
 // element length in [(1 - G) h0, (1 + G) h0]; the default 1 lets an element shrink to length 0);
 // --kappa K sets the homotopy's decrease factor in (0, 1) (MpccSolverOptions::kappa);
 // --warm-start says what every solve after the first
@@ -49,14 +48,12 @@ struct OcpBenchArgs {
   bool json = false;
   std::string only;   ///< one variant by name; empty: all
   int max_steps = -1; ///< > 0: MpccSolverOptions::max_homotopy_steps
-  bool lift = false;  ///< FesdOptions::lift_step_functions for every variant
   bool elastic = false;  ///< MpccSolverOptions::elastic_infinity for every Scholtes or Smoothing solve
-  double gap_scale = 0.0;  ///< > 0: FesdOptions::switching_scale[0] (K_gap) for every variant
-  double contact_side = -1.0;  ///< >= 0: FesdOptions::contact_side_weight (rho_c) for every variant
-  double element_length_freedom = -1.0;  ///< in [0, 1]: FesdOptions::element_length_freedom (gamma_h)
-  bool integrated_gap = false;  ///< FesdOptions::integrated_gap for every variant
-  bool velocity_cross = false;  ///< FesdOptions::velocity_switch_detection for every variant
-  bool composed_kinematics = false;  ///< FesdOptions::composed_kinematics for every variant
+  double gap_scale = 0.0;  ///< > 0: FesdOptions::switching.scale[0] (K_gap) for every variant
+  double contact_side = -1.0;  ///< >= 0: FesdOptions::regularisation.contact_side (rho_c) for every variant
+  double element_length_freedom = -1.0;  ///< in [0, 1]: FesdOptions::grid.element_length_freedom (gamma_h)
+  bool integrated_gap = false;  ///< FesdOptions::switching.integrated_gap for every variant
+  bool velocity_cross = false;  ///< FesdOptions::switching.velocity_detection for every variant
   int warm_start = -1;  ///< 1 primal-dual, 0 primal only: MpccSolverOptions::warm_start; -1: the variant's
   double polish_below = -1.0;  ///< >= 0: MpccSolverOptions::polish_below
   double warm_start_below = -1.0;  ///< >= 0: MpccSolverOptions::warm_start_below
@@ -79,17 +76,14 @@ struct OcpBenchArgs {
     if (kappa > 0.0) s.kappa = kappa;
     s.ipopt_options.insert(s.ipopt_options.end(), ipopt_options.begin(), ipopt_options.end());
   }
-  /// The command line's share of a variant's grid options: the lifted step functions, the
-  /// integrated gap, the velocities' switch detection, the gap scale, the contact-side weight, the
+  /// The command line's share of a variant's grid options: the integrated gap, the velocities' switch detection, the gap scale, the contact-side weight, the
   /// element lengths' freedom.
   void apply(timefreezing::FesdOptions& grid) const {
-    if (lift) grid.lift_step_functions = true;
-    if (integrated_gap) grid.integrated_gap = true;
-    if (velocity_cross) grid.velocity_switch_detection = true;
-    if (composed_kinematics) grid.composed_kinematics = true;
-    if (gap_scale > 0.0) grid.switching_scale[0] = gap_scale;
-    if (contact_side >= 0.0) grid.contact_side_weight = contact_side;
-    if (element_length_freedom >= 0.0) grid.element_length_freedom = element_length_freedom;
+    if (integrated_gap) grid.switching.integrated_gap = true;
+    if (velocity_cross) grid.switching.velocity_detection = true;
+    if (gap_scale > 0.0) grid.switching.scale[0] = gap_scale;
+    if (contact_side >= 0.0) grid.regularisation.contact_side = contact_side;
+    if (element_length_freedom >= 0.0) grid.grid.element_length_freedom = element_length_freedom;
   }
 };
 
@@ -140,7 +134,7 @@ inline std::optional<OcpBenchArgs> parse_ocp_bench_args(int argc, char** argv, c
   };
   const auto usage = [program] {
     std::fprintf(stderr,
-                 "usage: %s [--json] [--only NAME] [--max-steps K] [--lift] [--integrated-gap] [--velocity-cross] [--composed-kinematics] "
+                 "usage: %s [--json] [--only NAME] [--max-steps K] [--integrated-gap] [--velocity-cross] "
                  "[--elastic] [--gap-scale K] [--contact-side W] [--element-length-freedom G] [--warm-start primal|primal-dual] [--warm-start-below S] [--kappa K] [--polish-below S] [--polish-max-iter K] [--max-iter K] [--ipopt NAME=VALUE]...\n"
                  "  (NAME non-empty; --max-steps 1..1000; --max-iter, --polish-max-iter 1..100000; --gap-scale in (0, 1e6];\n"
                  "   --contact-side in [0, 1e3]; --element-length-freedom in [0, 1]; --kappa in (0, 1); --warm-start default primal-dual; --polish-below, --warm-start-below in [0, 1])\n",
@@ -153,11 +147,9 @@ inline std::optional<OcpBenchArgs> parse_ocp_bench_args(int argc, char** argv, c
       a.only = argv[++i];
       if (a.only.empty()) return usage();  // an empty name would run every variant
     }
-    else if (std::strcmp(argv[i], "--lift") == 0) a.lift = true;
     else if (std::strcmp(argv[i], "--elastic") == 0) a.elastic = true;
     else if (std::strcmp(argv[i], "--integrated-gap") == 0) a.integrated_gap = true;
     else if (std::strcmp(argv[i], "--velocity-cross") == 0) a.velocity_cross = true;
-    else if (std::strcmp(argv[i], "--composed-kinematics") == 0) a.composed_kinematics = true;
     else if (std::strcmp(argv[i], "--max-steps") == 0 && i + 1 < argc) {
       if (!integer_in(argv[++i], 1, 1000, a.max_steps)) return usage();
     } else if (std::strcmp(argv[i], "--polish-below") == 0 && i + 1 < argc) {

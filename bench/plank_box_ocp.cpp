@@ -1,8 +1,8 @@
 // The plank-box's flagship OCP, the flat landing (scenes/plank_box_landing.hpp), under the
 // formulation variants measured one by one (bench/README.md, "Plank-box flat landing").
 //
-//   plank_box_ocp [--short] [--json] [--only NAME] [--max-steps K] [--lift] [--integrated-gap] [--velocity-cross]
-//                 [--composed-kinematics] [--elastic] [--gap-scale K] [--contact-side W]
+//   plank_box_ocp [--short] [--json] [--only NAME] [--max-steps K] [--integrated-gap] [--velocity-cross]
+//                 [--elastic] [--gap-scale K] [--contact-side W]
 //                 [--element-length-freedom G]
 //                 [--warm-start primal|primal-dual] [--kappa K]
 //                 [--polish-below S] [--polish-max-iter K] [--max-iter K] [--ipopt NAME=VALUE]...
@@ -52,13 +52,12 @@ struct Variant {
   int smoothing_steps = 0;
   double then_sigma_0 = 0.0;
   bool scholtes = false;             ///< the Scholtes inequalities instead of the smoothing
-  double contact_side_weight = 0.0;  ///< FesdOptions::contact_side_weight
+  double contact_side_weight = 0.0;  ///< FesdOptions::regularisation.contact_side
   MpccSolverOptions::Relaxation then = MpccSolverOptions::Relaxation::Penalty;
   double then_side_weight = 0.0;
-  bool tangential_switch_detection = false;  ///< FesdOptions::tangential_switch_detection
   /// MpccSolverOptions::polish_fallback on, with polish_max_iter = 500
   bool polish_fallback = false;
-  /// The gap switching functions read gap(q) (FesdOptions::integrated_gap = false; the default
+  /// The gap switching functions read gap(q) (FesdOptions::switching.integrated_gap = false; the default
   /// reads the integrated gaps since 2026-12-01).
   bool gap_of_q = false;
   /// The polish of the default before 2026-12-01: only after the homotopy's last step, 100
@@ -92,22 +91,18 @@ std::vector<Variant> variants() {
        "the default's first 3 smoothing steps (1e-2 .. 1e-4), then the same smoothing with the contact-side "
        "selection 1e-2 from 1e-5 (alpha_gap is free in the touchdown element: the impact ran the clock)",
        0.0, 3, 1e-5, false, 0.0, MpccSolverOptions::Relaxation::Smoothing, 1e-2},
-      {"tangential-cross",
-       "the default with cross-complementarity on the tangential velocities too (FesdOptions::"
-       "tangential_switch_detection: a stick is J_t v = 0 exactly, no creep)",
-       0.0, 0, 0.0, false, 0.0, MpccSolverOptions::Relaxation::Penalty, 0.0, true},
       {"polish-fallback",
        "the default with the polish's fallback (MpccSolverOptions::polish_fallback: the biactive pairs flipped, all, "
        "then one at a time) and 500 iterations per polish attempt",
-       0.0, 0, 0.0, false, 0.0, MpccSolverOptions::Relaxation::Penalty, 0.0, false, true},
+       0.0, 0, 0.0, false, 0.0, MpccSolverOptions::Relaxation::Penalty, 0.0, true},
       {"gap-of-q", "the default reading gap(q) instead of the integrated gaps (same polish)", 0.0, 0, 0.0, false, 0.0,
-       MpccSolverOptions::Relaxation::Penalty, 0.0, false, false, true},
+       MpccSolverOptions::Relaxation::Penalty, 0.0, false, true},
       {"before-2026-12-01",
        "the default of before 2026-12-01: gap(q), the polish only after the last step (100 iterations)", 0.0, 0, 0.0,
-       false, 0.0, MpccSolverOptions::Relaxation::Penalty, 0.0, false, false, true, true},
+       false, 0.0, MpccSolverOptions::Relaxation::Penalty, 0.0, false, true, true},
       {"integrated-gap-late-polish",
        "the default with the polish only after the last step (100 iterations): the integrated gaps alone", 0.0, 0,
-       0.0, false, 0.0, MpccSolverOptions::Relaxation::Penalty, 0.0, false, false, false, true},
+       0.0, false, 0.0, MpccSolverOptions::Relaxation::Penalty, 0.0, false, false, true},
   };
 }
 
@@ -139,9 +134,8 @@ int run(const std::optional<bench::OcpBenchArgs>& args) {
       s.polish_max_iter = 100;
     }
     FesdOptions grid = Ocp::grid();
-    if (v.gap_of_q) grid.integrated_gap = false;
-    grid.contact_side_weight = v.contact_side_weight;
-    grid.tangential_switch_detection = v.tangential_switch_detection;
+    if (v.gap_of_q) grid.switching.integrated_gap = false;
+    grid.regularisation.contact_side = v.contact_side_weight;
     args->apply(s);
     args->apply(grid);
     TimeFreezingOcpResult<scenes::PlankBox> r;
@@ -155,7 +149,7 @@ int run(const std::optional<bench::OcpBenchArgs>& args) {
       first.polish = false;
       const MpccSolution a = solve_mpcc(problem, start, first);
       FesdOptions then_grid = grid;
-      then_grid.contact_side_weight = v.then_side_weight;
+      then_grid.regularisation.contact_side = v.then_side_weight;
       const FesdMpcc<scenes::PlankBox, Ocp> then_problem(Ocp::system(), ocp, Ocp::q0(), Ocp::v0(), then_grid);
       r.solution = bench::continue_homotopy(then_problem, a, s, v.then, v.then_sigma_0,
                                             s.max_homotopy_steps - v.smoothing_steps);
@@ -168,7 +162,7 @@ int run(const std::optional<bench::OcpBenchArgs>& args) {
     // The landing as the recovered trajectory reads it (recover_trajectory): one impact whose
     // guards are both corners' touchdowns, or two, or a touchdown without impact.
     nlohmann::ordered_json landing = nullptr;
-    const HybridTrajectory<scenes::PlankBox> traj = recover_trajectory(Ocp::system(), r.points, grid.stages);
+    const HybridTrajectory<scenes::PlankBox> traj = recover_trajectory(Ocp::system(), r.points, grid.grid.stages);
     for (const auto& ev : traj.events) {
       bool touchdown = false;
       for (const Guard& g : ev.guards()) touchdown = touchdown || g.kind == GuardKind::Touchdown;
@@ -181,7 +175,7 @@ int run(const std::optional<bench::OcpBenchArgs>& args) {
     std::vector<int> per_step;
     for (const MpccHomotopyStep& st : r.solution.steps) per_step.push_back(st.ipopt_iterations);
     if (json)
-      rows.push_back({{"variant", v.name}, {"what", v.what}, {"lifted_step_functions", args->lift}, {"converged", r.converged()},
+      rows.push_back({{"variant", v.name}, {"what", v.what}, {"converged", r.converged()},
                       {"solves", per_step.size()}, {"ipopt_iterations", r.solution.ipopt_iterations},
                       {"iterations_per_solve", per_step}, {"complementarity", r.solution.complementarity},
                       {"flatness", f.path_violation}, {"target_error", f.target_error},

@@ -24,7 +24,7 @@
 #include "scenes/plank_box_landing.hpp"
 
 #include <saltus/hybrid/reference/resimulation.hpp>
-#include <saltus/timefreezing/drivers/optimal_control.hpp>
+#include <saltus/timefreezing/header_only.hpp>  // detail::align_impact_samples
 
 #include <nlohmann/json.hpp>
 
@@ -50,13 +50,7 @@ using Ocp = scenes::PlankBoxFlatLanding;
 using Scene = scenes::PlankBox;
 
 /// The input law of one control interval: the OCP's u_k, constant.
-struct ConstantInput {
-  Vec<3> u;
-  template <class T>
-  VecT<T, 3> input(const T&, const VecT<T, 3>&) const {
-    return VecT<T, 3>(T(u[0]), T(u[1]), T(u[2]));
-  }
-};
+using ConstantInput = scenes::PlankBoxConstantInput;  // compiled in the scene library
 
 /// A fixed-size vector as a JSON array.
 template <class V>
@@ -98,7 +92,7 @@ Controls from_json(const nlohmann::json& j) {
   c.ocp_distance = j.at("ocp_resim_distance").get<double>();
   // The numerical interval length comes from the scene's grid: a file of another grid would be
   // integrated with the wrong lengths.
-  const int n = Ocp::grid().control_intervals;
+  const int n = Ocp::grid().grid.control_intervals;
   if (static_cast<int>(c.u.size()) != n || static_cast<int>(c.s.size()) != n)
     throw std::runtime_error("the controls file has " + std::to_string(c.u.size()) + " inputs and " +
                              std::to_string(c.s.size()) + " speeds of time; the flagship's grid has " +
@@ -117,7 +111,7 @@ Controls solve_flagship() {
   Controls c;
   c.q0 = Ocp::q0();
   c.v0 = Ocp::v0();
-  for (int k = 0; k < grid.control_intervals; ++k) {
+  for (int k = 0; k < grid.grid.control_intervals; ++k) {
     c.u.push_back(r.solution.x.segment<3>(problem.control_index(k)));
     c.s.push_back(r.solution.x[problem.speed_index(k)]);
   }
@@ -157,7 +151,7 @@ nlohmann::json reference_json(const ImportedReference<Scene>& ref) {
 
 Row simulate(const Controls& c, int elements, const std::string& reference_prefix) {
   const FesdOptions ocp_grid = Ocp::grid();
-  const double h = ocp_grid.horizon / ocp_grid.control_intervals;  // numerical length of an interval
+  const double h = ocp_grid.grid.horizon / ocp_grid.grid.control_intervals;  // numerical length of an interval
   // A simulation's settings (those of test_time_freezing's plank-box landing against the
   // event-driven simulator), not the OCP's: cross-complementarity on every switching function
   // (FesdOptions' default), so that the grid locates the end of the impact and the slip-stick
@@ -165,10 +159,10 @@ Row simulate(const Controls& c, int elements, const std::string& reference_prefi
   // settings, velocity switches left to the smoothing from sigma = 1e-2, interval 5 of the 2-element
   // simulation stalled at 3.3e-5 after 60,876 iterations in all.)
   FesdOptions piece;
-  piece.stages = ocp_grid.stages;
-  piece.integrated_gap = true;
-  piece.control_intervals = 1;
-  piece.finite_elements = elements;
+  piece.grid.stages = ocp_grid.grid.stages;
+  piece.switching.integrated_gap = true;
+  piece.grid.control_intervals = 1;
+  piece.grid.finite_elements = elements;
   MpccSolverOptions solver;
   solver.sigma_0 = 1e-3;
   Row row;
@@ -178,11 +172,11 @@ Row simulate(const Controls& c, int elements, const std::string& reference_prefi
   Vec<4> q = c.q0, v = c.v0;
   double tau0 = 0.0, t0 = 0.0;
   for (std::size_t k = 0; k < c.u.size(); ++k) {
-    piece.horizon = c.s[k] * h;
-    piece.initial_time = t0;
+    piece.grid.horizon = c.s[k] * h;
+    piece.clock.initial_time = t0;
     // The previous interval's end may sit below a contact by the discretisation's drift (gap(q) against
     // the integrated gap: 1e-5 m measured here), as simulate_time_freezing allows between its pieces.
-    if (k > 0) piece.gap_tolerance = std::numeric_limits<double>::infinity();
+    if (k > 0) piece.bounds.gap_tolerance = std::numeric_limits<double>::infinity();
     // An interval whose homotopy fails (measured: Ipopt's Infeasible_Problem_Detected at the first
     // step, sigma = 1e-3, in one interval of the 2- and of the 4-element simulations) is solved again
     // from a looser first relaxation, sigma_0 = 1e-2, then 1e-1; every attempt's iterations count.
@@ -212,14 +206,14 @@ Row simulate(const Controls& c, int elements, const std::string& reference_prefi
     q = end.head<4>();
     v = end.segment<4>(4);
     t0 = end[TimeFreezingSystem<Scene>::clock_index];
-    tau0 += piece.horizon;
+    tau0 += piece.grid.horizon;
   }
   // Read as the OCP's reference is (solve_time_freezing_ocp): where a frozen run ends before the
   // impact does, its x+ sample is the state where the impact ends, at that state's time
   // (recover_trajectory's docstring, x_plus_time): measured 2.8e-3 s after the impact at 30-120
   // elements, 1.2e-4 s at 480.
-  ImportedReference<Scene> ref = recover_reference<Scene>(points, piece.stages);
-  const HybridTrajectory<Scene> traj = recover_trajectory<Scene>(Ocp::system(), points, piece.stages);
+  ImportedReference<Scene> ref = recover_reference<Scene>(points, piece.grid.stages);
+  const HybridTrajectory<Scene> traj = recover_trajectory<Scene>(Ocp::system(), points, piece.grid.stages);
   timefreezing::detail::align_impact_samples(ref, traj);
   for (std::size_t e = 0; e < traj.events.size(); ++e)
     if (traj.events[e].impact()) {
@@ -305,7 +299,7 @@ int main(int argc, char** argv) {
   }
   const int intervals = static_cast<int>(c.u.size());
   std::printf("the OCP's own re-simulation distance (N = %d, %d elements per interval): %.3g\n", intervals,
-              Ocp::grid().finite_elements, c.ocp_distance);
+              Ocp::grid().grid.finite_elements, c.ocp_distance);
   // Columns: the simulation's elements (M per interval), whether every interval's homotopy
   // converged, Ipopt iterations and the sum of the solves' seconds, the re-simulation's largest
   // state distance, the time and state component where it is largest, the largest clock advance

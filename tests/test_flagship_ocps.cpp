@@ -22,7 +22,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdlib>
 #include <iostream>
 #include <limits>
 #include <numbers>
@@ -124,11 +123,11 @@ TEST(HopperOverOneHole, TargetGridAndRowsAreTheShortTask) {
   EXPECT_EQ(Short{}.terminal_lower(), Short::q_target());
   EXPECT_EQ(Short{}.terminal_upper(), Short::q_target());
   const timefreezing::FesdOptions grid = Short::grid();
-  EXPECT_EQ(grid.control_intervals, 8);
-  EXPECT_EQ(grid.finite_elements, 3);
-  EXPECT_EQ(grid.horizon, 1.0);
-  EXPECT_EQ(grid.physical_horizon, 1.0);
-  EXPECT_EQ(grid.horizon / grid.control_intervals, Ocp::grid().horizon / Ocp::grid().control_intervals);
+  EXPECT_EQ(grid.grid.control_intervals, 8);
+  EXPECT_EQ(grid.grid.finite_elements, 3);
+  EXPECT_EQ(grid.grid.horizon, 1.0);
+  EXPECT_EQ(grid.clock.physical_horizon, 1.0);
+  EXPECT_EQ(grid.grid.horizon / grid.grid.control_intervals, Ocp::grid().grid.horizon / Ocp::grid().grid.control_intervals);
   const std::vector<Short> levels = Short::hole_continuation();
   ASSERT_EQ(levels.size(), Ocp::hole_continuation().size());
   EXPECT_EQ(levels.back().hole_level, 1.0);
@@ -184,7 +183,7 @@ TEST(HopperOverOneHole, CoarseGridConvergesAndJumpsTheHole) {
   GTEST_SKIP() << "about 2.5 minutes in Release: run in the release stage only";
 #endif
   using Short = HopperOverOneHole;
-  EXPECT_EQ(Short::grid().contact_side_weight, 1e-2);
+  EXPECT_EQ(Short::grid().regularisation.contact_side, 1e-2);
   EXPECT_FALSE(Short::solver().warm_start);
   const auto r = timefreezing::solve_time_freezing_ocp_by_continuation(
       Short::system(), Short::hole_continuation(), Short{}, Short::q0(), Short::v0(), Short::grid(), Short::solver());
@@ -277,51 +276,6 @@ TEST(PlankBoxFlatLanding, IpoptDerivativeCheckerFindsNoError) {
   EXPECT_EQ(report.errors, 0) << report.output;
 }
 
-// FesdOptions::composed_kinematics: the contact kinematics chained into the callbacks' AD types by
-// ad::compose. The same constraint values, Jacobian and Hessian as the default evaluation, up to
-// rounding, on both flagship scenes (two contacts with friction on a rotating plank; the hopper's
-// foot on joint angles), at a point inside the bounds with multipliers of both signs.
-template <class Scene, class Ocp>
-void expect_same_callbacks_when_composed(timefreezing::FesdOptions grid) {
-  const timefreezing::FesdMpcc<Scene, Ocp> direct(Ocp::system(), Ocp{}, Ocp::q0(), Ocp::v0(), grid);
-  grid.composed_kinematics = true;
-  const timefreezing::FesdMpcc<Scene, Ocp> composed(Ocp::system(), Ocp{}, Ocp::q0(), Ocp::v0(), grid);
-  const Eigen::VectorXd x = interior_point(direct, 17);
-  std::srand(19);
-  const Eigen::VectorXd mu = Eigen::VectorXd::Random(direct.constraint_count());
-  const auto same = [](const Eigen::VectorXd& a, const Eigen::VectorXd& b, const char* what) {
-    ASSERT_EQ(a.size(), b.size()) << what;
-    EXPECT_LE((a - b).cwiseAbs().maxCoeff(), 1e-12 * (1.0 + a.cwiseAbs().maxCoeff())) << what;
-    EXPECT_GT(a.cwiseAbs().maxCoeff(), 0.0) << what;  // not a comparison of zeros
-  };
-  const auto same_structure = [](const std::vector<timefreezing::SparseEntry>& a,
-                                 const std::vector<timefreezing::SparseEntry>& b) {
-    if (a.size() != b.size()) return false;
-    for (std::size_t k = 0; k < a.size(); ++k)
-      if (a[k].row != b[k].row || a[k].col != b[k].col) return false;
-    return true;
-  };
-  Eigen::VectorXd g1(direct.constraint_count()), g2(composed.constraint_count());
-  direct.constraints(x, g1);
-  composed.constraints(x, g2);
-  same(g1, g2, "constraints");
-  ASSERT_TRUE(same_structure(direct.jacobian_structure(), composed.jacobian_structure()));
-  Eigen::VectorXd j1(static_cast<Eigen::Index>(direct.jacobian_structure().size())), j2(j1.size());
-  direct.jacobian_values(x, j1);
-  composed.jacobian_values(x, j2);
-  same(j1, j2, "Jacobian");
-  ASSERT_TRUE(same_structure(direct.hessian_structure(), composed.hessian_structure()));
-  Eigen::VectorXd h1(static_cast<Eigen::Index>(direct.hessian_structure().size())), h2(h1.size());
-  direct.hessian_values(x, 0.7, mu, h1);
-  composed.hessian_values(x, 0.7, mu, h2);
-  same(h1, h2, "Hessian");
-}
-
-TEST(ComposedKinematics, SameCallbacksOnThePlankBoxAndTheHopper) {
-  expect_same_callbacks_when_composed<PlankBox, PlankBoxFlatLanding>(PlankBoxFlatLanding::grid(2, 2, 2));
-  expect_same_callbacks_when_composed<Hopper, HopperOverThreeHoles>(HopperOverThreeHoles::grid(2, 2, 2));
-}
-
 // The flagship OCP on its own grid (15 control intervals, 2 elements, n_s = 2; the coarser grids
 // tried, 10 and 12 intervals, stall in the homotopy, and 1 element per interval cannot move an
 // element boundary): converged to complementarity 0 by the branch NLP, the box parallel to the
@@ -404,20 +358,20 @@ TEST(PlankBoxFlatLanding, OptimalReferenceLandsFlatAndAgreesWithTheEventDrivenSi
 // between it lets corner 1 leave the plank for 4.4e-4 s at t = 0.512 (a release and a touchdown the
 // FESD grid does not resolve), hence its two extra events and the distance there (measured 0.022,
 // the box's angular rate at t = 0.5125).
-// The path to this optimum depends on rounding: with FesdOptions::composed_kinematics (the same
-// derivatives, rounded differently) the first step needs 296 iterations and is cut at the 220 of
-// the solver's limit; with 400 the homotopy converges (1,049 iterations) to another optimum
-// (objective 52.0 against 61.5) that sticks at t = 0.564 s and lifts off at t = 0.7 s from rest, and absorbs
-// its landing impact into a flowing element (re-simulation 0.069; bench/README.md, "FESD callbacks").
+// The path to this optimum depends on rounding: with the contact kinematics chained into the AD
+// types (the same derivatives, rounded differently; docs/decisions/fesd-composed-kinematics.md) the
+// homotopy converged with 400 iterations per step to another optimum (objective 52.0 against 61.5)
+// that sticks at t = 0.564 s and lifts off at t = 0.7 s from rest, and absorbs its landing impact
+// into a flowing element (re-simulation 0.069).
 TEST(PlankBoxShortLanding, CoarseGridConvergesWithAFlatLandingAndALiftOff) {
 #if defined(SALTUS_TESTS_UNDER_SANITIZERS)
   GTEST_SKIP() << "about a minute in Release: run in the release stage only";
 #endif
   using Landing = PlankBoxShortLanding;
   const timefreezing::FesdOptions grid = Landing::grid();
-  EXPECT_EQ(grid.control_intervals, 10);
-  EXPECT_EQ(grid.horizon, 1.0);
-  EXPECT_EQ(grid.physical_horizon, 1.0);
+  EXPECT_EQ(grid.grid.control_intervals, 10);
+  EXPECT_EQ(grid.grid.horizon, 1.0);
+  EXPECT_EQ(grid.clock.physical_horizon, 1.0);
   // Its target: 5 cm above the level plank at 0.55 m from the hinge, at rest; the feasibility
   // report reads this target, not the flagship's.
   const PlankBox box;

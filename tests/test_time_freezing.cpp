@@ -4,6 +4,7 @@
 // guiding example (time-freezing paper, Example 3) and the frictional landing of a point mass;
 // a small OCP that lands the point mass and slides it to a target.
 #include "scenes/plank_box.hpp"
+#include "scenes/plank_box_landing.hpp"
 #include "scenes/point_mass.hpp"
 #include "scenes/time_freezing_examples.hpp"
 
@@ -13,7 +14,7 @@
 #include <saltus/sensitivity/jump_gain.hpp>
 #include <saltus/timefreezing/discretisation/fesd.hpp>
 #include <saltus/timefreezing/mpcc/mpcc_solver.hpp>
-#include <saltus/timefreezing/drivers/optimal_control.hpp>
+#include <saltus/timefreezing/header_only.hpp>
 
 #include "mpcc_support.hpp"
 
@@ -100,11 +101,6 @@ TEST(TimeFreezingSystem, PlankBoxRegionsGiveTheDocumentedFields) {
   // Fractional alphas: Theta is the product of the contacts' theta^free.
   const Alpha mixed = (Alpha() << 0.3, 0.4, 0.5, 0.8, 0.1, 0.2).finished();
   EXPECT_NEAR(system.ode_weight<double>(mixed), (0.3 + 0.7 * 0.4) * (0.8 + 0.2 * 0.1), 1e-15);
-  // The lifted form (closing weights beta_i = (1 - alpha_i1)(1 - alpha_i2)) is the same field.
-  const Vec<2> closing(0.7 * 0.6, 0.2 * 0.9);
-  EXPECT_NEAR(system.ode_weight_lifted<double>(closing), system.ode_weight<double>(mixed), 1e-15);
-  EXPECT_LT((system.generalised_force_lifted<double>(q, v, u, closing, mixed) -
-             system.generalised_force<double>(q, v, u, mixed)).norm(), 1e-12);
   // Switching functions: gap, J_n v, J_t v.
   const Vec<6> c = system.switching_functions<double>(q, v);
   for (int i = 0; i < 2; ++i) {
@@ -170,25 +166,25 @@ struct ClockAsDoubleRunningCost {
     return T(u.squaredNorm() * t);
   }
 };
-static_assert(detail::HasNonTemplateRunningCost<NonTemplateRunningCost>);
-static_assert(!detail::HasNonTemplateRunningCost<EveryTermOcp>);
-static_assert(!detail::HasNonTemplateRunningCost<scenes::PointMassToTheTarget>);
-static_assert(detail::HasTimedRunningCost<ClockAsDoubleRunningCost, double, 4, 2> &&
-              !detail::HasTimedRunningCost<ClockAsDoubleRunningCost, detail::Ad2<9>, 4, 2>);
-static_assert(detail::HasTimedRunningCost<EveryTermOcp, detail::Ad2<9>, 4, 2>);
+static_assert(HasNonTemplateRunningCost<NonTemplateRunningCost>);
+static_assert(!HasNonTemplateRunningCost<EveryTermOcp>);
+static_assert(!HasNonTemplateRunningCost<scenes::PointMassToTheTarget>);
+static_assert(HasTimedRunningCost<ClockAsDoubleRunningCost, double, 4, 2> &&
+              !HasTimedRunningCost<ClockAsDoubleRunningCost, detail::Ad2<9>, 4, 2>);
+static_assert(HasTimedRunningCost<EveryTermOcp, detail::Ad2<9>, 4, 2>);
 
 FesdOptions small_grid(bool switch_detection) {
   FesdOptions o;
-  o.control_intervals = 2;
-  o.finite_elements = 2;
-  o.stages = 2;
-  o.horizon = 1.0;
-  o.speed_of_time_max = 3.0;
-  o.speed_of_time_weight = 0.5;
-  o.clock = ClockConstraint::Stagewise;
-  o.physical_horizon = 0.8;
-  o.switch_detection = switch_detection;
-  o.contact_side_weight = 0.7;  // the contact-side selection's gradient entries are checked too
+  o.grid.control_intervals = 2;
+  o.grid.finite_elements = 2;
+  o.grid.stages = 2;
+  o.grid.horizon = 1.0;
+  o.clock.speed_of_time_max = 3.0;
+  o.regularisation.speed_of_time = 0.5;
+  o.clock.constraint = ClockConstraint::Stagewise;
+  o.clock.physical_horizon = 0.8;
+  o.switching.detection = switch_detection;
+  o.regularisation.contact_side = 0.7;  // the contact-side selection's gradient entries are checked too
   return o;
 }
 
@@ -199,25 +195,18 @@ TEST(Fesd, DerivativesMatchFiniteDifferences) {
   p.friction = Friction::Planar;
   p.mu = 0.3;
   const TimeFreezingSystem<PointMass> system(PointMass(p), 10.0);
-  // FESD with the heuristic penalty, the fixed grid, FESD with the exact step equilibration (its
-  // eta rows couple the multipliers of neighbouring elements, across control intervals too) and
-  // scaled switching functions; FESD with the lifted step functions; FESD with the gap switching
-  // function read from the integrated gap (its row is linear in g; g's field Theta J_n v is not).
-  for (int variant : {0, 1, 2, 3, 4}) {
+  // FESD with the heuristic penalty, the fixed grid, FESD on three elements with scaled switching
+  // functions; FESD with the gap switching function read from the integrated gap (its row is
+  // linear in g; g's field Theta J_n v is not).
+  for (int variant : {0, 1, 2, 4}) {
     const bool fesd = variant != 1;
     FesdOptions grid = small_grid(fesd);
     if (variant == 2) {
-      grid.step_equilibration = StepEquilibration::Exact;
-      grid.finite_elements = 3;
-      grid.switching_scale = {3.0, 0.5, 2.0};
+      grid.grid.finite_elements = 3;
+      grid.switching.scale = {3.0, 0.5, 2.0};
     }
-    grid.lift_step_functions = variant == 3;
-    grid.integrated_gap = variant == 4;
+    grid.switching.integrated_gap = variant == 4;
     const FesdMpcc<PointMass, EveryTermOcp> problem(system, EveryTermOcp{}, Vec<2>(0.1, 0.5), Vec<2>(1.0, -0.5), grid);
-    int equilibration_rows = 0;
-    for (int row = 0; row < problem.constraint_count(); ++row)
-      equilibration_rows += problem.constraint_name(row).rfind("step equilibration", 0) == 0 ? 1 : 0;
-    EXPECT_EQ(equilibration_rows, variant == 2 ? 2 * 2 : 0);  // N (N_fe - 1)
     const int n = problem.variable_count(), m = problem.constraint_count();
     const Eigen::VectorXd x = interior_point(problem, 3);
     // Dense Jacobian against central differences of the constraints.
@@ -286,34 +275,22 @@ TEST(Fesd, IpoptDerivativeCheckerFindsNoError) {
   // Ipopt's second-order check costs about one Hessian evaluation per constraint and variable: the
   // finite-difference test above covers the larger grid, this one a single control interval.
   FesdOptions one = small_grid(true);
-  one.control_intervals = 1;
+  one.grid.control_intervals = 1;
   const FesdMpcc<PointMass, EveryTermOcp> problem(system, EveryTermOcp{}, Vec<2>(0.1, 0.5), Vec<2>(1.0, -0.5), one);
   const DerivativeCheckReport report = check_derivatives(problem, interior_point(problem, 5));
   EXPECT_EQ(report.errors, 0) << report.output;
-  // The exact step equilibration's rows (three elements: two inner boundaries).
-  one.step_equilibration = StepEquilibration::Exact;
-  one.finite_elements = 3;
-  const FesdMpcc<PointMass, EveryTermOcp> exact(system, EveryTermOcp{}, Vec<2>(0.1, 0.5), Vec<2>(1.0, -0.5), one);
-  const DerivativeCheckReport report_exact = check_derivatives(exact, interior_point(exact, 5));
-  EXPECT_EQ(report_exact.errors, 0) << report_exact.output;
   // Two contacts with friction (the plank-box), no OCP terms.
   const TimeFreezingSystem<PlankBox> plank(PlankBox(), 50.0);
   FesdOptions o = small_grid(true);
-  o.control_intervals = 1;
-  o.finite_elements = 1;
-  o.clock = ClockConstraint::Terminal;
+  o.grid.control_intervals = 1;
+  o.grid.finite_elements = 1;
+  o.clock.constraint = ClockConstraint::Terminal;
   const FesdMpcc<PlankBox> two(plank, NoObjective{}, Vec<4>(0.5, 0.08, 0.01, 0.0), Vec<4>(0.2, -1.0, 0.3, 0.0), o);
   const DerivativeCheckReport report2 = check_derivatives(two, interior_point(two, 7));
   EXPECT_EQ(report2.errors, 0) << report2.output;
-  // The same lifted: Theta = (1 - beta_1)(1 - beta_2), the step-lifting rows.
-  o.lift_step_functions = true;
-  const FesdMpcc<PlankBox> two_lifted(plank, NoObjective{}, Vec<4>(0.5, 0.08, 0.01, 0.0), Vec<4>(0.2, -1.0, 0.3, 0.0), o);
-  const DerivativeCheckReport report3 = check_derivatives(two_lifted, interior_point(two_lifted, 7));
-  EXPECT_EQ(report3.errors, 0) << report3.output;
   // The integrated gaps read by the gap switching functions: g' = Theta J_n(q) v of the corners
   // on the rotating plank (a gap nonlinear in q).
-  o.lift_step_functions = false;
-  o.integrated_gap = true;
+  o.switching.integrated_gap = true;
   const FesdMpcc<PlankBox> two_integrated(plank, NoObjective{}, Vec<4>(0.5, 0.08, 0.01, 0.0),
                                           Vec<4>(0.2, -1.0, 0.3, 0.0), o);
   const DerivativeCheckReport report4 = check_derivatives(two_integrated, interior_point(two_integrated, 7));
@@ -321,126 +298,54 @@ TEST(Fesd, IpoptDerivativeCheckerFindsNoError) {
 }
 
 // Which pairs the smoothing relaxation may smooth: the stage-wise ones (velocity switching
-// functions when only the gaps have cross-complementarity), the tangential ones only when
-// smooth_tangential_pairs.
+// functions when only the gaps have cross-complementarity).
 TEST(Fesd, MarksTheStageWisePairsSmoothable) {
   scenes::PointMassParameters p;
   p.friction = Friction::Planar;
   p.mu = 0.3;
   const TimeFreezingSystem<PointMass> system(PointMass(p), 10.0);
   FesdOptions o = small_grid(true);
-  o.velocity_switch_detection = false;
+  o.switching.velocity_detection = false;
   auto smoothable = [&](const FesdOptions& options) {
     const FesdMpcc<PointMass> problem(system, NoObjective{}, Vec<2>(0.1, 0.5), Vec<2>(1.0, -0.5), options);
     int n = 0;
     for (const ComplementarityPair& pair : problem.complementarity_pairs()) n += pair.smoothable ? 1 : 0;
     return n;
   };
-  const int stage_points = o.control_intervals * o.finite_elements * o.stages;  // 8
+  const int stage_points = o.grid.control_intervals * o.grid.finite_elements * o.grid.stages;  // 8
   EXPECT_EQ(smoothable(o), 2 * 2 * stage_points);  // J_n v and J_t v, two pairs each
-  o.smooth_tangential_pairs = false;
-  EXPECT_EQ(smoothable(o), 2 * stage_points);  // J_n v only
-  // tangential_switch_detection: J_t v's pairs become cross-complementarity pairs (one per
-  // multiplier and point: the previous element's end when there is one, then the stages), never
-  // smoothed; J_n v keeps its stage-wise ones.
-  o.smooth_tangential_pairs = true;
-  o.tangential_switch_detection = true;
-  EXPECT_EQ(smoothable(o), 2 * stage_points);
-  const FesdMpcc<PointMass> tangential(system, NoObjective{}, Vec<2>(0.1, 0.5), Vec<2>(1.0, -0.5), o);
-  int cross_tangential = 0, stagewise_normal = 0;
-  for (const ComplementarityPair& pair : tangential.complementarity_pairs()) {
-    const bool is_cross = pair.name.find("sum") != std::string::npos;
-    if (pair.name.find("[2]") != std::string::npos) {
-      EXPECT_TRUE(is_cross) << pair.name;
-      EXPECT_FALSE(pair.smoothable) << pair.name;
-      ++cross_tangential;
-    }
-    if (pair.name.find("[1]") != std::string::npos && !is_cross) ++stagewise_normal;
-  }
-  const int elements = o.control_intervals * o.finite_elements;  // 4; the first has no previous end
-  EXPECT_EQ(cross_tangential, 2 * (stage_points + elements - 1));
-  EXPECT_EQ(stagewise_normal, 2 * stage_points);
-  o.velocity_switch_detection = true;
+  o.switching.velocity_detection = true;
   EXPECT_EQ(smoothable(o), 0);  // every function has cross-complementarity
-}
-
-// The lifted step functions' layout: nc closing weights per stage point after the multipliers,
-// nc "step lifting" rows after the path rows, both named; the initial points satisfy those rows.
-TEST(Fesd, LiftedStepFunctionsAddOneWeightAndOneRowPerContactAndStage) {
-  const TimeFreezingSystem<PlankBox> plank(PlankBox(), 50.0);
-  FesdOptions o = small_grid(true);
-  const Vec<4> q0(0.5, 0.08, 0.01, 0.0), v0(0.2, -1.0, 0.3, 0.0);
-  const FesdMpcc<PlankBox> plain(plank, NoObjective{}, q0, v0, o);
-  o.lift_step_functions = true;
-  const FesdMpcc<PlankBox> lifted(plank, NoObjective{}, q0, v0, o);
-  const int stage_points = o.control_intervals * o.finite_elements * o.stages;  // 8
-  EXPECT_EQ(lifted.variable_count() - plain.variable_count(), 2 * stage_points);
-  EXPECT_EQ(lifted.constraint_count() - plain.constraint_count(), 2 * stage_points);
-  EXPECT_EQ(lifted.variable_name(lifted.closing_index(1, 0, 1) + 1), "beta[1,0,1][1]");
-  EXPECT_EQ(lifted.complementarity_pairs().size(), plain.complementarity_pairs().size());
-  Eigen::VectorXd x(lifted.variable_count()), g(lifted.constraint_count());
-  auto check_lifting_rows = [&](const char* which) {
-    lifted.constraints(x, g);
-    int rows = 0;
-    for (int row = 0; row < lifted.constraint_count(); ++row)
-      if (lifted.constraint_name(row).rfind("step lifting", 0) == 0) {
-        ++rows;
-        EXPECT_NEAR(g[row], 0.0, 1e-15) << which << ": " << lifted.constraint_name(row);
-      }
-    EXPECT_EQ(rows, 2 * stage_points) << which;
-  };
-  lifted.initial_point(x);
-  check_lifting_rows("initial_point");
-  // A guess that touches down: the start state is in flight, the guess crosses the plank.
-  lifted.initial_point_from_guess(x, [&](double t) {
-    Vec<8> y;
-    y << q0 + t * v0, v0;
-    return y;
-  });
-  check_lifting_rows("initial_point_from_guess");
-  // The stage dynamics agree with the plain form's where the lifting rows hold.
-  Eigen::VectorXd xp(plain.variable_count()), gp(plain.constraint_count());
-  plain.initial_point_from_guess(xp, [&](double t) {
-    Vec<8> y;
-    y << q0 + t * v0, v0;
-    return y;
-  });
-  plain.constraints(xp, gp);
-  for (int row = 0, lrow = 0; row < plain.constraint_count(); ++row, ++lrow) {
-    while (lifted.constraint_name(lrow).rfind("step lifting", 0) == 0) ++lrow;
-    ASSERT_EQ(plain.constraint_name(row), lifted.constraint_name(lrow));
-    EXPECT_NEAR(gp[row], g[lrow], 1e-12) << plain.constraint_name(row);
-  }
 }
 
 TEST(Fesd, RefusesBadOptionsAndStates) {
   const TimeFreezingSystem<PointMass> system(PointMass(), 10.0);
   FesdOptions o;
-  o.finite_elements = 0;
+  o.grid.finite_elements = 0;
   EXPECT_THROW(FesdMpcc<PointMass>(system, {}, Vec<2>(0, 1), Vec<2>(0, 0), o), InvalidArgument);
   o = FesdOptions{};
-  o.horizon = -1.0;
+  o.grid.horizon = -1.0;
   EXPECT_THROW(FesdMpcc<PointMass>(system, {}, Vec<2>(0, 1), Vec<2>(0, 0), o), InvalidArgument);
   o = FesdOptions{};
-  o.contact_side_weight = -1e-3;
+  o.regularisation.contact_side = -1e-3;
   EXPECT_THROW(FesdMpcc<PointMass>(system, {}, Vec<2>(0, 1), Vec<2>(0, 0), o), InvalidArgument);
   o = FesdOptions{};
-  o.contact_side_weight = std::numeric_limits<double>::quiet_NaN();
+  o.regularisation.contact_side = std::numeric_limits<double>::quiet_NaN();
   EXPECT_THROW(FesdMpcc<PointMass>(system, {}, Vec<2>(0, 1), Vec<2>(0, 0), o), InvalidArgument);
   o = FesdOptions{};
-  o.step_equilibration_weight = std::numeric_limits<double>::infinity();  // Ipopt failed on it before
+  o.regularisation.step_equilibration = std::numeric_limits<double>::infinity();  // Ipopt failed on it before
   EXPECT_THROW(FesdMpcc<PointMass>(system, {}, Vec<2>(0, 1), Vec<2>(0, 0), o), InvalidArgument);
   o = FesdOptions{};
-  o.clock = ClockConstraint::Terminal;  // without a physical horizon
+  o.clock.constraint = ClockConstraint::Terminal;  // without a physical horizon
   EXPECT_THROW(FesdMpcc<PointMass>(system, {}, Vec<2>(0, 1), Vec<2>(0, 0), o), InvalidArgument);
   o = FesdOptions{};
-  o.stages = 4;
+  o.grid.stages = 4;
   EXPECT_THROW(FesdMpcc<PointMass>(system, {}, Vec<2>(0, 1), Vec<2>(0, 0), o), InvalidArgument);
   o = FesdOptions{};
-  o.switching_scale[1] = 0.0;
+  o.switching.scale[1] = 0.0;
   EXPECT_THROW(FesdMpcc<PointMass>(system, {}, Vec<2>(0, 1), Vec<2>(0, 0), o), InvalidArgument);
   o = FesdOptions{};
-  o.control_lower = Eigen::VectorXd::Zero(3);
+  o.bounds.control_lower = Eigen::VectorXd::Zero(3);
   EXPECT_THROW(FesdMpcc<PointMass>(system, {}, Vec<2>(0, 1), Vec<2>(0, 0), o), InvalidArgument);
   EXPECT_THROW(FesdMpcc<PointMass>(system, {}, Vec<2>(0, std::nan("")), Vec<2>(0, 0), FesdOptions{}), InvalidArgument);
   // Below the table: refused, naming the contact.
@@ -453,11 +358,11 @@ TEST(Fesd, RefusesBadOptionsAndStates) {
   // The simulation driver checks the grid before splitting it (a message with the given value,
   // not a crash on zero intervals).
   o = FesdOptions{};
-  o.control_intervals = 0;
+  o.grid.control_intervals = 0;
   EXPECT_THROW(simulate_time_freezing(system, Vec<2>(0, 1), Vec<2>(0, 0), o), InvalidArgument);
   o = FesdOptions{};
-  o.control_intervals = 10;
-  o.horizon = -1.0;
+  o.grid.control_intervals = 10;
+  o.grid.horizon = -1.0;
   try {
     simulate_time_freezing(system, Vec<2>(0, 1), Vec<2>(0, 0), o);
     ADD_FAILURE() << "a negative horizon was accepted";
@@ -476,13 +381,13 @@ TEST(Fesd, InitialPointFromAGuessOfTheMotion) {
   const scenes::PointMassParameters p;
   const TimeFreezingSystem<PointMass> system(PointMass(p), 10.0);
   FesdOptions grid;
-  grid.control_intervals = 3;
-  grid.finite_elements = 2;
-  grid.stages = 2;
-  grid.horizon = 0.5;
-  grid.speed_of_time_max = 3.0;
-  grid.clock = ClockConstraint::Stagewise;
-  grid.physical_horizon = 0.8;  // the clock runs 1.6 times numerical time: s = 1.6
+  grid.grid.control_intervals = 3;
+  grid.grid.finite_elements = 2;
+  grid.grid.stages = 2;
+  grid.grid.horizon = 0.5;
+  grid.clock.speed_of_time_max = 3.0;
+  grid.clock.constraint = ClockConstraint::Stagewise;
+  grid.clock.physical_horizon = 0.8;  // the clock runs 1.6 times numerical time: s = 1.6
   const Vec<2> q0(0.1, 5.0), v0(1.0, 0.5);
   const auto flight = [&](double t) {
     Vec<4> x;
@@ -540,19 +445,19 @@ constexpr double g_ex3 = scenes::Example3::gravity;
 TEST(TimeFreezingSimulation, GuidingExampleMatchesItsClosedForms) {
   const TimeFreezingSystem<PointMass> system(PointMass(), g_ex3);
   FesdOptions o;
-  o.stages = 2;
-  o.control_intervals = 14;  // tau = 2 (t = 1, the kink of u) is a control node
+  o.grid.stages = 2;
+  o.grid.control_intervals = 14;  // tau = 2 (t = 1, the kink of u) is a control node
   // 8 elements per control interval (112): with the contact-side selection 4 elements leave the lift-off interval's homotopy stalled at 2.4e-8 (the lift-off at
   // t = 1.5 is tangential, v2 = g (t - 1.5)^2, and sits exactly on the control node tau = 2.75).
-  o.finite_elements = 8;
-  o.contact_side_weight = 1e-2;  // fesd.hpp: the frozen phase exact, its end located
-  o.horizon = 3.5;
+  o.grid.finite_elements = 8;
+  o.regularisation.contact_side = 1e-2;  // fesd.hpp: the frozen phase exact, its end located
+  o.grid.horizon = 3.5;
 #if defined(SALTUS_TESTS_UNDER_SANITIZERS)
   // 9 s in Release, ~250 s under the sanitizers: there only the first 4 control intervals
   // (tau <= 1: free fall, touchdown, the whole frozen phase), the same driver and code paths.
-  o.control_intervals = 4;
-  o.finite_elements = 4;  // the frozen end is located at 4 too (measured 1.2e-10); half the time
-  o.horizon = 1.0;
+  o.grid.control_intervals = 4;
+  o.grid.finite_elements = 4;  // the frozen end is located at 4 too (measured 1.2e-10); half the time
+  o.grid.horizon = 1.0;
   constexpr bool whole_horizon = false;
 #else
   constexpr bool whole_horizon = true;
@@ -564,10 +469,10 @@ TEST(TimeFreezingSimulation, GuidingExampleMatchesItsClosedForms) {
   const auto sim = simulate_time_freezing(system, Vec<2>(0, 1), Vec<2>(0, 0), o, scenes::Example3{}, solver);
   ASSERT_TRUE(sim.converged()) << sim.solution.message;
   const std::string lines = progress.str();
-  EXPECT_EQ(lines.rfind("simulate_time_freezing: control interval 1 of " + std::to_string(o.control_intervals) + "\n", 0),
+  EXPECT_EQ(lines.rfind("simulate_time_freezing: control interval 1 of " + std::to_string(o.grid.control_intervals) + "\n", 0),
             0u)
       << lines.substr(0, 200);
-  EXPECT_NE(lines.find("control interval " + std::to_string(o.control_intervals) + " of "), std::string::npos);
+  EXPECT_NE(lines.find("control interval " + std::to_string(o.grid.control_intervals) + " of "), std::string::npos);
   EXPECT_NE(lines.find("mpcc step   0"), std::string::npos);
   const double t_impact = std::sqrt(2.0 / g_ex3);
   // The recovered trajectory (recover_trajectory): the impact at t = sqrt(2/g) from flight into
@@ -613,7 +518,7 @@ TEST(TimeFreezingSimulation, GuidingExampleMatchesItsClosedForms) {
   // phase after t = 1 (clock speed 1 / (2 (2 - t)), not a polynomial), order 3-4 in h; the frozen
   // phase is exact to 1e-11 with the contact-side selection (without it: a drift of 1.6e-5, and
   // 1.4e-5 at 112 elements).
-  EXPECT_LT(error, 1.2e-5);  // 7.1e-6 with contact_side_weight 1e-2 (1.05e-5 with 1e-3, 1.41e-5 without)
+  EXPECT_LT(error, 1.2e-5);  // 7.1e-6 with regularisation.contact_side 1e-2 (1.05e-5 with 1e-3, 1.41e-5 without)
   // The touchdown is a switch of the gap at t = sqrt(2/g); the frozen phase ends at
   // tau = 2 sqrt(2/g) (the normal velocity switches to 0); lift-off at tau = 2.75 (t = 1.5).
   const SwitchPoint* touchdown = nullptr;
@@ -661,15 +566,15 @@ TEST(TimeFreezingSimulation, GuidingExampleReachesTheRadauOrder) {
 #endif
   const TimeFreezingSystem<PointMass> system(PointMass(), g_ex3);
   FesdOptions o;
-  o.stages = 3;
-  o.control_intervals = 14;
-  o.horizon = 3.5;
-  o.contact_side_weight = 1e-2;
+  o.grid.stages = 3;
+  o.grid.control_intervals = 14;
+  o.grid.horizon = 3.5;
+  o.regularisation.contact_side = 1e-2;
   MpccSolverOptions solver;
   solver.complementarity_refinement = 1e-14;
   std::vector<double> errors;
   for (const int nfe : {4, 8}) {
-    o.finite_elements = nfe;
+    o.grid.finite_elements = nfe;
     const auto sim = simulate_time_freezing(system, Vec<2>(0, 1), Vec<2>(0, 0), o, scenes::Example3{}, solver);
     ASSERT_TRUE(sim.converged()) << sim.solution.message;
     errors.push_back((sim.final_state().head<5>() - scenes::Example3::final_state()).cwiseAbs().maxCoeff());
@@ -682,21 +587,21 @@ TEST(TimeFreezingSimulation, GuidingExampleReachesTheRadauOrder) {
   EXPECT_GE(order, 4.5);
 }
 
-// FesdOptions::integrated_gap on a gap linear in q (the point mass: gap = q_2): the collocated g
+// FesdOptions::switching.integrated_gap on a gap linear in q (the point mass: gap = q_2): the collocated g
 // equals q_2 at every stage point, so the discrete problems are the same and so are the
 // solutions, to Ipopt's tolerance (Example 3's first 4 control intervals: free fall, touchdown,
 // the frozen phase; 16 elements, n_s = 2, the contact-side selection as in the test above).
 TEST(TimeFreezingSimulation, IntegratedGapOfALinearGapChangesNothing) {
   const TimeFreezingSystem<PointMass> system(PointMass(), g_ex3);
   FesdOptions o;
-  o.stages = 2;
-  o.control_intervals = 4;
-  o.finite_elements = 4;
-  o.horizon = 1.0;
-  o.contact_side_weight = 1e-2;
+  o.grid.stages = 2;
+  o.grid.control_intervals = 4;
+  o.grid.finite_elements = 4;
+  o.grid.horizon = 1.0;
+  o.regularisation.contact_side = 1e-2;
   std::vector<Eigen::Matrix<double, 7, 1>> finals;
   for (const bool integrated : {false, true}) {
-    o.integrated_gap = integrated;
+    o.switching.integrated_gap = integrated;
     const auto sim = simulate_time_freezing(system, Vec<2>(0, 1), Vec<2>(0, 0), o, scenes::Example3{});
     ASSERT_TRUE(sim.converged()) << sim.solution.message;
     finals.push_back(sim.final_state());
@@ -725,18 +630,18 @@ TEST(TimeFreezingSimulation, IntegratedGapOfANonlinearGapConvergesToTheGap) {
   Vec<8> x0 = scene.flat_state(0.5, 0.3);
   x0.tail<4>() << 0.5, 0.0, 3.0, 0.0;  // sliding sideways and spinning at 3 rad/s, plank at rest
   FesdOptions o;
-  o.stages = 2;
-  o.control_intervals = 1;
-  o.horizon = 0.2;
-  o.integrated_gap = true;
+  o.grid.stages = 2;
+  o.grid.control_intervals = 1;
+  o.grid.horizon = 0.2;
+  o.switching.integrated_gap = true;
   std::vector<double> mismatch;
   for (const int nfe : {4, 8}) {
-    o.finite_elements = nfe;
+    o.grid.finite_elements = nfe;
     const auto sim = simulate_time_freezing(system, Vec<4>(x0.head<4>()), Vec<4>(x0.tail<4>()), o);
     ASSERT_TRUE(sim.converged()) << sim.solution.message;
     double worst = 0.0, lowest_gap = 1.0;
     for (const auto& p : sim.points) {
-      if (p.stage != o.stages - 1) continue;  // element ends
+      if (p.stage != o.grid.stages - 1) continue;  // element ends
       const Vec<4> q = p.y.head<4>();
       for (int i = 0; i < 2; ++i) {
         const double gap = scene.gap<double>(i, q);
@@ -757,12 +662,12 @@ TEST(TimeFreezingSimulation, IntegratedGapOfANonlinearGapConvergesToTheGap) {
 
 // The frozen phase of Example 3 against the closed form. During the frozen phase the gap's pair is
 // degenerate (gap = 0 and both multipliers 0 at the exact solution), so complementarity leaves
-// alpha_gap free. Without the contact-side selection (FesdOptions::contact_side_weight = 0) a
+// alpha_gap free. Without the contact-side selection (FesdOptions::regularisation.contact_side = 0) a
 // residual of 1e-9 lets the gap drift to about -1.6e-5 (lambda and alpha both ~1e-5..1e-4) and the
 // clock creep 5e-6 while the mass should stand still, and the drift stays in q2 for the rest of the
 // motion. Two remedies: refinement past convergence to 1e-14 (MpccSolverOptions::
 // complementarity_refinement) shrinks it below 1e-7; the contact-side selection
-// (FesdOptions::contact_side_weight = 1e-2) removes it. First 4 control intervals: free fall,
+// (FesdOptions::regularisation.contact_side = 1e-2) removes it. First 4 control intervals: free fall,
 // touchdown, the frozen phase, sliding to tau = 1 (t = 1/2: q = (0.875, 0), v = (3.5, 0)).
 TEST(TimeFreezingSimulation, FrozenPhaseDriftIsRemovedBySideSelectionOrRefinement) {
 #if defined(SALTUS_TESTS_UNDER_SANITIZERS)
@@ -771,10 +676,10 @@ TEST(TimeFreezingSimulation, FrozenPhaseDriftIsRemovedBySideSelectionOrRefinemen
 #endif
   const TimeFreezingSystem<PointMass> system(PointMass(), g_ex3);
   FesdOptions o;
-  o.stages = 2;
-  o.control_intervals = 4;
-  o.finite_elements = 4;
-  o.horizon = 1.0;
+  o.grid.stages = 2;
+  o.grid.control_intervals = 4;
+  o.grid.finite_elements = 4;
+  o.grid.horizon = 1.0;
   const Vec<5> exact = (Vec<5>() << 0.875, 0.0, 3.5, 0.0, 0.5).finished();
   auto error_at_the_end = [&](const FesdOptions& grid, const MpccSolverOptions& solver, const char* what) {
     const auto sim = simulate_time_freezing(system, Vec<2>(0, 1), Vec<2>(0, 0), grid, scenes::Example3{}, solver);
@@ -784,8 +689,8 @@ TEST(TimeFreezingSimulation, FrozenPhaseDriftIsRemovedBySideSelectionOrRefinemen
               << sim.solution.ipopt_iterations << " Ipopt iterations)\n";
     return e;
   };
-  const FesdOptions no_side = o;  // contact_side_weight 0, the default
-  o.contact_side_weight = 1e-2;
+  const FesdOptions no_side = o;  // regularisation.contact_side 0, the default
+  o.regularisation.contact_side = 1e-2;
   MpccSolverOptions solver;
   const Vec<5> plain = error_at_the_end(no_side, solver, "no side selection");
   EXPECT_GT(std::abs(plain[1]), 1e-6) << "the drift this test is about (if it vanished, update the docs)";
@@ -793,15 +698,11 @@ TEST(TimeFreezingSimulation, FrozenPhaseDriftIsRemovedBySideSelectionOrRefinemen
   const Vec<5> refined = error_at_the_end(no_side, solver, "no side selection, refined to 1e-14");
   EXPECT_LE(refined.cwiseAbs().maxCoeff(), 1e-7);
   // With the selection the end state is exact to the homotopy's tolerance; what remains is a remnant
-  // of the drift at residual 1e-9, in q2, and which of two equal discrete problems keeps it depends
-  // on Ipopt's path: the plain and the lifted step functions (the same discrete problem) measured
-  // 1.1e-11 and 1.4e-9 before the state carried the integrated gaps (time_freezing_system.hpp),
-  // 1.4e-9 and 2.7e-13 after (546 and 521 Ipopt iterations).
+  // of the drift at residual 1e-9, in q2, whose size depends on Ipopt's path (measured 1.1e-11
+  // before the state carried the integrated gaps, time_freezing_system.hpp; 1.4e-9 after, in 546
+  // Ipopt iterations).
   const Vec<5> selected = error_at_the_end(o, MpccSolverOptions{}, "side selection 1e-2");
   EXPECT_LE(selected.cwiseAbs().maxCoeff(), 1e-8);
-  o.lift_step_functions = true;
-  const Vec<5> lifted = error_at_the_end(o, MpccSolverOptions{}, "side selection 1e-2, lifted step functions");
-  EXPECT_LE(lifted.cwiseAbs().maxCoeff(), 1e-8);
 }
 
 // NOSNOC's smallest time-freezing example: the mass lands at t = sqrt(2/g) with v = (3, -sqrt(2 g)),
@@ -873,14 +774,8 @@ TEST(TimeFreezingSimulation, FrictionalLandingStopsAtTheClosedForm) {
 // push that interval 1 cannot undo (measured: not converged, complementarity 1.2e-2, 18,310
 // Ipopt iterations); 1e-2 and 1e-4 fail in other intervals, so this is a narrow window, not a fix
 // (timefreezing issue, open).
-/// A constant input law.
-struct ConstantInput3 {
-  Vec<3> u;
-  template <class T>
-  VecT<T, 3> input(const T&, const VecT<T, 3>&) const {
-    return VecT<T, 3>(T(u[0]), T(u[1]), T(u[2]));
-  }
-};
+/// A constant input law (the scene library's, compiled there).
+using ConstantInput3 = scenes::PlankBoxConstantInput;
 
 TEST(TimeFreezingSimulation, PlankBoxFlatLandingAgreesWithTheEventDrivenSimulator) {
 #if defined(SALTUS_TESTS_UNDER_SANITIZERS)
@@ -890,15 +785,15 @@ TEST(TimeFreezingSimulation, PlankBoxFlatLandingAgreesWithTheEventDrivenSimulato
   const Vec<8> x0 = scene.flat_state(0.6, 0.05);
   const TimeFreezingSystem<PlankBox> system(scene, 50.0);
   FesdOptions o;
-  o.stages = 2;
-  o.control_intervals = 10;
-  o.finite_elements = 4;
-  o.horizon = 0.5;
+  o.grid.stages = 2;
+  o.grid.control_intervals = 10;
+  o.grid.finite_elements = 4;
+  o.grid.horizon = 0.5;
   // The corners' gaps on the rocking plank are nonlinear in q: with gap(q) the resting box's
   // control intervals are overdetermined (fesd.hpp, "INTEGRATED GAP"; measured: interval 9's
   // homotopy stalls at 1e-9 after 3,000 iterations in one step, where it passed in 30 s in total
   // before the state carried the integrated gaps, by Ipopt's path); with them 1,449 iterations, 15 s.
-  o.integrated_gap = true;
+  o.switching.integrated_gap = true;
   MpccSolverOptions solver;
   solver.sigma_0 = 1e-3;
   const auto sim = simulate_time_freezing(system, Vec<4>(x0.head<4>()), Vec<4>(x0.tail<4>()), o,
@@ -1082,7 +977,7 @@ TEST(TimeFreezingRecovery, ATangentialLiftOffIsReadWhereTheClosingWeightVanishes
 }
 
 // An impact absorbed into a flowing element (recover_trajectory's docstring; the flagships'
-// velocity_switch_detection = false): the element after the touchdown runs the clock (0.1 -> 0.12
+// switching.velocity_detection = false): the element after the touchdown runs the clock (0.1 -> 0.12
 // at its first stage) while the normal velocity goes from -1 to 0. Read as an impact at t = 0.1
 // with x+ at that stage, held over the advance, then the slide.
 TEST(TimeFreezingRecovery, AnImpactAbsorbedIntoAFlowingElementIsAnImpactEvent) {

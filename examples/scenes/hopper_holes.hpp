@@ -31,9 +31,9 @@
 #include "scenes/hopper.hpp"
 #include "scenes/ocp_grid.hpp"
 
-#include <saltus/timefreezing/discretisation/fesd.hpp>
-#include <saltus/timefreezing/mpcc/mpcc_solver.hpp>
 #include <saltus/timefreezing/formulation/time_freezing_system.hpp>
+#include <saltus/timefreezing/instantiate.hpp>
+#include <saltus/timefreezing/mpcc/mpcc_solver.hpp>
 
 #include <algorithm>
 #include <array>
@@ -109,11 +109,12 @@ struct HopperOverThreeHoles {
   Vec<4> terminal_lower() const { return q_target(); }
   Vec<4> terminal_upper() const { return q_target(); }
 
-  /// The paper's discretisation (TF Section 6, NOSNOC's script: nosnoc_hopper_baseline.md section 4):
+  /// The paper's discretisation (time-freezing paper, Nurkanović, Albrecht, Brogliato, Diehl,
+  /// Automatica 2023, Section 6, as in NOSNOC's hopper script):
   /// N = 20 control intervals, 3 finite elements each, Radau IIA with n_s stages, numerical horizon
   /// T~ = T with the terminal clock constraint t(T~) = T, speed of time s in [1, 5] with
   /// rho_s = 0.01, heuristic step equilibration rho_h = 1, |u_i| <= 60; one change:
-  /// cross-complementarity for the gap only (FesdOptions::velocity_switch_detection = false: the
+  /// cross-complementarity for the gap only (FesdOptions::switching.velocity_detection = false: the
   /// foot's velocities change sign in flight, bench/README.md).
   static timefreezing::FesdOptions grid(int control_intervals = 20, int finite_elements = 3, int stages = 2) {
     return terminal_clock_grid(horizon, control_intervals, finite_elements, stages,
@@ -215,7 +216,7 @@ struct HopperOverThreeHoles {
 /// Its solver settings are the flagship's with three changes, which make it converge
 /// (bench/README.md, "The one-hole bed converges"; measured with `hopper_ocp --one-hole`, a
 /// scratch driver and the test HopperOverOneHole.CoarseGridConvergesAndJumpsTheHole):
-/// - the contact-side selection rho_c = 1e-2 (grid(); FesdOptions::contact_side_weight): it pushes
+/// - the contact-side selection rho_c = 1e-2 (grid(); FesdOptions::regularisation.contact_side): it pushes
 ///   alpha_gap to 0 in the relaxed stances, where a fractional alpha_gap next to the sliding mode
 ///   on J_n v leaves the weights of the Filippov field undetermined (the branch NLPs from such
 ///   iterates have rank-deficient active Jacobians; measured);
@@ -238,7 +239,7 @@ struct HopperOverOneHole : HopperOverThreeHoles {
     timefreezing::FesdOptions o =
         terminal_clock_grid(horizon, control_intervals, finite_elements, stages,
                             Eigen::VectorXd::Constant(2, -torque_limit), Eigen::VectorXd::Constant(2, torque_limit));
-    o.contact_side_weight = contact_side_weight;
+    o.regularisation.contact_side = contact_side_weight;
     return o;
   }
   /// The flagship's homotopy (HopperOverThreeHoles::solver) with primal-only warm starts and 11
@@ -265,3 +266,8 @@ struct HopperOverOneHole : HopperOverThreeHoles {
 };
 
 }  // namespace saltus::scenes
+
+// Compiled once in hopper_holes.cpp: the hopper's recovery and both hole OCPs.
+SALTUS_DECLARE_TIME_FREEZING_SCENE(saltus::scenes::Hopper)
+SALTUS_DECLARE_TIME_FREEZING_OCP(saltus::scenes::Hopper, saltus::scenes::HopperOverThreeHoles)
+SALTUS_DECLARE_TIME_FREEZING_OCP(saltus::scenes::Hopper, saltus::scenes::HopperOverOneHole)

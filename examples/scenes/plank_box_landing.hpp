@@ -26,9 +26,9 @@
 #include "scenes/ocp_grid.hpp"
 #include "scenes/plank_box.hpp"
 
-#include <saltus/timefreezing/discretisation/fesd.hpp>
-#include <saltus/timefreezing/mpcc/mpcc_solver.hpp>
 #include <saltus/timefreezing/formulation/time_freezing_system.hpp>
+#include <saltus/timefreezing/instantiate.hpp>
+#include <saltus/timefreezing/mpcc/mpcc_solver.hpp>
 
 #include <algorithm>
 #include <array>
@@ -96,7 +96,7 @@ struct PlankBoxFlatLanding {
   /// terminal_clock_grid (scenes/ocp_grid.hpp: speed of time s in [1, 5], needed because the clock
   /// runs slower than tau while the box slides, a_n / (a_n + g) for a resting box; terminal clock;
   /// gap-only cross-complementarity), the bounds of u, the gap scale, and the integrated gaps
-  /// (FesdOptions::integrated_gap: with gap(q) the branch NLP of the sliding stance is
+  /// (FesdOptions::switching.integrated_gap: with gap(q) the branch NLP of the sliding stance is
   /// overdetermined and the homotopy stalls at complementarity 8.4e-7; bench/README.md).
   static timefreezing::FesdOptions grid(int control_intervals = 15, int finite_elements = 2, int stages = 2) {
     timefreezing::FesdOptions o =
@@ -106,10 +106,10 @@ struct PlankBoxFlatLanding {
     // parameter sigma then leaves a phantom support of a_n sigma / (100 gap) in flight
     // (bench/README.md, "Plank-box flat landing": with K_gap = 1 the first relaxed NLPs float the
     // box for free and the homotopy fails at sigma = 0.1).
-    o.switching_scale = {100.0, 1.0, 1.0};
+    o.switching.scale = {100.0, 1.0, 1.0};
     // The corners' gaps on the rotating plank are nonlinear in q: read the integrated gaps
     // (fesd.hpp, "INTEGRATED GAP"), so that the branch NLP of a sliding stance is consistent.
-    o.integrated_gap = true;
+    o.switching.integrated_gap = true;
     return o;
   }
   /// The largest |theta - phi| over the given stage points and the target error (box pose and
@@ -176,8 +176,8 @@ struct PlankBoxShortLanding : PlankBoxFlatLanding {
   static timefreezing::FesdOptions grid(int intervals = control_intervals, int finite_elements = 2, int stages = 2) {
     // The flagship's grid with this horizon (terminal_clock_grid reads T in these two fields only).
     timefreezing::FesdOptions o = PlankBoxFlatLanding::grid(intervals, finite_elements, stages);
-    o.horizon = horizon;
-    o.physical_horizon = horizon;
+    o.grid.horizon = horizon;
+    o.clock.physical_horizon = horizon;
     return o;
   }
   static timefreezing::MpccSolverOptions solver() {
@@ -194,4 +194,23 @@ struct PlankBoxShortLanding : PlankBoxFlatLanding {
   }
 };
 
+/// A constant input u = (F_x, F_y, tau) on the box, as an input law of simulate_time_freezing (the
+/// box lowered onto the plank in tests/test_time_freezing.cpp; the piecewise-constant re-simulation
+/// of bench/plank_box_refinement.cpp).
+struct PlankBoxConstantInput {
+  Vec<3> u;
+  template <class T>
+  VecT<T, 3> input(const T&, const VecT<T, 3>&) const {
+    return VecT<T, 3>(T(u[0]), T(u[1]), T(u[2]));
+  }
+};
+
 }  // namespace saltus::scenes
+
+// Compiled once in plank_box_landing.cpp: the plank-box's recovery, its simulations without input
+// and under a constant input, and both landing OCPs.
+SALTUS_DECLARE_TIME_FREEZING_SCENE(saltus::scenes::PlankBox)
+SALTUS_DECLARE_TIME_FREEZING_SIMULATION(saltus::scenes::PlankBox, saltus::timefreezing::NoObjective)
+SALTUS_DECLARE_TIME_FREEZING_SIMULATION(saltus::scenes::PlankBox, saltus::scenes::PlankBoxConstantInput)
+SALTUS_DECLARE_TIME_FREEZING_OCP(saltus::scenes::PlankBox, saltus::scenes::PlankBoxFlatLanding)
+SALTUS_DECLARE_TIME_FREEZING_OCP(saltus::scenes::PlankBox, saltus::scenes::PlankBoxShortLanding)

@@ -7,9 +7,9 @@
 #include "scenes/point_mass.hpp"
 
 #include <saltus/hybrid/vocabulary/scene.hpp>
-#include <saltus/timefreezing/discretisation/fesd.hpp>
-#include <saltus/timefreezing/mpcc/mpcc_solver.hpp>
 #include <saltus/timefreezing/formulation/time_freezing_system.hpp>
+#include <saltus/timefreezing/instantiate.hpp>
+#include <saltus/timefreezing/mpcc/mpcc_solver.hpp>
 
 #include <cmath>
 
@@ -52,13 +52,13 @@ struct FrictionalLanding {
   static timefreezing::TimeFreezingSystem<PointMass> system() { return {PointMass(parameters()), 20.0}; }
   static timefreezing::FesdOptions grid() {
     timefreezing::FesdOptions o;
-    o.stages = 2;
-    o.control_intervals = 20;
-    o.finite_elements = 5;
-    o.horizon = 2.5;
+    o.grid.stages = 2;
+    o.grid.control_intervals = 20;
+    o.grid.finite_elements = 5;
+    o.grid.horizon = 2.5;
     // The contact-side selection (fesd.hpp): sliding keeps the gap at exactly zero, where alpha_gap
     // is free; measured stop error 2.0e-6 without it, 6.2e-12 with it (bench/README.md).
-    o.contact_side_weight = 1e-2;
+    o.regularisation.contact_side = 1e-2;
     return o;
   }
   static Vec<2> q0() { return Vec<2>(0, 1); }
@@ -94,15 +94,15 @@ struct PointMassToTheTarget {
   }
   static timefreezing::FesdOptions grid() {
     timefreezing::FesdOptions o;
-    o.stages = 2;
-    o.control_intervals = 10;
-    o.finite_elements = 3;
-    o.horizon = 2.0;
-    o.clock = timefreezing::ClockConstraint::Terminal;
-    o.physical_horizon = 2.0;
-    o.speed_of_time_max = 5.0;
-    o.control_lower = Eigen::VectorXd::Constant(2, -20.0);
-    o.control_upper = Eigen::VectorXd::Constant(2, 20.0);
+    o.grid.stages = 2;
+    o.grid.control_intervals = 10;
+    o.grid.finite_elements = 3;
+    o.grid.horizon = 2.0;
+    o.clock.constraint = timefreezing::ClockConstraint::Terminal;
+    o.clock.physical_horizon = 2.0;
+    o.clock.speed_of_time_max = 5.0;
+    o.bounds.control_lower = Eigen::VectorXd::Constant(2, -20.0);
+    o.bounds.control_upper = Eigen::VectorXd::Constant(2, 20.0);
     return o;
   }
   static timefreezing::MpccSolverOptions solver() {
@@ -116,3 +116,10 @@ struct PointMassToTheTarget {
 };
 
 }  // namespace saltus::scenes
+
+// Compiled once in time_freezing_examples.cpp: the point mass's recovery, its simulations without
+// input and under Example 3's input law, and the OCP to the target.
+SALTUS_DECLARE_TIME_FREEZING_SCENE(saltus::scenes::PointMass)
+SALTUS_DECLARE_TIME_FREEZING_SIMULATION(saltus::scenes::PointMass, saltus::timefreezing::NoObjective)
+SALTUS_DECLARE_TIME_FREEZING_SIMULATION(saltus::scenes::PointMass, saltus::scenes::Example3)
+SALTUS_DECLARE_TIME_FREEZING_OCP(saltus::scenes::PointMass, saltus::scenes::PointMassToTheTarget)

@@ -8,7 +8,7 @@
 // Evaluating them along nq directions and applying the chain rule once costs a small fraction of
 // carrying the nz directions through every operation of the scene's kinematics
 // (bench/fesd_callbacks.cpp: the measurement, bench/README.md: the table). Used by
-// TimeFreezingSystem when FesdOptions::composed_kinematics is on.
+// a caller that differentiates along many more directions than n.
 //
 // compose(x, f) returns f(x) with the derivatives x carries: f is a generic callable
 // `[]<class S>(const VecT<S, n>&) -> VecT<S, m>`; it is evaluated at the innermost values of x with

@@ -1,4 +1,5 @@
 // Forwarding header, kept for one release (0.2): the header moved to its stage folder.
-// Include <saltus/timefreezing/drivers/optimal_control.hpp> instead.
+// Include <saltus/timefreezing/drivers/optimal_control.hpp> (declarations) or
+// <saltus/timefreezing/header_only.hpp> (definitions) instead.
 #pragma once
-#include <saltus/timefreezing/drivers/optimal_control.hpp>
+#include <saltus/timefreezing/header_only.hpp>

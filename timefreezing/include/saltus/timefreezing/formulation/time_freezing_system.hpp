@@ -17,7 +17,7 @@
 // the motion), so the discrete problem with both exactly zero has no solution in a moving stance
 // (derivation in fesd.hpp, "INTEGRATED GAP"). g's stage values are g_start + h sum_l a_rl s Theta_l
 // J_n v_l, which vanish whenever the stage values of J_n v do: the two conditions then agree
-// exactly, as they do for a gap linear in q. FesdOptions::integrated_gap chooses which gap the
+// exactly, as they do for a gap linear in q. FesdOptions::switching.integrated_gap chooses which gap the
 // switching functions read.
 //
 // ONE CONTACT i (eq. 25). Switching functions c_i = (gap_i(q), J_n,i(q) v, J_t,i(q) v): gap, normal
@@ -57,12 +57,12 @@
 #pragma once
 
 #include <saltus/ad/autodiff.hpp>
-#include <saltus/ad/compose.hpp>
 #include <saltus/hybrid/vocabulary/errors.hpp>
 #include <saltus/hybrid/vocabulary/scene.hpp>
 
 #include <Eigen/Core>
 
+#include <array>
 #include <cmath>
 
 namespace saltus::timefreezing {
@@ -108,42 +108,9 @@ class TimeFreezingSystem {
   double auxiliary_acceleration() const { return a_n_; }
   bool has_friction(int i) const { return planar_[i]; }
 
-  /// Whether the contact kinematics (gaps, J_n, J_t: functions of q alone) are evaluated along the
-  /// nq coordinates and chained into the caller's AD type (ad::compose) instead of at that type
-  /// (default: false). The same values and derivatives up to rounding, and cheaper where the
-  /// caller differentiates along many more than nq directions: the FESD Hessian of the plank-box
-  /// 2.8x, of the hopper 1.3-1.8x cheaper (runs on a loaded machine, bench/README.md, "FESD
-  /// callbacks"). Off by default
-  /// because the flagship homotopies' paths are sensitive to rounding: with it, the plank-box
-  /// flagship stalled at sigma = complementarity = 4.5e-3 where it converges without (measured). Set
-  /// through FesdOptions::composed_kinematics.
-  void set_composed_kinematics(bool on) { composed_kinematics_ = on; }
-  bool composed_kinematics() const { return composed_kinematics_; }
-
-  /// Per contact i, at offset i (2 nq + 1): gap_i(q) [m], J_n,i(q) (size nq), J_t,i(q) (size nq;
-  /// zero for a frictionless contact), evaluated along the nq coordinates and chained into T by
-  /// ad::compose whatever composed_kinematics() says (it is the path that flag selects).
-  static constexpr int kinematics_stride = 2 * nq + 1;
-  static constexpr int kinematics_size = nc > 0 ? nc * kinematics_stride : 1;
-  template <class T>
-  VecT<T, kinematics_size> contact_kinematics(const VecT<T, nq>& q) const {
-    return ad::compose(q, [this]<class R>(const VecT<R, nq>& qr) { return this->template kinematics_direct<R>(qr); });
-  }
-
   /// c(q, v) (size 3 nc): per contact (gap, J_n v, J_t v); the third is 1 for a frictionless one.
   template <class T>
   VecT<T, n_switch> switching_functions(const VecT<T, nq>& q, const VecT<T, nq>& v) const {
-    if (composed_kinematics_) {
-      const VecT<T, kinematics_size> k = contact_kinematics<T>(q);
-      VecT<T, n_switch> c;
-      for (int i = 0; i < nc; ++i) {
-        const int base = i * kinematics_stride;
-        c[3 * i] = k[base];
-        c[3 * i + 1] = T(k.template segment<nq>(base + 1).dot(v));
-        c[3 * i + 2] = planar_[i] ? T(k.template segment<nq>(base + 1 + nq).dot(v)) : T(1.0);
-      }
-      return c;
-    }
     using D = ad::Dual<T, 1>;
     const VecT<D, nq> qd = seeded_along<T>(q, v);
     VecT<T, n_switch> c;
@@ -167,13 +134,6 @@ class TimeFreezingSystem {
   VecT<T, (nc > 0 ? nc : 1)> normal_velocities(const VecT<T, nq>& q, const VecT<T, nq>& v) const {
     VecT<T, (nc > 0 ? nc : 1)> out;
     out.setZero();
-    if (composed_kinematics_) {
-      if constexpr (nc > 0) {
-        const VecT<T, kinematics_size> k = contact_kinematics<T>(q);
-        for (int i = 0; i < nc; ++i) out[i] = T(k.template segment<nq>(i * kinematics_stride + 1).dot(v));
-      }
-      return out;
-    }
     const VecT<ad::Dual<T, 1>, nq> qd = seeded_along<T>(q, v);
     for (int i = 0; i < nc; ++i) out[i] = scene_.template gap<ad::Dual<T, 1>>(i, qd).derivatives()[0];
     return out;
@@ -208,26 +168,10 @@ class TimeFreezingSystem {
     return force_from_weights<T>(q, v, u, ode_weight<T>(alpha), closing, alpha);
   }
 
-  /// The LIFTED form of the step DCS (FesdOptions::lift_step_functions): contact i's closing
-  /// weight beta_i = (1 - alpha_i1)(1 - alpha_i2) = theta_i^+ + theta_i^- is a variable of its own
-  /// (size nc), so that theta_i^free = 1 - beta_i, theta_i^+ = beta_i alpha_i3, theta_i^- =
-  /// beta_i (1 - alpha_i3): every weight is at most bilinear (the unlifted theta_i^+ is trilinear,
-  /// and Theta of nc contacts has degree 2 nc). Equal to ode_weight / generalised_force wherever
-  /// beta_i = (1 - alpha_i1)(1 - alpha_i2). Theta = prod_i (1 - beta_i).
-  template <class T>
-  static T ode_weight_lifted(const VecT<T, (nc > 0 ? nc : 1)>& closing) {
-    T theta(1.0);
-    for (int i = 0; i < nc; ++i) theta = T(theta * T(1.0 - closing[i]));
-    return theta;
-  }
-  /// M(q) v' of the lifted form: only alpha_i3 of alpha (size 3 nc) is read; closing has size nc.
-  template <class T>
-  VecT<T, nq> generalised_force_lifted(const VecT<T, nq>& q, const VecT<T, nq>& v, const VecT<T, nu>& u,
-                                       const VecT<T, (nc > 0 ? nc : 1)>& closing, const VecT<T, n_switch>& alpha) const {
-    return force_from_weights<T>(q, v, u, ode_weight_lifted<T>(closing), closing, alpha);
-  }
-
  private:
+  static constexpr int kinematics_stride = 2 * nq + 1;
+  static constexpr int kinematics_size = nc > 0 ? nc * kinematics_stride : 1;
+
   // q seeded with the direction v: functions of it carry their directional derivative along v
   // (J v for the gap and the tangent position), one more AD level with one direction.
   template <class T>
@@ -245,8 +189,7 @@ class TimeFreezingSystem {
     if constexpr (nu > 0) f += scene_input_matrix<S, T>(scene_, q) * u;
     f *= theta;
     if constexpr (nc > 0) {
-      // The direct evaluation does the same arithmetic as the scene's gap differentiated in place.
-      const VecT<T, kinematics_size> k = composed_kinematics_ ? contact_kinematics<T>(q) : kinematics_direct<T>(q);
+      const VecT<T, kinematics_size> k = kinematics_direct<T>(q);
       for (int i = 0; i < nc; ++i) {
         const T plus = T(closing[i] * alpha[3 * i + 2]);
         const T minus = T(closing[i] * T(1.0 - alpha[3 * i + 2]));
@@ -257,7 +200,8 @@ class TimeFreezingSystem {
     return f;
   }
 
-  // contact_kinematics at R itself: the gradients by one more AD level along the nq coordinates.
+  // Per contact i, at offset i (2 nq + 1): gap_i(q) [m], J_n,i(q) (size nq), J_t,i(q) (size nq;
+  // zero for a frictionless contact): the gradients by one more AD level along the nq coordinates.
   template <class R>
   VecT<R, kinematics_size> kinematics_direct(const VecT<R, nq>& q) const {
     VecT<R, kinematics_size> k;
@@ -279,7 +223,6 @@ class TimeFreezingSystem {
 
   S scene_;
   double a_n_;
-  bool composed_kinematics_ = false;
   std::array<double, (nc > 0 ? nc : 1)> mu_{};
   std::array<bool, (nc > 0 ? nc : 1)> planar_{};
 };
