@@ -5,9 +5,9 @@
 // test's time in the second-order AD); this bench measures what a change to it buys (the contact
 // kinematics chained in by ad::compose were measured with it: docs/decisions/fesd-composed-kinematics.md).
 //
-// Each problem is evaluated at a fixed point inside its bounds (the derivative tests'
-// interior_point, seed 7) and with fixed multipliers (Eigen's Random after std::srand(11)), so
-// every version of the code times the same arithmetic. Before timing, the bench prints a checksum
+// Each problem is evaluated at a fixed point inside its bounds (evaluation_point below, seed 7)
+// and with fixed multipliers (Eigen's Random after std::srand(11)), so every version of the code
+// times the same arithmetic. Before timing, the bench prints a checksum
 // of each callback's values: a change that should not change the numbers must keep them (to
 // rounding).
 //
@@ -15,21 +15,45 @@
 #include "scenes/hopper_holes.hpp"
 #include "scenes/plank_box_landing.hpp"
 
-#include "mpcc_support.hpp"  // tests/: the derivative tests' interior_point
-
 #include <saltus/timefreezing/discretisation/fesd.hpp>
 
 #include <benchmark/benchmark.h>
 
 #include <Eigen/Core>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <memory>
+#include <random>
 
 namespace {
 
 using namespace saltus;
+
+// Where the callbacks are timed: inside the variable bounds and away from the initial point (a
+// point an iteration could visit, not the start's special values). With w_i uniform in [0, 1) from std::mt19937(seed): a variable
+// bounded on both sides sits at the fraction 0.1 + 0.8 w_i of its range, one bounded on one side
+// 0.1 + 0.2 w_i inside that bound from the initial point (or from the bound, if the initial point
+// is not that far inside), a free one at the initial point plus 0.4 w_i - 0.2.
+Eigen::VectorXd evaluation_point(const timefreezing::Mpcc& problem, unsigned seed) {
+  const int n = problem.variable_count(), m = problem.constraint_count();
+  Eigen::VectorXd x(n), lower(n), upper(n), g_lower(m), g_upper(m);
+  problem.initial_point(x);
+  problem.bounds(lower, upper, g_lower, g_upper);
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> uniform(0.0, 1.0);
+  for (int i = 0; i < n; ++i) {
+    const double w = uniform(rng);
+    const bool below = std::isfinite(lower[i]), above = std::isfinite(upper[i]);
+    if (below && above) x[i] = lower[i] + (0.1 + 0.8 * w) * (upper[i] - lower[i]);
+    else if (below) x[i] = std::max(x[i], lower[i]) + 0.1 + 0.2 * w;
+    else if (above) x[i] = std::min(x[i], upper[i]) - 0.1 - 0.2 * w;
+    else x[i] += 0.4 * w - 0.2;
+  }
+  return x;
+}
 
 struct Evaluation {
   std::unique_ptr<timefreezing::Mpcc> problem;
@@ -40,7 +64,7 @@ template <class Scene, class Ocp>
 Evaluation make(const timefreezing::FesdOptions& grid) {
   Evaluation e;
   e.problem = std::make_unique<timefreezing::FesdMpcc<Scene, Ocp>>(Ocp::system(), Ocp{}, Ocp::q0(), Ocp::v0(), grid);
-  e.x = saltus::testing::interior_point(*e.problem, 7);  // inside the bounds, away from the start
+  e.x = evaluation_point(*e.problem, 7);
   std::srand(11);
   e.multipliers = Eigen::VectorXd::Random(e.problem->constraint_count());
   e.g.resize(e.problem->constraint_count());

@@ -6,15 +6,17 @@
 // `plank_box --json` instead solves the plank-box's flagship OCP (scenes/plank_box_landing.hpp):
 // land flat, slide, lift off and stop above the plank's far end, minimising the integral of u'u;
 // prints the report of ocp_report.hpp, progress lines (one per homotopy step) on stderr; exit
-// status 0 only when it converged. A converged reference is then analysed (ocp_analysis.hpp, the
-// report's "analysis"): its re-simulation's jump gains (conewise at the flat landing), an LQR
-// tracking design along it with its stability check, and 100 perturbed closed-loop runs. The
-// analysis's outcome does not change the exit status; its failures are reported in it.
+// status 0 only when it converged. A converged reference is then analysed (analyse_reference,
+// saltus/sensitivity/analysis/reference_analysis.hpp; the report's "analysis"): its re-simulation's
+// jump gains (conewise at the flat landing), an LQR tracking design along it with its stability
+// check (scenes/plank_box_tracking.hpp), and 100 perturbed closed-loop runs. The analysis's outcome
+// does not change the exit status; its failures are reported in it.
 #include <saltus/hybrid/vocabulary/trajectory_report.hpp>
+#include <saltus/sensitivity/analysis/reference_analysis_io.hpp>
 #include <saltus/timefreezing/drivers/optimal_control.hpp>
 #include "scenes/all_scenes.hpp"
 #include "scenes/plank_box_landing.hpp"
-#include "plank_box_tracking.hpp"
+#include "scenes/plank_box_tracking.hpp"
 #include "ocp_report.hpp"
 
 #include <cstdio>
@@ -36,9 +38,11 @@ int optimal_flat_landing() {
   std::optional<PolishResult<scenes::PlankBox>> resim;
   auto j = examples::ocp_report(scene, r, {f.path_violation, f.path_violation > 1e-6 ? "theta - phi = 0" : "", f.target_error},
                                 &resim);
-  if (resim)
-    j["analysis"] =
-        examples::analyse_reference(scene, resim->trajectory, SimulationOptions{}, examples::plank_box_tracking_setup(100));
+  if (resim) {
+    ReferenceAnalysisOptions<scenes::PlankBox> analysis = scenes::plank_box_tracking(100);
+    analysis.progress = &std::cerr;
+    j["analysis"] = to_json(analyse_reference(scene, resim->trajectory, SimulationOptions{}, analysis));
+  }
   std::cout << j.dump(2) << "\n";
   return r.converged() ? 0 : 1;
 }

@@ -14,12 +14,12 @@
 //     {"cases": [{"name", "design", "verdict", "upper_bound", "lower_bound", "predicted_rate",
 //                 "observed_rate", "runs", "kept_event_sequence", "failed", "agree", "seconds",
 //                 "monte_carlo_seconds", ...}], "parallel_speedup": {...}}
-// Agreement: the runs that keep the nominal event sequence all shrink (verdict stable) or the
-// worst grows (unstable), their observed amplification is the first-order one within 5 %
-// (|log(observed / predicted)| <= 0.05), and the largest observed rate is not above the
-// predicted bound (1e-3 1/s slack).
+// Agreement (monte_carlo_agrees, saltus/sensitivity/analysis/reference_analysis.hpp): the runs that
+// keep the nominal event sequence all shrink (verdict stable) or the worst grows (unstable), their
+// observed amplification is the first-order one within 5 % (|log(observed / predicted)| <= 0.05),
+// and the largest observed rate is not above the predicted bound (1e-3 1/s slack).
+#include "scenes/plank_box_tracking.hpp"
 #include "scenes/references.hpp"
-#include "plank_box_tracking.hpp"
 
 #include <saltus/sensitivity/sensitivity.hpp>
 
@@ -105,7 +105,7 @@ CaseResult run_case(const std::string& name, const std::string& design, const re
   // The finite-horizon bound is on a(T); the periodic one on the asymptotic rate, which a finite
   // batch does not bound from above (transients): there only the sampled prediction is compared.
   CaseResult out;
-  out.agree = examples::monte_carlo_agrees(verdict, m, predicted_rate, !periodic);
+  out.agree = monte_carlo_agrees(verdict, m, predicted_rate, !periodic);
   json row;
   row["name"] = name;
   row["design"] = design;
@@ -187,13 +187,13 @@ int main(int argc, char** argv) {
     Kp.leftCols<3>() = Vec<3>(60.0, 60.0, 6.0).asDiagonal();
     Kd.leftCols<3>() = Vec<3>(10.0, 10.0, 1.0).asDiagonal();
     // Deviations of the box's initial state (the plank starts at rest), measured on the box; the
-    // LQR weights on the box (plank_box_tracking.hpp, shared with the optimised landing's analysis).
-    const examples::ReferenceAnalysisSetup<S> box_tracking = examples::plank_box_tracking_setup(200);
-    const StabilityOptions<S>& check = box_tracking.check;
+    // LQR weights on the box (scenes/plank_box_tracking.hpp, shared with the optimised landing's analysis).
+    const ReferenceAnalysisOptions<S> box_tracking = scenes::plank_box_tracking(200);
+    const StabilityOptions<S>& check = box_tracking.stability;
     const MonteCarloOptions<S>& mc = box_tracking.monte_carlo;
     const int n = ol.segment_count();
-    const LqrDesign<S> lqr = lqr_design(ol, box_tracking.weights);  // the cost-to-go jump through the worst piece
-    add(run_case<S>("plank-box (flat landing)", box_tracking.design, ref, ol, lqr.gains, check, mc));
+    const LqrDesign<S> lqr = lqr_design(ol, box_tracking.design.weights);  // the cost-to-go jump through the worst piece
+    add(run_case<S>("plank-box (flat landing)", box_tracking.design.name, ref, ol, lqr.gains, check, mc));
     add(run_case<S>("plank-box (flat landing)", "box PD (60, 10; 6, 1)", ref, ol, GainSchedule<S>(n, pd_gain<S>(Kp, Kd)),
                     check, mc));
     add(run_case<S>("plank-box (flat landing)", "open-loop replay (K = 0)", ref, ol, GainSchedule<S>(n, Mat<3, 8>::Zero()),

@@ -3,9 +3,9 @@
 // Coulomb conditions and energy over 10,000 random pre-impact states per scene (redundant
 // contacts included), and bad input.
 #include "scenes/sampling.hpp"
+#include "scenes/three_point_block.hpp"
 
 #include "support.hpp"
-#include "three_point_block.hpp"
 
 #include <saltus/hybrid/dynamics/impact.hpp>
 #include <saltus/hybrid/header_only.hpp>  // the test-local Kane pendulum below
@@ -16,6 +16,8 @@
 
 namespace saltus::testing {
 namespace {
+
+using scenes::ThreePointBlock;
 
 TEST(Impact, BouncingBallReboundsWithItsRestitution) {
   scenes::BouncingBall ball;

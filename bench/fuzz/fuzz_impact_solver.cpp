@@ -18,7 +18,7 @@
 #include <saltus/hybrid/dynamics/jump_map.hxx>
 #include <saltus/hybrid/dynamics/kinematics.hxx>
 
-#include "three_point_block.hpp"
+#include "scenes/three_point_block.hpp"
 
 #include <array>
 #include <cmath>
@@ -32,7 +32,7 @@ namespace {
 
 using namespace saltus;
 
-using testing::ThreePointBlock;  // tests/three_point_block.hpp
+using scenes::ThreePointBlock;  // examples/scenes/three_point_block.hpp
 
 /// Point mass (2 kg) in space, q = (x, y, z), on the floor z = 0 with spatial friction.
 class SpatialPointMass {

@@ -11,7 +11,7 @@ jobs=${2:-1}
 out="$here/out"
 mkdir -p "$out"
 flags=(-std=c++20 -O1 -g1 -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=undefined
-       -I"$root/hybrid/include" -I"$root/tests" -isystem /usr/include/eigen3)
+       -I"$root/hybrid/include" -I"$root/examples" -isystem /usr/include/eigen3)
 status=0
 for target in fuzz_impact_solver fuzz_reference_csv; do
   if [[ ! -x "$out/$target" || "$here/$target.cpp" -nt "$out/$target" ]]; then

@@ -13,10 +13,12 @@
 // Compiled per scene: feedback_gain, JumpGainSolver, jump_gains, ConewiseJumpGain, LinearisedSystem,
 // numerical_jump_gain, numerical_conewise_piece, prediction_remainder, piece_remainder, and the
 // tracking design and stability check (GainSchedule, lqr_design, ReferenceSpreadingController, ClosedLoopLinearisation,
-// check_stability, check_periodic_stability, monte_carlo). The hybrid machinery they call must be
-// instantiated too (SALTUS_INSTANTIATE_SCENE). <saltus/sensitivity/header_only.hpp> is the header-only path.
+// check_stability, check_periodic_stability, monte_carlo), and the analysis of a reference in one call
+// (analyse_reference). The hybrid machinery they call must be instantiated too
+// (SALTUS_INSTANTIATE_SCENE). <saltus/sensitivity/header_only.hpp> is the header-only path.
 #pragma once
 
+#include <saltus/sensitivity/analysis/reference_analysis.hpp>
 #include <saltus/sensitivity/conewise_gain.hpp>
 #include <saltus/sensitivity/jump_gain.hpp>
 #include <saltus/sensitivity/linearisation.hpp>
@@ -57,7 +59,10 @@
       const saltus::ClosedLoopLinearisation<S>&, double, const saltus::StabilityOptions<S>&, double);            \
   prefix template saltus::MonteCarloReport saltus::monte_carlo<S>(                                               \
       const S&, const saltus::SimulationOptions&, const saltus::ReferenceSpreadingController<S>&,                \
-      const saltus::ClosedLoopLinearisation<S>&, const saltus::MonteCarloOptions<S>&);
+      const saltus::ClosedLoopLinearisation<S>&, const saltus::MonteCarloOptions<S>&);                         \
+  prefix template saltus::ReferenceAnalysis<S> saltus::analyse_reference<S>(                                     \
+      const S&, const saltus::HybridTrajectory<S>&, const saltus::SimulationOptions&,                            \
+      const saltus::ReferenceAnalysisOptions<S>&);
 
 /// In the scene's header, after SALTUS_DECLARE_SCENE: its sensitivity machinery is compiled elsewhere.
 #define SALTUS_DECLARE_SCENE_SENSITIVITY(S) SALTUS_SENSITIVITY_TEMPLATES(extern, S)

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <saltus/sensitivity/instantiate.hpp>
+#include <saltus/sensitivity/analysis/reference_analysis.hxx>
 #include <saltus/sensitivity/conewise_gain.hxx>
 #include <saltus/sensitivity/jump_gain.hxx>
 #include <saltus/sensitivity/linearisation.hxx>
@@ -10,6 +11,5 @@
 #include <saltus/sensitivity/prediction_check.hxx>
 #include <saltus/sensitivity/tracking.hxx>
 
-/// feedback_gain, JumpGainSolver, jump_gains, LinearisedSystem, numerical_jump_gain and
-/// prediction_remainder of scene S.
+/// Everything SALTUS_SENSITIVITY_TEMPLATES lists (instantiate.hpp), for scene S.
 #define SALTUS_INSTANTIATE_SCENE_SENSITIVITY(S) SALTUS_SENSITIVITY_TEMPLATES(, S)

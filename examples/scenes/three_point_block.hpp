@@ -1,5 +1,6 @@
-// A planar block with redundant contacts, used by test_impact and the impact-solver fuzz target
-// (bench/fuzz/fuzz_impact_solver.cpp): header-only, instantiated where it is used.
+// A planar block with redundant contacts, used by tests/test_impact.cpp and the impact-solver fuzz
+// target (bench/fuzz/fuzz_impact_solver.cpp): header-only, instantiated where it is used (not one of
+// the five scenes of all_scenes.hpp, and not compiled into saltus_scenes).
 #pragma once
 
 #include <saltus/hybrid/vocabulary/scene.hpp>
@@ -8,7 +9,7 @@
 #include <cmath>
 #include <optional>
 
-namespace saltus::testing {
+namespace saltus::scenes {
 
 // A planar block (1 kg, 0.4 m x 0.2 m, q = (x, y, theta)) with three planar-friction contacts
 // along its bottom edge, at x = -0.2, 0 and 0.2 m in the body frame: redundant collinear
@@ -58,4 +59,4 @@ class ThreePointBlock {
   std::array<ContactSpec, 3> points_;
 };
 
-}  // namespace saltus::testing
+}  // namespace saltus::scenes

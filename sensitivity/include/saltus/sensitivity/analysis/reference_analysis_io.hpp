@@ -1,0 +1,102 @@
+// Writing the report of analyse_reference (reference_analysis.hpp) as JSON (to_json, write_json;
+// nlohmann-json), as hybrid/vocabulary/trajectory_io.hpp writes a trajectory.
+#pragma once
+
+#include <saltus/sensitivity/analysis/reference_analysis.hpp>
+
+#include <nlohmann/json.hpp>
+
+#include <ostream>
+
+namespace saltus {
+
+/// The report as a JSON object; a stage's keys are written only when it completed:
+///   linearisation_seconds
+///   events               [{t (s), guards (their count), conewise; linear events: saltation_norm
+///                        (|G_z|_2); conewise events: pieces, unrealisable_orders (their count),
+///                        face_discontinuity (null when no face was compared)}]: every row built,
+///                        also when the jump gains' stage failed after some of them
+///   jump_gain_seconds
+///   design, lqr_seconds  the tracking design's name and time
+///   verdict              "stable", "unstable" or "undecided"
+///   upper_bound, lower_bound   of a(T)
+///   predicted_rate       log(upper_bound) / (T - t0), 1/s
+///   peak_amplification   the largest sampled a(t) (upper bound)
+///   check_seconds        the closed loop's linearisation and the check
+///   monte_carlo          {runs, kept_event_sequence, failed, failure_reasons, grew, shrank (kept
+///                        runs whose observed amplification is > 1, < 1), observed_rate_max (max
+///                        over kept runs of log(observed) / (T - t0), 1/s), predicted_rate_max (the
+///                        same of each run's first-order amplification), max_log_discrepancy (max
+///                        |log(observed / first order)|), perturbation_size, simulation_seconds (the
+///                        closed-loop runs), seconds (with the first-order predictions), threads}
+///   agree                monte_carlo_agrees against predicted_rate
+///   failure, failed_at   the message and the stage (to_string(AnalysisStage)) of a failed analysis
+///   seconds              the whole analysis
+/// Numbers keep their double values (a non-finite one is written as null); keys keep this order
+/// (nlohmann::ordered_json).
+template <Scene S>
+nlohmann::ordered_json to_json(const ReferenceAnalysis<S>& analysis) {
+  using json = nlohmann::ordered_json;
+  const auto done = [&](AnalysisStage s) { return analysis.completed(s); };
+  json j = json::object();
+  if (done(AnalysisStage::Linearisation)) {
+    j["linearisation_seconds"] = analysis.seconds.linearisation;
+    j["events"] = json::array();
+    for (const EventGainSummary& e : analysis.events) {
+      json row{{"t", e.t}, {"guards", e.guards}, {"conewise", e.conewise}};
+      if (e.conewise) {
+        row["pieces"] = e.pieces;
+        row["unrealisable_orders"] = e.unrealisable_orders;
+        row["face_discontinuity"] = e.face_discontinuity ? json(*e.face_discontinuity) : json(nullptr);
+      } else {
+        row["saltation_norm"] = e.saltation_norm;
+      }
+      j["events"].push_back(std::move(row));
+    }
+  }
+  if (done(AnalysisStage::JumpGains)) j["jump_gain_seconds"] = analysis.seconds.jump_gains;
+  if (done(AnalysisStage::TrackingDesign)) {
+    j["design"] = analysis.design_name;
+    j["lqr_seconds"] = analysis.seconds.tracking_design;
+  }
+  if (done(AnalysisStage::StabilityCheck) && analysis.stability) {
+    const StabilityReport& r = *analysis.stability;
+    j["verdict"] = to_string(r.verdict);
+    j["upper_bound"] = r.upper_bound;
+    j["lower_bound"] = r.lower_bound;
+    j["predicted_rate"] = r.upper_rate;
+    j["peak_amplification"] = r.peak_upper;
+    j["check_seconds"] = analysis.seconds.stability_check;
+  }
+  if (done(AnalysisStage::MonteCarlo) && analysis.monte_carlo) {
+    const MonteCarloReport& m = *analysis.monte_carlo;
+    j["monte_carlo"] = {{"runs", m.runs},
+                        {"kept_event_sequence", m.kept_event_sequence},
+                        {"failed", m.failed},
+                        {"failure_reasons", m.failure_reasons},
+                        {"grew", m.grew},
+                        {"shrank", m.shrank},
+                        {"observed_rate_max", m.observed_rate_max},
+                        {"predicted_rate_max", m.predicted_rate_max},
+                        {"max_log_discrepancy", m.max_log_discrepancy},
+                        {"perturbation_size", analysis.perturbation_size},
+                        {"simulation_seconds", m.seconds},
+                        {"seconds", analysis.seconds.monte_carlo},
+                        {"threads", m.threads}};
+    j["agree"] = analysis.agree;
+  }
+  if (analysis.failed_at) {
+    j["failure"] = analysis.failure;
+    j["failed_at"] = to_string(*analysis.failed_at);
+  }
+  j["seconds"] = analysis.seconds.total;
+  return j;
+}
+
+/// to_json(analysis) on one line, then a newline.
+template <Scene S>
+void write_json(std::ostream& os, const ReferenceAnalysis<S>& analysis) {
+  os << to_json(analysis).dump() << "\n";
+}
+
+}  // namespace saltus
