@@ -40,27 +40,6 @@
 
 namespace saltus::timefreezing {
 
-namespace detail {
-/// First-order seeds: value w_k, direction k.
-template <int N>
-VecT<Ad1<N>, N> seed_first(const Eigen::Matrix<double, N, 1>& w) {
-  VecT<Ad1<N>, N> x;
-  for (int k = 0; k < N; ++k) x[k] = ad::seed<N>(w[k], k);
-  return x;
-}
-/// Forward-over-forward seeds: value w_k, inner direction k, outer direction k.
-template <int N>
-VecT<Ad2<N>, N> seed_second(const Eigen::Matrix<double, N, 1>& w) {
-  VecT<Ad2<N>, N> x;
-  for (int k = 0; k < N; ++k) {
-    Eigen::Matrix<Ad1<N>, N, 1> outer;
-    for (int j = 0; j < N; ++j) outer[j] = Ad1<N>(j == k ? 1.0 : 0.0);
-    x[k] = Ad2<N>(ad::seed<N>(w[k], k), outer);
-  }
-  return x;
-}
-}  // namespace detail
-
 // ---- the applied input -------------------------------------------------------------------------
 template <Scene S, class Ocp>
 template <class T>

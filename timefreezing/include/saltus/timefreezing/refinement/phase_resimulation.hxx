@@ -120,18 +120,18 @@ std::vector<PhaseResimulation> resimulate_phases(const S& scene, const HybridTra
   return out;
 }
 
-/// (b) of refinement.hpp: the whole horizon open loop from x0. Returns the largest distance over
-/// the element boundaries at which the simulation has seen as many events as the reference, and in
-/// `compared_until` the last such time (the open-loop motion of an unstable gait departs).
 template <Scene S>
-double resimulate_open_loop(const S& scene, const HybridTrajectory<S>& traj, const std::vector<double>& element_times,
-                            const SimulationOptions& simulation, double& compared_until) {
+OpenLoopResimulation resimulate_open_loop(const S& scene, const HybridTrajectory<S>& traj,
+                                          const std::vector<double>& element_times,
+                                          const SimulationOptions& simulation) {
   SimulationOptions options = simulation;
   options.breakpoints = element_times;
   Simulator<S> sim(scene, options);
   const HybridTrajectory<S> run = sim.run(traj.state(0, traj.t_begin()), traj.t_begin(), traj.t_end(), traj.input);
-  double worst = 0.0;
-  compared_until = traj.t_begin();
+  OpenLoopResimulation out;
+  out.compared_until = traj.t_begin();
+  double& worst = out.max_error;
+  double& compared_until = out.compared_until;
   for (double t : element_times) {
     const int p = traj.segment_at(t), q = run.segment_at(t);
     if (p != q) break;
@@ -142,7 +142,7 @@ double resimulate_open_loop(const S& scene, const HybridTrajectory<S>& traj, con
                                 .maxCoeff());
     compared_until = t;
   }
-  return worst;
+  return out;
 }
 
 }  // namespace saltus::timefreezing

@@ -65,7 +65,7 @@ InputLaw<S> refined_input_law(const ScheduleRefinementNlp<S, Ocp>& nlp, const Ei
     const auto it = std::upper_bound(table->t.begin(), table->t.end(), t);
     const std::size_t k = it == table->t.begin() ? 0 : static_cast<std::size_t>(it - table->t.begin()) - 1;
     const VecT<double, nu> d = table->decision[k];
-    if constexpr (detail::HasInputLaw<Ocp, double, nu>) return VecT<double, nu>(ocp.template input<double>(t, d));
+    if constexpr (HasInputLaw<Ocp, double, nu>) return VecT<double, nu>(ocp.template input<double>(t, d));
     else return d;
   };
 }

@@ -77,6 +77,17 @@ struct PhaseResimulation {
   std::string note;            ///< why the comparison is partial, or "" (e.g. an unplanned event inside the phase)
 };
 
+/// The event-driven re-simulation of the whole refined horizon open loop from x0, under the
+/// optimal input ((b) of the checks).
+struct OpenLoopResimulation {
+  /// max ||x_sim - x_refined||_inf over the element boundaries at which the simulation has seen
+  /// the reference's segments so far (same segment index on both)
+  double max_error = 0.0;
+  /// the last such boundary [s]: an unstable motion departs open loop (a missed or extra event),
+  /// and the comparison stops there
+  double compared_until = 0.0;
+};
+
 template <Scene S>
 struct RefinementResult {
   /// "refined" when the last solve converged with every check below within its tolerance of the
@@ -102,6 +113,7 @@ struct RefinementResult {
   std::vector<RefinementSolve> solves;
   std::vector<PhaseResimulation> phase_resimulation;
   double phase_resim_max_error = 0.0;   ///< max over the phases' max_error
+  OpenLoopResimulation open_loop;
   int ipopt_iterations = 0;
   double seconds = 0.0;
 };
@@ -113,6 +125,13 @@ inline SimulationOptions precise_simulation() {
   o.integrator.absolute_tolerance = 1e-13;
   return o;
 }
+
+/// (b) of the checks: simulates `traj`'s input from its initial state over its horizon with
+/// `simulation` (breakpoints replaced by `element_times`) and compares at `element_times`.
+template <Scene S>
+OpenLoopResimulation resimulate_open_loop(const S& scene, const HybridTrajectory<S>& traj,
+                                          const std::vector<double>& element_times,
+                                          const SimulationOptions& simulation = precise_simulation());
 
 /// Refines `guess` (a schedule, its event times and a motion) for the OCP `ocp` (the struct the
 /// time-freezing solver takes) on `horizon`: solves the refinement NLP, edits the schedule up to

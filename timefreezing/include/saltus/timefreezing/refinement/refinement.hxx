@@ -139,6 +139,7 @@ RefinementResult<S> refine_schedule(const S& scene, const Ocp& ocp, const OcpHor
   detail::edit_schedule(scene, ocp, horizon, options, nlp, sol, out);
   out.phase_resimulation = resimulate_phases(scene, out.trajectory, out.schedule, out.element_times, simulation);
   for (const PhaseResimulation& r : out.phase_resimulation) out.phase_resim_max_error = std::max(out.phase_resim_max_error, r.max_error);
+  out.open_loop = resimulate_open_loop(scene, out.trajectory, out.element_times, simulation);
   out.stage = "refined";
   out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return out;

@@ -118,8 +118,8 @@ template <Scene S, class Ocp>
 class ScheduleRefinementNlp final : public Mpcc {
  public:
   static constexpr int nq = S::nq, nu = S::nu, nc = S::nc, nx = 2 * S::nq;
-  static constexpr int np = detail::path_count<Ocp>();
-  static constexpr int nt = detail::terminal_count<Ocp>();
+  static constexpr int np = path_constraint_count<Ocp>();
+  static constexpr int nt = terminal_constraint_count<Ocp>();
   static constexpr int max_validity = 3 * nc;
   /// Stage block: w = (x, u, t_p, t_{p+1}); outputs (h f [nx], h l [1], validity, path [np]).
   static constexpr int nw = nx + nu + 2;

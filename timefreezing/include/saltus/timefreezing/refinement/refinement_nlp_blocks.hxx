@@ -12,7 +12,7 @@ namespace saltus::timefreezing {
 template <Scene S, class Ocp>
 template <class T>
 VecT<T, S::nu> ScheduleRefinementNlp<S, Ocp>::input_law(const T& t, const VecT<T, S::nu>& decision) const {
-  if constexpr (detail::HasInputLaw<Ocp, T, nu>) return ocp_.template input<T>(t, decision);
+  if constexpr (HasInputLaw<Ocp, T, nu>) return ocp_.template input<T>(t, decision);
   else return decision;
 }
 
@@ -64,8 +64,8 @@ VecT<T, ScheduleRefinementNlp<S, Ocp>::stage_outputs> ScheduleRefinementNlp<S, O
   VecT<T, stage_outputs> out = VecT<T, stage_outputs>::Zero();
   out.template head<nx>() = h * ws.xdot;
   T running(0.0);
-  if constexpr (detail::HasTimedRunningCost<Ocp, T, nx, nu>) running = ocp_.template running_cost<T>(x, u, t);
-  else if constexpr (detail::HasRunningCost<Ocp, T, nx, nu>) running = ocp_.template running_cost<T>(x, u);
+  if constexpr (HasTimedRunningCost<Ocp, T, nx, nu>) running = ocp_.template running_cost<T>(x, u, t);
+  else if constexpr (HasRunningCost<Ocp, T, nx, nu>) running = ocp_.template running_cost<T>(x, u);
   out[nx] = h * running;
   write_validity<T>(p, ws, out);
   if constexpr (np > 0) out.template segment<np>(nx + 1 + max_validity) = ocp_.template path_constraints<T>(x, u);
@@ -133,7 +133,7 @@ VecT<T, ScheduleRefinementNlp<S, Ocp>::terminal_outputs> ScheduleRefinementNlp<S
   VecT<T, terminal_outputs> out = VecT<T, terminal_outputs>::Zero();
   const VecT<T, nx> x = w.template head<nx>();
   if constexpr (nt > 0) out.template head<nt>() = ocp_.template terminal_constraints<T>(x, w[nx]);
-  if constexpr (detail::HasTerminalCost<Ocp, T, nx>) out[nt] = ocp_.template terminal_cost<T>(x, w[nx]);
+  if constexpr (HasTerminalCost<Ocp, T, nx>) out[nt] = ocp_.template terminal_cost<T>(x, w[nx]);
   return out;
 }
 
