@@ -19,6 +19,7 @@ namespace saltus::timefreezing {
 namespace {
 
 using scenes::PointMass;
+using Case = scenes::PointMassToTheTarget;
 
 /// Expects InvalidArgument whose message contains every one of `parts`.
 template <class F>
@@ -92,21 +93,11 @@ ScheduleGuess<PointMass> hand_guess() {
   return g;
 }
 
-OcpHorizon<PointMass> guiding_horizon() {
-  using Case = scenes::PointMassToTheTarget;
-  OcpHorizon<PointMass> h;
-  h.x0 << Case::q0(), Case::v0();
-  h.final_time = Case::grid().clock.physical_horizon;
-  h.control_lower = Case::grid().bounds.control_lower;
-  h.control_upper = Case::grid().bounds.control_upper;
-  return h;
-}
-
 TEST(RefinementNlp, IpoptDerivativeCheckerFindsNoError) {
   RefinementOptions o;
   o.grid.max_element_duration = 0.25;
   o.grid.stages = 2;
-  const ScheduleRefinementNlp<PointMass, scenes::PointMassToTheTarget> nlp(frictional_mass(), {}, guiding_horizon(),
+  const ScheduleRefinementNlp<PointMass, scenes::PointMassToTheTarget> nlp(frictional_mass(), {}, Case::refinement_horizon(),
                                                                            hand_guess(), o);
   Eigen::VectorXd x(nlp.variable_count());
   nlp.initial_point(x);
@@ -116,7 +107,7 @@ TEST(RefinementNlp, IpoptDerivativeCheckerFindsNoError) {
 }
 
 void build_guiding_nlp(const PointMass& mass, const ScheduleGuess<PointMass>& guess) {
-  const ScheduleRefinementNlp<PointMass, scenes::PointMassToTheTarget> nlp(mass, {}, guiding_horizon(), guess, {});
+  const ScheduleRefinementNlp<PointMass, scenes::PointMassToTheTarget> nlp(mass, {}, Case::refinement_horizon(), guess, {});
 }
 
 TEST(RefinementNlp, BadGuessesAndStatesNameThePhase) {
@@ -137,13 +128,12 @@ TEST(RefinementNlp, BadGuessesAndStatesNameThePhase) {
 /// validity <= 1e-9, the event-driven re-simulation <= 1e-8; the time-freezing reference's own
 /// re-simulation is 1.4e-4 away).
 TEST(ScheduleRefinement, GuidingExampleOcpIsExactAfterItsTimeFreezingSolution) {
-  using Case = scenes::PointMassToTheTarget;
   const auto relaxed = solve_time_freezing_ocp(Case::system(), Case{}, Case::q0(), Case::v0(), Case::grid(), Case::solver());
   ASSERT_TRUE(relaxed.converged());
   const PointMass mass = frictional_mass();
   const ExtractedSchedule<PointMass> discovered = extract_schedule(mass, relaxed.trajectory);
   EXPECT_EQ(describe(mass, discovered.guess.schedule), "table:open [touchdown table] table:slip+");
-  const RefinementResult<PointMass> r = refine_schedule(mass, Case{}, guiding_horizon(), discovered.guess);
+  const RefinementResult<PointMass> r = refine_schedule(mass, Case{}, Case::refinement_horizon(), discovered.guess);
   EXPECT_EQ(r.stage, "refined") << r.message;
   EXPECT_LE(r.mode_validity_violation, 1e-9);
   EXPECT_LE(r.terminal_violation, 1e-8);
@@ -172,7 +162,7 @@ TEST(ScheduleRefinement, AScheduleThatCannotReachItsTargetSaysSo) {
   g.schedule.phases = {closed_mode(1)};
   g.state = [](int, double t) { return Vec<4>(t, 0, 1, 0); };
   g.input = [](double) { return Vec<2>(1, 0); };
-  OcpHorizon<PointMass> h = guiding_horizon();
+  OcpHorizon<PointMass> h = Case::refinement_horizon();
   h.x0 << 0, 0, 1, 0;
   RefinementOptions o;
   o.grid.max_element_duration = 0.25;

@@ -53,6 +53,15 @@ struct PlankBoxFlatLanding {
 
   static Vec<4> q0() { return PlankBox{}.flat_state(start_along, clearance).head<4>(); }
   static Vec<4> v0() { return Vec<4>::Zero(); }
+  /// The start, T and the input bounds of grid() for the mode-schedule refinement.
+  static timefreezing::OcpHorizon<PlankBox> refinement_horizon() {
+    timefreezing::OcpHorizon<PlankBox> h;
+    h.x0 << q0(), v0();
+    h.final_time = horizon;
+    h.control_lower = Vec<3>(-force_limit, -force_limit, -torque_limit);
+    h.control_upper = Vec<3>(force_limit, force_limit, torque_limit);
+    return h;
+  }
   /// (x, y, theta) of the box at T.
   static Vec<3> box_target() { return box_target_at(target_along); }
   /// (x, y, theta) of the box flat `clearance` above the level plank, its centre `along` [m] from
@@ -213,4 +222,6 @@ SALTUS_DECLARE_TIME_FREEZING_SCENE(saltus::scenes::PlankBox)
 SALTUS_DECLARE_TIME_FREEZING_SIMULATION(saltus::scenes::PlankBox, saltus::timefreezing::NoObjective)
 SALTUS_DECLARE_TIME_FREEZING_SIMULATION(saltus::scenes::PlankBox, saltus::scenes::PlankBoxConstantInput)
 SALTUS_DECLARE_TIME_FREEZING_OCP(saltus::scenes::PlankBox, saltus::scenes::PlankBoxFlatLanding)
+SALTUS_DECLARE_SCHEDULE_REFINEMENT_SCENE(saltus::scenes::PlankBox)
+SALTUS_DECLARE_SCHEDULE_REFINEMENT(saltus::scenes::PlankBox, saltus::scenes::PlankBoxFlatLanding)
 SALTUS_DECLARE_TIME_FREEZING_OCP(saltus::scenes::PlankBox, saltus::scenes::PlankBoxShortLanding)

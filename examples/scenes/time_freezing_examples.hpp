@@ -113,6 +113,15 @@ struct PointMassToTheTarget {
   }
   static Vec<2> q0() { return Vec<2>(0, 1); }
   static Vec<2> v0() { return Vec<2>(0, 0); }
+  /// The start, the horizon and the input bounds of grid() for the mode-schedule refinement.
+  static timefreezing::OcpHorizon<PointMass> refinement_horizon() {
+    timefreezing::OcpHorizon<PointMass> h;
+    h.x0 << q0(), v0();
+    h.final_time = grid().clock.physical_horizon;
+    h.control_lower = grid().bounds.control_lower;
+    h.control_upper = grid().bounds.control_upper;
+    return h;
+  }
 };
 
 }  // namespace saltus::scenes
@@ -123,3 +132,5 @@ SALTUS_DECLARE_TIME_FREEZING_SCENE(saltus::scenes::PointMass)
 SALTUS_DECLARE_TIME_FREEZING_SIMULATION(saltus::scenes::PointMass, saltus::timefreezing::NoObjective)
 SALTUS_DECLARE_TIME_FREEZING_SIMULATION(saltus::scenes::PointMass, saltus::scenes::Example3)
 SALTUS_DECLARE_TIME_FREEZING_OCP(saltus::scenes::PointMass, saltus::scenes::PointMassToTheTarget)
+SALTUS_DECLARE_SCHEDULE_REFINEMENT_SCENE(saltus::scenes::PointMass)
+SALTUS_DECLARE_SCHEDULE_REFINEMENT(saltus::scenes::PointMass, saltus::scenes::PointMassToTheTarget)

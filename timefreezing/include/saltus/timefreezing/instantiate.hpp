@@ -22,6 +22,10 @@
 // namespaces (or from the global namespace), at namespace scope. Without any of this, including
 // <saltus/timefreezing/header_only.hpp> compiles everything in the including translation unit.
 //
+// The mode-schedule refinement (refinement/refinement.hpp) has its pairs too:
+// SALTUS_DECLARE/INSTANTIATE_SCHEDULE_REFINEMENT_SCENE(S) (the re-simulations of refined references)
+// and SALTUS_DECLARE/INSTANTIATE_SCHEDULE_REFINEMENT(S, Ocp) (ScheduleRefinementNlp, refine_schedule).
+//
 // What is compiled: per scene, recover_trajectory and recover_reference of its FESD points; per
 // (scene, OCP), FesdMpcc<S, Ocp> and solve_time_freezing_ocp, _from_guess and _by_continuation; per
 // (scene, input law), FesdMpcc<S, Law> and simulate_time_freezing. The scene-free MPCC solver is
@@ -33,6 +37,7 @@
 #include <saltus/timefreezing/drivers/simulate.hpp>
 #include <saltus/timefreezing/recovery/recover_reference.hpp>
 #include <saltus/timefreezing/recovery/recover_trajectory.hpp>
+#include <saltus/timefreezing/refinement/refinement.hpp>
 
 #include <vector>
 
@@ -71,6 +76,29 @@
       S, Law>(const saltus::timefreezing::TimeFreezingSystem<S>&, const saltus::Vec<S::nq>&,                      \
               const saltus::Vec<S::nq>&, saltus::timefreezing::FesdOptions, const Law&,                           \
               const saltus::timefreezing::MpccSolverOptions&, saltus::timefreezing::SimulationSplit);
+
+#define SALTUS_SCHEDULE_REFINEMENT_SCENE_TEMPLATES(prefix, S)                                              \
+  prefix template std::vector<saltus::timefreezing::PhaseResimulation>                                      \
+  saltus::timefreezing::resimulate_phases<S>(const S&, const saltus::HybridTrajectory<S>&,                  \
+                                             const saltus::timefreezing::ModeSchedule<S::nc>&,              \
+                                             const std::vector<double>&, const saltus::SimulationOptions&); \
+  prefix template saltus::timefreezing::OpenLoopResimulation saltus::timefreezing::resimulate_open_loop<S>(  \
+      const S&, const saltus::HybridTrajectory<S>&, const std::vector<double>&, const saltus::SimulationOptions&);
+
+#define SALTUS_SCHEDULE_REFINEMENT_OCP_TEMPLATES(prefix, S, Ocp)                                              \
+  prefix template saltus::timefreezing::RefinementResult<S> saltus::timefreezing::refine_schedule<S, Ocp>(     \
+      const S&, const Ocp&, const saltus::timefreezing::OcpHorizon<S>&,                                       \
+      const saltus::timefreezing::ScheduleGuess<S>&, const saltus::timefreezing::RefinementOptions&,          \
+      const saltus::SimulationOptions&);
+
+/// In the scene's header: the re-simulations of refined references of scene S (refinement.hpp)
+/// are compiled in one .cpp elsewhere.
+#define SALTUS_DECLARE_SCHEDULE_REFINEMENT_SCENE(S) SALTUS_SCHEDULE_REFINEMENT_SCENE_TEMPLATES(extern, S)
+/// In the OCP's header: ScheduleRefinementNlp<S, Ocp> and refine_schedule<S, Ocp> are compiled in
+/// one .cpp elsewhere (with SALTUS_DECLARE_SCHEDULE_REFINEMENT_SCENE(S) declared too).
+#define SALTUS_DECLARE_SCHEDULE_REFINEMENT(S, Ocp)                           \
+  extern template class saltus::timefreezing::ScheduleRefinementNlp<S, Ocp>; \
+  SALTUS_SCHEDULE_REFINEMENT_OCP_TEMPLATES(extern, S, Ocp)
 
 /// In the scene's header: the recovery of scene S is compiled in one .cpp elsewhere.
 #define SALTUS_DECLARE_TIME_FREEZING_SCENE(S) SALTUS_TIME_FREEZING_SCENE_TEMPLATES(extern, S)

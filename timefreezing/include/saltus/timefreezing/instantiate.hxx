@@ -7,6 +7,7 @@
 #include <saltus/timefreezing/discretisation/fesd.hxx>
 #include <saltus/timefreezing/drivers/optimal_control.hxx>
 #include <saltus/timefreezing/drivers/simulate.hxx>
+#include <saltus/timefreezing/refinement/refinement.hxx>
 
 /// recover_trajectory and recover_reference of scene S's FESD points.
 #define SALTUS_INSTANTIATE_TIME_FREEZING_SCENE(S) SALTUS_TIME_FREEZING_SCENE_TEMPLATES(, S)
@@ -21,3 +22,9 @@
 /// simulate_time_freezing<S, Law> alone (its FesdMpcc instantiated as an OCP).
 #define SALTUS_INSTANTIATE_TIME_FREEZING_SIMULATION_DRIVER(S, Law) \
   SALTUS_TIME_FREEZING_SIMULATION_DRIVER_TEMPLATES(, S, Law)
+/// resimulate_phases<S> and resimulate_open_loop<S> (refinement.hpp).
+#define SALTUS_INSTANTIATE_SCHEDULE_REFINEMENT_SCENE(S) SALTUS_SCHEDULE_REFINEMENT_SCENE_TEMPLATES(, S)
+/// ScheduleRefinementNlp<S, Ocp> and refine_schedule<S, Ocp> (refinement.hpp).
+#define SALTUS_INSTANTIATE_SCHEDULE_REFINEMENT(S, Ocp)              \
+  template class saltus::timefreezing::ScheduleRefinementNlp<S, Ocp>; \
+  SALTUS_SCHEDULE_REFINEMENT_OCP_TEMPLATES(, S, Ocp)

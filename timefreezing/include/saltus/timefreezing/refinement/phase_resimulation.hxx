@@ -36,8 +36,6 @@ HybridTrajectory<S> run_from(Simulator<S>& sim, const VecT<double, 2 * S::nq>& x
 
 }  // namespace detail
 
-/// (a) of refinement.hpp: every phase of `traj` (a refined reference with its element boundaries)
-/// re-simulated from its start state in its mode under its own input.
 template <Scene S>
 std::vector<PhaseResimulation> resimulate_phases(const S& scene, const HybridTrajectory<S>& traj,
                                                  const ModeSchedule<S::nc>& schedule,

@@ -126,6 +126,16 @@ inline SimulationOptions precise_simulation() {
   return o;
 }
 
+/// (a) of the checks: every phase of `traj` (a refined reference, one segment per phase of
+/// `schedule`, with its element boundaries) re-simulated by the event-driven simulator from its
+/// start state (projected onto the contacts it closes) in its mode under its own input, compared
+/// at the element boundaries, the first event after its start against the schedule's.
+template <Scene S>
+std::vector<PhaseResimulation> resimulate_phases(const S& scene, const HybridTrajectory<S>& traj,
+                                                 const ModeSchedule<S::nc>& schedule,
+                                                 const std::vector<double>& element_times,
+                                                 const SimulationOptions& simulation = precise_simulation());
+
 /// (b) of the checks: simulates `traj`'s input from its initial state over its horizon with
 /// `simulation` (breakpoints replaced by `element_times`) and compares at `element_times`.
 template <Scene S>
