@@ -6,13 +6,17 @@
 #include "scenes/plank_box_landing.hpp"
 #include "scenes/time_freezing_examples.hpp"
 
+#include <saltus/hybrid/reference/resimulation.hpp>
+#include <saltus/hybrid/vocabulary/trajectory_io.hpp>
 #include <saltus/timefreezing/drivers/optimal_control.hpp>
+// the definitions, for the test's own OCPs (AboveTheTable, LiftWish); the guiding OCP's are in
+// the scene library
 #include <saltus/timefreezing/refinement/refinement.hxx>
-#include <saltus/timefreezing/refinement/schedule_extraction.hxx>
 
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <sstream>
 #include <string>
 
 namespace saltus::timefreezing {
@@ -149,6 +153,28 @@ TEST(ScheduleRefinement, GuidingExampleOcpIsExactAfterItsTimeFreezingSolution) {
   ASSERT_EQ(r.trajectory.events.size(), 1u);
   EXPECT_TRUE(r.trajectory.events[0].impact());
   EXPECT_NEAR(r.trajectory.events[0].x_plus[3], 0.0, 1e-12);  // the jump map's inelastic impact
+}
+
+/// The same OCP refined from a user's guess: a reference made elsewhere and imported from CSV (here
+/// the event-driven simulator under a hand-made input: drop, land, slide), re-simulated into a
+/// HybridTrajectory (polish) whose events define the schedule. The refined optimum is the one
+/// reached from the time-freezing solution (18.7116).
+TEST(ScheduleRefinement, AnImportedCsvReferenceDefinesTheSchedule) {
+  const PointMass mass = frictional_mass();
+  Simulator<PointMass> simulator(mass, precise_simulation());
+  const auto push = open_loop<PointMass>([](double t) { return Vec<2>(t < 1.3 ? 4.0 : -0.5, 0.0); });
+  const HybridTrajectory<PointMass> made_elsewhere = simulator.run(Vec<4>(0, 1, 0, 0), 0.0, 2.0, push);
+  std::stringstream csv;
+  write_csv(csv, made_elsewhere, 0.01, mass);
+  const ImportedReference<PointMass> imported = read_reference_csv<PointMass>(csv);
+  const PolishResult<PointMass> polished = polish(mass, imported, precise_simulation());
+  const ExtractedSchedule<PointMass> guess = extract_schedule(mass, polished.trajectory);
+  EXPECT_EQ(describe(mass, guess.guess.schedule), "table:open [touchdown table] table:slip+");
+  const RefinementResult<PointMass> r = refine_schedule(mass, Case{}, Case::refinement_horizon(), guess.guess);
+  EXPECT_EQ(r.stage, "refined") << r.message;
+  EXPECT_LE(r.mode_validity_violation, 1e-9);
+  EXPECT_LE(r.phase_resim_max_error, 1e-8);
+  EXPECT_NEAR(r.objective, 18.7116, 1e-4);
 }
 
 /// A schedule that cannot reach its target: the mass stays on the table, the target is above it.

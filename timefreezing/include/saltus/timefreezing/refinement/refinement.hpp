@@ -11,7 +11,8 @@
 // SCHEDULE EDITS. After a converged solve the multipliers and bounds say where the schedule is not
 // locally optimal:
 //   - a closed contact whose lambda_n >= 0 row is active with a positive multiplier at a stage
-//     point inside its phase wants to lift off there: the phase is split by a release, a flight of
+//     point inside its phase wants to lift off there (over the arc of consecutive stage points
+//     where that row is active): the phase is split by a release, a flight of
 //     that contact, and a touchdown back into the phase's mode (a vanishing flight is removed by the
 //     next check);
 //   - an open contact whose gap >= 0 row is active with a positive multiplier inside its phase
@@ -43,6 +44,9 @@ struct ScheduleEdit {
   int phase = -1;           ///< the phase edited (in the schedule it was read from)
   int contact = -1;         ///< the contact (-1 for "vanish")
   double t = 0.0;           ///< where [s]: the stage point's time, or the vanishing phase's start
+  /// the active arc around t [s]: the consecutive stage points where the same row is active (the
+  /// edited mode is put over it, at least 0.02 s or a quarter of the phase around t); t, t for "vanish"
+  double t_begin = 0.0, t_end = 0.0;
   double multiplier = 0.0;  ///< the row's multiplier (0 for "vanish")
   std::string schedule_after;  ///< describe() of the edited schedule
 };

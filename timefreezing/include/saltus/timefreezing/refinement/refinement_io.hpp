@@ -23,7 +23,7 @@ inline nlohmann::ordered_json finite_or_null(double v) {
 ///   event_times                 [s]
 ///   objective, mode_validity_violation, path_violation, terminal_violation, constraint_violation,
 ///   contact_drift               as in RefinementResult
-///   schedule_edits              [{kind, phase, contact, t, multiplier, schedule_after}]
+///   schedule_edits              [{kind, phase, contact, t, t_begin, t_end, multiplier, schedule_after}]
 ///   schedule_check_passed       no edit proposed after the last solve
 ///   solves                      [{schedule, succeeded, ipopt_status, objective, constraint_violation,
 ///                               ipopt_iterations, seconds}]
@@ -51,6 +51,7 @@ nlohmann::ordered_json to_json(const S& scene, const RefinementResult<S>& r) {
   json edits = json::array();
   for (const ScheduleEdit& e : r.edits)
     edits.push_back({{"kind", e.kind}, {"phase", e.phase}, {"contact", e.contact}, {"t", e.t},
+                     {"t_begin", e.t_begin}, {"t_end", e.t_end},
                      {"multiplier", e.multiplier}, {"schedule_after", e.schedule_after}});
   j["schedule_edits"] = edits;
   j["schedule_check_passed"] = r.schedule_check_passed;

@@ -7,6 +7,9 @@
 #include <cmath>
 #include <memory>
 #include <optional>
+#include <tuple>
+#include <utility>
+#include <vector>
 
 namespace saltus::timefreezing {
 
@@ -33,12 +36,45 @@ inline std::string edit_kind(const ContactState& c, int entry) {
   return entry == 1 ? "slip-" : "slip+";  // lambda_t at +mu lambda_n: the friction pushes +, the slip goes -
 }
 
+/// The time of stage point (element e, point r) of phase p: r = -1 the element's start.
+template <Scene S, class Ocp>
+double stage_point_time(const ScheduleRefinementNlp<S, Ocp>& nlp, const Eigen::VectorXd& x, int p, int e, int r) {
+  const double t0 = x[nlp.time_index(p)], t1 = x[nlp.time_index(p + 1)];
+  return t0 + (t1 - t0) * (double(e - nlp.first_element(p)) + (r < 0 ? 0.0 : nlp.tableau().c[r])) / nlp.elements_in(p);
+}
+
+/// The active arc of validity value k in phase p around time t: the first and last stage point of
+/// the run of consecutive points (in time order) whose row has a multiplier >= multiplier_threshold
+/// (Ipopt's active set: an inactive row's multiplier is about mu / slack, far below it) and that
+/// contains t. An edit then changes the mode over the whole arc, not around its strongest point.
+template <Scene S, class Ocp>
+std::pair<double, double> active_arc(const ScheduleRefinementNlp<S, Ocp>& nlp, const Eigen::VectorXd& x,
+                                     const Eigen::VectorXd& lambda, int p, int k, double t, double multiplier_threshold) {
+  std::vector<std::pair<double, bool>> points;  // (time, active), in time order
+  for (int e = nlp.first_element(p); e < nlp.first_element(p) + nlp.elements_in(p); ++e)
+    for (int r = -1; r < nlp.stages(); ++r) {
+      const int row = nlp.validity_row(e, r, k);
+      points.emplace_back(stage_point_time(nlp, x, p, e, r), row >= 0 && -lambda[row] >= multiplier_threshold);
+    }
+  std::pair<double, double> arc{t, t};
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    if (points[i].first != t || !points[i].second) continue;
+    std::size_t a = i, b = i;
+    while (a > 0 && points[a - 1].second) --a;
+    while (b + 1 < points.size() && points[b + 1].second) ++b;
+    arc = {points[a].first, points[b].first};
+    break;
+  }
+  return arc;
+}
+
 /// The largest active validity row with a positive multiplier at a point inside its phase (not the
-/// phase's first or last point).
+/// phase's first or last point), with the active arc it belongs to.
 template <Scene S, class Ocp>
 std::optional<ScheduleEdit> strongest_validity_edit(const ScheduleRefinementNlp<S, Ocp>& nlp, const Eigen::VectorXd& x,
                                                     const Eigen::VectorXd& lambda, const RefinementEdits& o) {
   std::optional<ScheduleEdit> best;
+  int best_k = -1;
   const int ns = nlp.stages();
   for (int e = 0; e < nlp.element_count(); ++e) {
     const int p = nlp.phase_of(e);
@@ -53,17 +89,18 @@ std::optional<ScheduleEdit> strongest_validity_edit(const ScheduleRefinementNlp<
           const double multiplier = -lambda[row];  // Ipopt: lambda <= 0 on an active lower bound
           if (v[static_cast<std::size_t>(k)] > o.active_tolerance || multiplier < o.multiplier_threshold) continue;
           if (best && multiplier <= best->multiplier) continue;
-          const double t0 = x[nlp.time_index(p)], t1 = x[nlp.time_index(p + 1)];
           ScheduleEdit edit;
           edit.kind = edit_kind(mode[i], entry);
           edit.phase = p;
           edit.contact = i;
-          edit.t = t0 + (t1 - t0) * (double(e - nlp.first_element(p)) + (r < 0 ? 0.0 : nlp.tableau().c[r])) / nlp.elements_in(p);
+          edit.t = stage_point_time(nlp, x, p, e, r);
           edit.multiplier = multiplier;
           best = edit;
+          best_k = k;
         }
     }
   }
+  if (best) std::tie(best->t_begin, best->t_end) = active_arc(nlp, x, lambda, best->phase, best_k, best->t, o.multiplier_threshold);
   return best;
 }
 
@@ -80,7 +117,7 @@ std::optional<ScheduleEdit> propose_edit(const ScheduleRefinementNlp<S, Ocp>& nl
         ScheduleEdit edit;
         edit.kind = "vanish";
         edit.phase = p;
-        edit.t = x[nlp.time_index(p)];
+        edit.t = edit.t_begin = edit.t_end = x[nlp.time_index(p)];
         return edit;
       }
   return detail::strongest_validity_edit(nlp, x, lambda, options);
@@ -123,8 +160,10 @@ std::optional<ScheduleGuess<S>> edited_guess(const S& scene, const HybridTraject
       const double zt = kin.contacts[edit.contact].zeta_t[0];
       changed[edit.contact] = std::abs(zt) <= 1e-7 ? ContactState::stick() : ContactState::slip_planar(zt > 0 ? 1 : -1);
     }
+    // the changed mode over the active arc, at least `width` around the strongest point
     const double width = std::min(0.25 * (t1 - t0), 0.02);
-    const double a = std::clamp(edit.t - 0.5 * width, t0, t1), b = std::clamp(edit.t + 0.5 * width, t0, t1);
+    const double a = std::clamp(std::min(edit.t_begin, edit.t - 0.5 * width), t0, t1),
+                 b = std::clamp(std::max(edit.t_end, edit.t + 0.5 * width), t0, t1);
     add(m, p, t0);
     add(changed, p, a);
     add(m, p, b);
