@@ -94,8 +94,10 @@ struct OpenLoopResimulation {
 
 template <Scene S>
 struct RefinementResult {
-  /// "refined" when the last solve converged with every check below within its tolerance of the
-  /// options, "not converged" (Ipopt failed on the schedule), or where it stopped.
+  /// "refined" when the last solve converged and mode_validity_violation and phase_resim_max_error
+  /// are within RefinementOptions::checks; "converged, checks failed: ..." naming each failed
+  /// check with its figures (and the phase and the simulator's note); "not converged" (Ipopt
+  /// failed on the schedule: `message` has its status and worst row).
   std::string stage;
   bool converged = false;         ///< the last solve succeeded and its constraint violation <= 1e-6
   std::string message;

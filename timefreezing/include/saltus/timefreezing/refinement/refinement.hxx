@@ -8,6 +8,7 @@
 
 #include <chrono>
 #include <ostream>
+#include <sstream>
 
 namespace saltus::timefreezing {
 
@@ -117,6 +118,22 @@ void edit_schedule(const S& scene, const Ocp& ocp, const OcpHorizon<S>& horizon,
   }
 }
 
+/// "refined", or "converged, checks failed: ..." naming each failed check and its figures.
+template <Scene S>
+std::string checked_stage(const RefinementResult<S>& r, const RefinementChecks& checks) {
+  std::ostringstream failed;
+  if (!(r.mode_validity_violation <= checks.mode_validity))
+    failed << "; mode validity " << r.mode_validity_violation << " > " << checks.mode_validity;
+  if (!(r.phase_resim_max_error <= checks.phase_resimulation)) {
+    failed << "; per-phase re-simulation " << r.phase_resim_max_error << " > " << checks.phase_resimulation;
+    for (const PhaseResimulation& p : r.phase_resimulation)
+      if (!(p.max_error <= checks.phase_resimulation))
+        failed << " (phase " << p.phase << ": " << p.max_error << (p.note.empty() ? "" : ", " + p.note) << ")";
+  }
+  const std::string f = failed.str();
+  return f.empty() ? "refined" : "converged, checks failed: " + f.substr(2);
+}
+
 }  // namespace detail
 
 template <Scene S, class Ocp>
@@ -140,7 +157,7 @@ RefinementResult<S> refine_schedule(const S& scene, const Ocp& ocp, const OcpHor
   out.phase_resimulation = resimulate_phases(scene, out.trajectory, out.schedule, out.element_times, simulation);
   for (const PhaseResimulation& r : out.phase_resimulation) out.phase_resim_max_error = std::max(out.phase_resim_max_error, r.max_error);
   out.open_loop = resimulate_open_loop(scene, out.trajectory, out.element_times, simulation);
-  out.stage = "refined";
+  out.stage = detail::checked_stage(out, options.checks);
   out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return out;
 }

@@ -24,6 +24,10 @@ inline void RefinementOptions::validate() const {
                  "refinement: min_phase_duration must be >= 0, got ", min_phase_duration);
   SALTUS_REQUIRE(implied_row_tolerance > 0.0 && implied_row_tolerance < 1.0,
                  "refinement: implied_row_tolerance must lie in (0, 1), got ", implied_row_tolerance);
+  SALTUS_REQUIRE(std::isfinite(checks.mode_validity) && checks.mode_validity >= 0.0,
+                 "refinement: checks.mode_validity must be >= 0, got ", checks.mode_validity);
+  SALTUS_REQUIRE(std::isfinite(checks.phase_resimulation) && checks.phase_resimulation >= 0.0,
+                 "refinement: checks.phase_resimulation must be >= 0, got ", checks.phase_resimulation);
   SALTUS_REQUIRE(std::isfinite(initial_state_tolerance) && initial_state_tolerance >= 0.0,
                  "refinement: initial_state_tolerance must be >= 0, got ", initial_state_tolerance);
 }

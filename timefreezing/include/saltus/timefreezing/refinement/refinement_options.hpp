@@ -39,10 +39,20 @@ struct RefinementEdits {
   double vanishing_duration = 1e-6;
 };
 
+/// What "refined" means (RefinementResult::stage): a converged last solve AND these checks.
+struct RefinementChecks {
+  /// mode_validity_violation <= this (scene units: m, N, m/s); Ipopt relaxes inequality rows by
+  /// its bound_relax_factor (1e-8 relative by default), so a tighter tolerance needs that option.
+  double mode_validity = 1e-9;
+  /// phase_resim_max_error <= this [state units] (the "exact": 1e-6 on the default grid).
+  double phase_resimulation = 1e-6;
+};
+
 struct RefinementOptions {
   RefinementGrid grid;
   RefinementIpopt ipopt;
   RefinementEdits edits;
+  RefinementChecks checks;
   /// d_p >= min_phase_duration [s] for every phase (>= 0; 0: a phase may shrink to a point).
   double min_phase_duration = 0.0;
   /// An equality path row of a phase whose gradient lies in the span of the closed contacts' gap
