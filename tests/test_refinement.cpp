@@ -144,6 +144,9 @@ TEST(ScheduleRefinement, GuidingExampleOcpIsExactAfterItsTimeFreezingSolution) {
   EXPECT_LE(r.phase_resim_max_error, 1e-8);
   for (const PhaseResimulation& p : r.phase_resimulation) {
     EXPECT_TRUE(p.event_guards_match) << "phase " << p.phase << ": " << p.note;
+    EXPECT_TRUE(p.next_mode_matches) << "phase " << p.phase << ": " << p.note;
+    EXPECT_EQ(p.unplanned_events, 0) << p.note;
+    EXPECT_DOUBLE_EQ(p.compared_until, r.trajectory.segments[static_cast<std::size_t>(p.phase)].t_end);
     EXPECT_TRUE(p.note.empty()) << p.note;
   }
   EXPECT_LE(r.open_loop.max_error, 1e-8);
@@ -230,7 +233,8 @@ TEST(ScheduleRefinement, AStanceThatWantsToLiftOffIsEdited) {
   RefinementOptions o;
   o.grid.max_element_duration = 0.05;
   const RefinementResult<PointMass> r = refine_schedule(PointMass{}, LiftWish{}, h, g, o);
-  ASSERT_EQ(r.stage, "refined") << r.message;
+  ASSERT_EQ(r.stage, "refined") << r.message << "; schedule " << describe(PointMass{}, r.schedule) << "; events at "
+                                << ::testing::PrintToString(r.event_times);
   ASSERT_GE(r.edits.size(), 1u);
   EXPECT_EQ(r.edits[0].kind, "lift-off");
   EXPECT_GT(r.edits[0].multiplier, 0.0);

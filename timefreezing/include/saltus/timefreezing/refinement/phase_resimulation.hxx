@@ -9,6 +9,7 @@
 #include <cmath>
 #include <limits>
 #include <set>
+#include <sstream>
 #include <utility>
 
 namespace saltus::timefreezing {
@@ -34,6 +35,93 @@ HybridTrajectory<S> run_from(Simulator<S>& sim, const VecT<double, 2 * S::nq>& x
   }
 }
 
+
+/// Whether two modes put every contact in the same branch (open, stick, slip with the same sign
+/// of the slip direction).
+template <int NC>
+bool same_branches(const Mode<NC>& a, const Mode<NC>& b) {
+  for (int i = 0; i < NC; ++i) {
+    if (a[i].mode != b[i].mode) return false;
+    if (a[i].mode == ContactMode::Slip && a[i].slip_direction.dot(b[i].slip_direction) <= 0.0) return false;
+  }
+  return true;
+}
+
+/// The state of `run` at t before any event at t: x- of the first event within `tolerance` of t
+/// (the simulator locates an event to its own tolerance, a hair before or after the node), else
+/// the state on the segment that contains t.
+template <Scene S>
+VecT<double, 2 * S::nq> state_before_events(const HybridTrajectory<S>& run, double t, double tolerance) {
+  for (const auto& ev : run.events)
+    if (std::abs(ev.t - t) <= tolerance) return ev.x_minus;
+  const int k = run.segment_at(t);
+  const Segment<S>& s = run.segments[static_cast<std::size_t>(k)];
+  return run.state(k, std::clamp(t, s.t_begin, s.t_end));
+}
+
+/// (a) of the checks on one phase: the distance at every node of [t0, t1], through events the
+/// simulator finds inside the phase (a contact whose force and gap are both zero on the reference
+/// can be labelled open or closed: the motion is the same, and the distance says whether it is),
+/// which are counted and named.
+template <Scene S>
+void compare_phase(const S& scene, const HybridTrajectory<S>& traj, int p, const HybridTrajectory<S>& run,
+                   const std::vector<double>& nodes, double t1, double tolerance, PhaseResimulation& r) {
+  for (double t : nodes) {
+    const double e = (state_before_events(run, t, tolerance) - traj.state(p, t)).cwiseAbs().maxCoeff();
+    r.max_error = std::max(r.max_error, e);
+    if (t == t1) r.end_error = e;
+    r.compared_until = t;
+  }
+  std::ostringstream named;
+  for (const auto& ev : run.events) {
+    if (ev.t >= t1 - tolerance) break;
+    if (r.unplanned_events++ < 3)
+      named << (r.unplanned_events > 1 ? ", " : "") << describe_event(scene, ScheduleEvent{ev.guards()}) << " at t = " << ev.t;
+  }
+  if (r.unplanned_events > 0)
+    r.note += std::string(r.note.empty() ? "" : "; ") + std::to_string(r.unplanned_events) +
+              " unplanned event(s) inside the phase (" + named.str() + (r.unplanned_events > 3 ? ", ..." : "") + ")";
+}
+
+/// The boundary at the end of phase p: the events the simulator finds within `tolerance` of t1,
+/// their guards against the schedule's, the mode after them against phase p + 1's, and the state
+/// after them (x+ of the last one, else the state at t1) against the reference's x+.
+template <Scene S>
+void judge_boundary(const HybridTrajectory<S>& run, const ModeSchedule<S::nc>& schedule, const Mode<S::nc>& next,
+                    const VecT<double, 2 * S::nq>& x_plus, int p, double t1, double tolerance, PhaseResimulation& r) {
+  std::set<std::pair<int, int>> found;
+  int last_at_boundary = -1;
+  r.event_time_error = std::numeric_limits<double>::quiet_NaN();
+  for (int k = 0; k < static_cast<int>(run.events.size()); ++k) {
+    const auto& ev = run.events[static_cast<std::size_t>(k)];
+    if (std::abs(ev.t - t1) > tolerance) continue;
+    if (last_at_boundary < 0) r.event_time_error = ev.t - t1;
+    last_at_boundary = k;
+    for (const auto& g : guard_set(ev.guards())) found.insert(g);
+  }
+  const VecT<double, 2 * S::nq> x_after =
+      last_at_boundary >= 0 ? run.events[static_cast<std::size_t>(last_at_boundary)].x_plus : state_before_events(run, t1, tolerance);
+  r.x_plus_error = (x_after - x_plus).cwiseAbs().maxCoeff();
+  r.event_guards_match = found == guard_set(schedule.events[static_cast<std::size_t>(p)].guards);
+  r.next_mode_matches =
+      same_branches(last_at_boundary >= 0 ? run.segments[static_cast<std::size_t>(last_at_boundary + 1)].mode
+                                          : run.segments[static_cast<std::size_t>(run.segment_at(t1))].mode,
+                    next);
+  std::ostringstream why;
+  if (last_at_boundary < 0) {
+    why << "no event within " << tolerance << " s of the phase's end";
+    for (const auto& ev : run.events)
+      if (ev.t > t1) {
+        why << " (the next one at t = " << ev.t << ")";
+        break;
+      }
+  } else if (!r.event_guards_match) {
+    why << "the simulator's event at the phase's end has other guards";
+  }
+  if (!r.next_mode_matches) why << (why.tellp() > 0 ? ", " : "") << "after it the simulator is in another mode";
+  if (why.tellp() > 0) r.note += std::string(r.note.empty() ? "" : "; ") + why.str();
+}
+
 }  // namespace detail
 
 template <Scene S>
@@ -51,9 +139,10 @@ std::vector<PhaseResimulation> resimulate_phases(const S& scene, const HybridTra
     std::vector<double> nodes;
     for (double t : element_times)
       if (t >= t0 && t <= t1) nodes.push_back(t);
-    const double last_input_time = nodes.size() >= 2 ? nodes[nodes.size() - 2] : t0;
-    const InputLaw<S> law = [&traj, t0, last_input_time](double t, const VecT<double, 2 * S::nq>& x, const Mode<S::nc>& m) {
-      return traj.input(std::clamp(t, t0, last_input_time), x, m);
+    // The optimal input on both sides of the phase's end: a release (lambda_n = 0 at x-) or a slip
+    // onset happens there because the next phase's input drives the force out of its cone.
+    const InputLaw<S> law = [&traj, t0](double t, const VecT<double, 2 * S::nq>& x, const Mode<S::nc>& m) {
+      return traj.input(std::max(t, t0), x, m);
     };
     SimulationOptions options = simulation;
     options.breakpoints = nodes;
@@ -80,39 +169,18 @@ std::vector<PhaseResimulation> resimulate_phases(const S& scene, const HybridTra
     try {
       run = detail::run_from(sim, x_start, seg.mode, t0, t1 + margin, law, r.note);
     } catch (const Error& e) {
-      r.max_error = r.end_error = r.event_time_error = std::numeric_limits<double>::quiet_NaN();
-      r.event_guards_match = false;
+      r.max_error = r.end_error = r.event_time_error = r.x_plus_error = std::numeric_limits<double>::quiet_NaN();
+      r.event_guards_match = r.next_mode_matches = false;
       r.note += std::string(r.note.empty() ? "" : "; ") + "the simulation failed: " + e.what();
       out.push_back(r);
       continue;
     }
-    const double t_event = run.events.empty() ? std::numeric_limits<double>::infinity() : run.events.front().t;
     const double tolerance = 1e-6 * std::max(1.0, std::abs(t1));
-    if (t_event < t1 - tolerance)
-      r.note += std::string(r.note.empty() ? "" : "; ") + "an unplanned event inside the phase at t = " + std::to_string(t_event) +
-                " (" + describe_event(scene, ScheduleEvent{run.events.front().guards()}) + ")";
-    for (double t : nodes) {
-      // Before the simulator's first event its first segment; at a node within the tolerance of that
-      // event (the phase's end, found a hair earlier or later) the event's x-.
-      const bool at_event = std::abs(t - t_event) <= tolerance;
-      if (t > t_event && !at_event) break;
-      const VecT<double, 2 * S::nq> x_sim = at_event ? run.events.front().x_minus : run.state(0, std::min(t, run.segments.front().t_end));
-      const double e = (x_sim - traj.state(p, t)).cwiseAbs().maxCoeff();
-      r.max_error = std::max(r.max_error, e);
-      if (t == t1) r.end_error = e;
-    }
-    if (last) {  // an event at the horizon's end (e.g. a stop exactly at T) is the motion's next one, not an error
-      r.event_time_error = run.events.empty() ? std::numeric_limits<double>::quiet_NaN() : t_event - t1;
-      r.event_guards_match = run.events.empty() || std::abs(t_event - t1) <= tolerance;
-    } else if (run.events.empty()) {
-      r.event_time_error = std::numeric_limits<double>::quiet_NaN();
-      r.event_guards_match = false;
-      r.note += std::string(r.note.empty() ? "" : "; ") + "no event found within the margin after the phase's end";
-    } else {
-      r.event_time_error = t_event - t1;
-      r.event_guards_match = detail::guard_set(run.events.front().guards()) ==
-                             detail::guard_set(schedule.events[static_cast<std::size_t>(p)].guards);
-    }
+    detail::compare_phase(scene, traj, p, run, nodes, t1, tolerance, r);
+    if (last) r.event_time_error = std::numeric_limits<double>::quiet_NaN();
+    else
+      detail::judge_boundary(run, schedule, traj.segments[static_cast<std::size_t>(p + 1)].mode,
+                             traj.events[static_cast<std::size_t>(p)].x_plus, p, t1, tolerance, r);
     out.push_back(r);
   }
   return out;

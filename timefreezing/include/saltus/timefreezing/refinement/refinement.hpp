@@ -66,19 +66,35 @@ struct RefinementSolve {
 struct PhaseResimulation {
   int phase = 0;
   /// max ||x_sim - x_refined||_inf over the phase's element boundaries (the collocation's nodes,
-  /// where Radau IIA is of order 2 n_s - 1), the phase's end included.
+  /// where Radau IIA is of order 2 n_s - 1), the phase's end included. The comparison goes on
+  /// through events the simulator finds inside the phase (unplanned_events): where a contact's
+  /// force and gap are both zero on the reference, the simulator may label it open or closed with
+  /// the same motion, and this distance says whether the motion is the same.
   double max_error = 0.0;
   double end_error = 0.0;      ///< the same at the phase's end (x-)
+  double compared_until = 0.0; ///< the last node compared [s] (the phase's end unless the simulation failed)
+  int unplanned_events = 0;    ///< events the simulator found inside the phase (named in `note`)
   /// ||x_start projected - x_start||_inf: the start state brought onto the contacts it closes (its
   /// own closed contacts, and those released at its start) before it is simulated; the size of the
   /// collocation's drift (contact_drift), which the simulator's initial-mode check would refuse.
   double start_projection = 0.0;
-  /// The first event the simulator finds after the phase's start (it runs past the phase's end by
-  /// a margin, with the phase's last input held): its time minus the scheduled event time [s]
-  /// (NaN when it found none, e.g. the last phase), and whether its guards are the schedule's.
+  /// The events the simulator finds within 1e-6 (relative) of the phase's end (it runs past the
+  /// end by a margin, under the optimal input, the next phase's beyond the end): the first one's
+  /// time minus the scheduled event time [s] (NaN when none, and for the last phase); the state
+  /// after them (x+ of the last one, else the state at the end) against the reference's x+; and,
+  /// as information, whether their guards together are the schedule's and whether the mode after
+  /// them is the next phase's. The labels can differ where the reference is degenerate (a force
+  /// and a gap both zero at the boundary, e.g. a touchdown at zero approach speed): the states say
+  /// whether the motion is the same.
   double event_time_error = 0.0;
+  double x_plus_error = 0.0;
   bool event_guards_match = true;
-  std::string note;            ///< why the comparison is partial, or "" (e.g. an unplanned event inside the phase)
+  bool next_mode_matches = true;
+  std::string note;            ///< what the comparison found besides the distance, or ""
+
+  /// The phase passes check (a): the distance <= tolerance at every node of the phase and across
+  /// the boundary at its end.
+  bool passes(double tolerance) const { return max_error <= tolerance && x_plus_error <= tolerance; }
 };
 
 /// The event-driven re-simulation of the whole refined horizon open loop from x0, under the

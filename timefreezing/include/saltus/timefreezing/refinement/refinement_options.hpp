@@ -41,8 +41,9 @@ struct RefinementEdits {
 
 /// What "refined" means (RefinementResult::stage): a converged last solve AND these checks.
 struct RefinementChecks {
-  /// mode_validity_violation <= this (scene units: m, N, m/s); Ipopt relaxes inequality rows by
-  /// its bound_relax_factor (1e-8 relative by default), so a tighter tolerance needs that option.
+  /// mode_validity_violation <= this (scene units: m, N, m/s). The refinement sets Ipopt's
+  /// bound_relax_factor to 0 (RefinementIpopt::options can set it again), so the validity rows
+  /// hold to the constraint tolerance rather than to Ipopt's 1e-8 relaxation of the bounds.
   double mode_validity = 1e-9;
   /// phase_resim_max_error <= this [state units] (the "exact": 1e-6 on the default grid).
   double phase_resimulation = 1e-6;
