@@ -6,14 +6,15 @@
 // `plank_box --json` instead solves the plank-box's flagship OCP (scenes/plank_box_landing.hpp):
 // land flat, slide, lift off and stop above the plank's far end, minimising the integral of u'u;
 // prints the report of ocp_report.hpp, progress lines (one per homotopy step) on stderr; exit
-// status 0 only when it converged. A converged reference is then analysed (analyse_reference,
+// status 0 only when the reference is refined (converged and exact). The reference is then analysed (analyse_reference,
 // saltus/sensitivity/analysis/reference_analysis.hpp; the report's "analysis"): its re-simulation's
 // jump gains (conewise at the flat landing), an LQR tracking design along it with its stability
 // check (scenes/plank_box_tracking.hpp), and 100 perturbed closed-loop runs. The analysis's outcome
-// does not change the exit status; its failures are reported in it. Between the two, the
-// mode-schedule refinement (the second stage; refinement.hpp) makes the reference exact: the
-// schedule read off the relaxed solution, the smooth multi-phase OCP on the plank-box's own flows,
-// guards and jump maps, its re-simulations. Keys "stage", "relaxed_objective",
+// does not change the exit status; its failures are reported in it. The optimisation has two
+// stages: discovery (refinement/discovery.hpp: the time-freezing homotopy run until the contact
+// schedule read off consecutive relaxed solutions settles; key "discovery") and the
+// mode-schedule refinement (refinement.hpp), which makes the reference exact: that schedule, the
+// smooth multi-phase OCP on the plank-box's own flows, guards and jump maps, its re-simulations. Keys "stage", "relaxed_objective",
 // "discovery_seconds", "refinement_seconds", "schedule", "schedule_edits",
 // "mode_validity_violation", "phase_resim_max_error" and "refinement" (refinement_io.hpp); when
 // the refinement converged, the analysis is of the refined reference and "objective" its cost.
@@ -37,30 +38,34 @@ int optimal_flat_landing() {
   using namespace saltus;
   using namespace saltus::timefreezing;
   using Ocp = scenes::PlankBoxFlatLanding;
+  const scenes::PlankBox scene{};
   MpccSolverOptions solver = Ocp::solver();
   solver.progress = &std::cerr;
-  const auto r = solve_time_freezing_ocp(Ocp::system(), Ocp{}, Ocp::q0(), Ocp::v0(), Ocp::grid(), solver);
+  DiscoveryOptions discovery_options;
+  discovery_options.progress = &std::cerr;
+  const DiscoveryResult<scenes::PlankBox> discovery =
+      discover_schedule(scene, Ocp::system(), Ocp{}, Ocp::q0(), Ocp::v0(), Ocp::grid(), solver, discovery_options);
+  const auto& r = discovery.relaxed;
   const Ocp::Feasibility f = Ocp::feasibility(r.points);
-  const scenes::PlankBox scene{};
   std::optional<PolishResult<scenes::PlankBox>> resim;
   auto j = examples::ocp_report(scene, r, {f.path_violation, f.path_violation > 1e-6 ? "theta - phi = 0" : "", f.target_error},
                                 &resim);
   j["relaxed_objective"] = r.solution.objective;
-  j["discovery_seconds"] = r.solution.seconds;
-  j["stage"] = "discovery (the time-freezing homotopy did not converge)";
+  j["discovery_seconds"] = discovery.seconds;
+  j["discovery"] = to_json(discovery);
+  j["stage"] = "discovery (" + discovery.message + ")";
   std::optional<RefinementResult<scenes::PlankBox>> refined;
-  if (r.converged()) {
+  if (discovery.schedule_found) {
     try {
-      const ExtractedSchedule<scenes::PlankBox> discovered = extract_schedule(scene, r.trajectory);
-      RefinementOptions options;
+      RefinementOptions options = Ocp::refinement();
       options.progress = &std::cerr;
-      refined = refine_schedule(scene, Ocp{}, Ocp::refinement_horizon(), discovered.guess, options);
+      refined = refine_schedule(scene, Ocp{}, Ocp::refinement_horizon(), discovery.discovered.guess, options);
       const nlohmann::ordered_json rj = to_json(scene, *refined);
       for (const char* key : {"stage", "schedule", "schedule_edits", "mode_validity_violation", "phase_resim_max_error",
                               "refinement_seconds"})
         j[key] = rj[key];
       j["refinement"] = rj;
-      j["refinement"]["extraction_notes"] = to_json(discovered);
+      j["refinement"]["extraction_notes"] = to_json(discovery.discovered);
       if (refined->converged) j["objective"] = refined->objective;
     } catch (const Error& e) {
       j["stage"] = std::string("refinement (") + e.what() + ")";
@@ -74,7 +79,7 @@ int optimal_flat_landing() {
     j["analysis"] = to_json(analyse_reference(scene, *reference, SimulationOptions{}, analysis));
   }
   std::cout << j.dump(2) << "\n";
-  return r.converged() ? 0 : 1;
+  return refined && refined->stage == "refined" ? 0 : 1;
 }
 
 }  // namespace

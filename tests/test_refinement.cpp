@@ -128,6 +128,26 @@ TEST(RefinementNlp, BadGuessesAndStatesNameThePhase) {
   expect_invalid([&] { build_guiding_nlp(mass, closed_start); }, {"phase 0", "closed in the first phase", "gap 1"});
 }
 
+/// Discovery stopped where the schedule settles: on the guiding example the first two homotopy
+/// steps (sigma = 1, 0.1) agree; the refinement of that schedule reaches the optimum of the
+/// refinement from the converged homotopy (18.7116, the test below).
+TEST(ScheduleDiscovery, GuidingExampleSettlesAfterTwoStepsAndRefinesToTheOptimum) {
+  const PointMass mass = frictional_mass();
+  const DiscoveryResult<PointMass> d =
+      discover_schedule(mass, Case::system(), Case{}, Case::q0(), Case::v0(), Case::grid(), Case::solver());
+  ASSERT_TRUE(d.settled) << d.message;
+  ASSERT_TRUE(d.schedule_found);
+  EXPECT_EQ(d.steps.size(), 2u);
+  for (const DiscoveryStep& s : d.steps) EXPECT_EQ(s.schedule, "table:open [touchdown table] table:slip+");
+  const RefinementResult<PointMass> r = refine_schedule(mass, Case{}, Case::refinement_horizon(), d.discovered.guess);
+  EXPECT_EQ(r.stage, "refined") << r.message;
+  EXPECT_NEAR(r.objective, 18.7116, 1e-4);
+  DiscoveryOptions bad;
+  bad.max_steps = 0;
+  EXPECT_THROW(discover_schedule(mass, Case::system(), Case{}, Case::q0(), Case::v0(), Case::grid(), Case::solver(), bad),
+               InvalidArgument);
+}
+
 /// The guiding example's OCP refined from its time-freezing solution (the musts: converged, mode
 /// validity <= 1e-9, the event-driven re-simulation <= 1e-8; the time-freezing reference's own
 /// re-simulation is 1.4e-4 away).

@@ -84,12 +84,21 @@ void align_impact_samples(ImportedReference<S>& ref, const HybridTrajectory<S>& 
   }
 }
 
+template <Scene S, class Problem>
+TimeFreezingOcpResult<S> read_solution(const Problem& problem, MpccSolution solution, const FesdOptions& fesd);
+
 /// Solves `problem` from `start` and reads the discrete solution, its events and its reference.
 template <Scene S, class Problem>
 TimeFreezingOcpResult<S> solve_and_read(const Problem& problem, const MpccStart& start, const FesdOptions& fesd,
                                         const MpccSolverOptions& solver) {
+  return read_solution<S>(problem, solve_mpcc(problem, start, solver), fesd);
+}
+
+/// The discrete solution of `problem` at `solution`, its events, its reference and its trajectory.
+template <Scene S, class Problem>
+TimeFreezingOcpResult<S> read_solution(const Problem& problem, MpccSolution solution, const FesdOptions& fesd) {
   TimeFreezingOcpResult<S> out;
-  out.solution = solve_mpcc(problem, start, solver);
+  out.solution = std::move(solution);
   const auto pts = problem.points(out.solution.x);
   out.points.assign(pts.begin(), pts.end());
   read_events<FesdMpcc<S>::ny, FesdMpcc<S>::nsw, S::nu, 2 * S::nq>(out.points, fesd.grid.stages, out.element_lengths,

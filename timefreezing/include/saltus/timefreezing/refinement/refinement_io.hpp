@@ -3,6 +3,7 @@
 // written by hybrid/vocabulary/trajectory_io.hpp.
 #pragma once
 
+#include <saltus/timefreezing/refinement/discovery.hpp>
 #include <saltus/timefreezing/refinement/refinement.hpp>
 #include <saltus/timefreezing/refinement/schedule_extraction.hpp>
 
@@ -69,8 +70,9 @@ nlohmann::ordered_json to_json(const S& scene, const RefinementResult<S>& r) {
     phases.push_back({{"phase", p.phase}, {"max_error", finite_or_null(p.max_error)},
                       {"end_error", finite_or_null(p.end_error)}, {"start_projection", finite_or_null(p.start_projection)},
                       {"event_time_error", finite_or_null(p.event_time_error)},
-                      {"x_plus_error", finite_or_null(p.x_plus_error)}, {"event_guards_match", p.event_guards_match}, {"next_mode_matches", p.next_mode_matches},
-                      {"compared_until", p.compared_until}, {"unplanned_events", p.unplanned_events}, {"note", p.note}});
+                      {"x_plus_error", finite_or_null(p.x_plus_error)}, {"event_guards_match", p.event_guards_match},
+                      {"next_mode_matches", p.next_mode_matches}, {"compared_until", p.compared_until},
+                      {"unplanned_events", p.unplanned_events}, {"note", p.note}});
   j["phase_resimulation"] = phases;
   j["open_loop"] = {{"max_error", finite_or_null(r.open_loop.max_error)}, {"compared_until", r.open_loop.compared_until}};
   json implied = json::array();
@@ -88,6 +90,20 @@ nlohmann::ordered_json to_json(const ExtractedSchedule<S>& extracted) {
   for (const ExtractionNote& n : extracted.notes)
     notes.push_back({{"rule", n.rule}, {"t_begin", n.t_begin}, {"t_end", n.t_end}});
   return notes;
+}
+
+/// The discovery stage (discovery.hpp): {settled, message, seconds, steps: [{index, sigma,
+/// complementarity, objective, ipopt_status, ipopt_iterations, seconds, schedule,
+/// extraction_error}]}.
+template <Scene S>
+nlohmann::ordered_json to_json(const DiscoveryResult<S>& d) {
+  nlohmann::ordered_json steps = nlohmann::ordered_json::array();
+  for (const DiscoveryStep& s : d.steps)
+    steps.push_back({{"index", s.index}, {"sigma", s.sigma}, {"complementarity", finite_or_null(s.complementarity)},
+                     {"objective", finite_or_null(s.objective)}, {"ipopt_status", s.ipopt_status},
+                     {"ipopt_iterations", s.ipopt_iterations}, {"seconds", s.seconds}, {"schedule", s.schedule},
+                     {"extraction_error", s.extraction_error}});
+  return {{"settled", d.settled}, {"message", d.message}, {"seconds", d.seconds}, {"steps", steps}};
 }
 
 }  // namespace saltus::timefreezing

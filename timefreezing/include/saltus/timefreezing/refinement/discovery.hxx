@@ -1,0 +1,103 @@
+// The definitions of the discovery stage (declared in discovery.hpp).
+#pragma once
+
+#include <saltus/timefreezing/drivers/optimal_control.hxx>
+#include <saltus/timefreezing/refinement/discovery.hpp>
+#include <saltus/timefreezing/refinement/schedule_extraction.hxx>
+
+#include <chrono>
+#include <ostream>
+#include <sstream>
+#include <utility>
+
+namespace saltus::timefreezing {
+
+inline void DiscoveryOptions::validate() const {
+  SALTUS_REQUIRE(max_steps >= 1, "DiscoveryOptions::max_steps must be >= 1, got ", max_steps);
+  SALTUS_REQUIRE(agreeing_steps >= 1, "DiscoveryOptions::agreeing_steps must be >= 1, got ", agreeing_steps);
+}
+
+namespace detail {
+
+/// The step's record from a one-step solve of the homotopy.
+inline DiscoveryStep discovery_step(int k, double sigma, const MpccSolution& solution) {
+  DiscoveryStep step;
+  step.index = k;
+  step.sigma = sigma;
+  step.complementarity = solution.complementarity;
+  step.objective = solution.objective;
+  step.ipopt_iterations = solution.ipopt_iterations;
+  step.seconds = solution.seconds;
+  step.ipopt_status = solution.steps.empty() ? std::string("no solve") : solution.steps.back().ipopt_status;
+  return step;
+}
+
+inline void print_discovery_step(std::ostream* out, const DiscoveryStep& s) {
+  if (out == nullptr) return;
+  *out << "discovery step " << s.index << "  sigma " << s.sigma << "  compl " << s.complementarity << "  f " << s.objective
+       << "  iter " << s.ipopt_iterations << "  " << s.ipopt_status << "  " << s.seconds << " s  schedule: "
+       << (s.schedule.empty() ? "(none: " + s.extraction_error + ")" : s.schedule) << "\n";
+}
+
+}  // namespace detail
+
+template <Scene S, class Ocp>
+DiscoveryResult<S> discover_schedule(const S& scene, const TimeFreezingSystem<S>& system, const Ocp& ocp,
+                                     const Vec<S::nq>& q0, const Vec<S::nq>& v0, const FesdOptions& fesd,
+                                     const MpccSolverOptions& solver, const DiscoveryOptions& options) {
+  options.validate();
+  const auto clock = std::chrono::steady_clock::now();
+  const FesdMpcc<S, Ocp> problem(system, ocp, q0, v0, fesd);
+  MpccStart start;
+  start.x.resize(problem.variable_count());
+  problem.initial_point(start.x);
+  MpccSolverOptions one_step = solver;
+  one_step.max_homotopy_steps = 1;
+  one_step.polish = false;
+  DiscoveryResult<S> out;
+  std::string previous;
+  int agreeing = 0;
+  double sigma = solver.sigma_0;
+  for (int k = 0; k < options.max_steps; ++k, sigma *= solver.kappa) {
+    one_step.sigma_0 = sigma;
+    MpccSolution solution = solve_mpcc(problem, start, one_step);
+    DiscoveryStep step = detail::discovery_step(k, sigma, solution);
+    const bool solved = !solution.steps.empty() && solution.steps.back().ipopt_succeeded;
+    if (!solved) {
+      detail::print_discovery_step(options.progress, step);
+      out.steps.push_back(step);
+      out.message = "Ipopt did not solve homotopy step " + std::to_string(k) + " (" + step.ipopt_status + ")";
+      break;
+    }
+    start = MpccStart{solution.x, solution.constraint_multipliers, solution.bound_multipliers_lower,
+                      solution.bound_multipliers_upper};
+    out.relaxed = detail::read_solution<S>(problem, std::move(solution), fesd);
+    out.schedule_found = false;
+    try {
+      out.discovered = extract_schedule(scene, out.relaxed.trajectory, options.extraction);
+      out.schedule_found = true;
+      step.schedule = describe(scene, out.discovered.guess.schedule);
+    } catch (const Error& e) {
+      step.extraction_error = e.what();
+    }
+    agreeing = step.schedule.empty() ? 0 : (step.schedule == previous ? agreeing + 1 : 1);
+    previous = step.schedule;
+    detail::print_discovery_step(options.progress, step);
+    out.steps.push_back(step);
+    if (agreeing >= options.agreeing_steps) {
+      out.settled = true;
+      out.message = "the schedule settled: the same at " + std::to_string(agreeing) + " consecutive steps (last sigma " +
+                    std::to_string(sigma) + ")";
+      break;
+    }
+    if (out.relaxed.solution.converged) {
+      out.message = "the homotopy converged at step " + std::to_string(k) + " before the schedule settled";
+      break;
+    }
+  }
+  if (out.message.empty()) out.message = "the schedule did not settle in " + std::to_string(options.max_steps) + " steps";
+  out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - clock).count();
+  return out;
+}
+
+}  // namespace saltus::timefreezing
