@@ -195,19 +195,14 @@ OpenLoopResimulation resimulate_open_loop(const S& scene, const HybridTrajectory
   Simulator<S> sim(scene, options);
   const HybridTrajectory<S> run = sim.run(traj.state(0, traj.t_begin()), traj.t_begin(), traj.t_end(), traj.input);
   OpenLoopResimulation out;
-  out.compared_until = traj.t_begin();
-  double& worst = out.max_error;
-  double& compared_until = out.compared_until;
+  const double tolerance = 1e-6 * std::max(1.0, std::abs(traj.t_end()));
   for (double t : element_times) {
-    const int p = traj.segment_at(t), q = run.segment_at(t);
-    if (p != q) break;
-    const Segment<S>& s = run.segments[static_cast<std::size_t>(q)];
-    const Segment<S>& r = traj.segments[static_cast<std::size_t>(p)];
-    worst = std::max(worst, (run.state(q, std::clamp(t, s.t_begin, s.t_end)) - traj.state(p, std::clamp(t, r.t_begin, r.t_end)))
-                                .cwiseAbs()
-                                .maxCoeff());
-    compared_until = t;
+    const VecT<double, 2 * S::nq> x_sim = detail::state_before_events(run, t, tolerance);
+    const VecT<double, 2 * S::nq> x_ref = detail::state_before_events(traj, t, tolerance);
+    out.max_error = std::max(out.max_error, (x_sim - x_ref).cwiseAbs().maxCoeff());
+    out.compared_until = t;
   }
+  out.events = static_cast<int>(run.events.size());
   return out;
 }
 

@@ -100,12 +100,11 @@ struct PhaseResimulation {
 /// The event-driven re-simulation of the whole refined horizon open loop from x0, under the
 /// optimal input ((b) of the checks).
 struct OpenLoopResimulation {
-  /// max ||x_sim - x_refined||_inf over the element boundaries at which the simulation has seen
-  /// the reference's segments so far (same segment index on both)
+  /// max ||x_sim - x_refined||_inf over all element boundaries of the horizon (before any event at
+  /// a boundary): an unstable motion departs open loop, and this says by how much
   double max_error = 0.0;
-  /// the last such boundary [s]: an unstable motion departs open loop (a missed or extra event),
-  /// and the comparison stops there
-  double compared_until = 0.0;
+  double compared_until = 0.0;  ///< the last boundary compared [s] (the horizon's end)
+  int events = 0;               ///< events of the open-loop simulation (the schedule has P - 1)
 };
 
 template <Scene S>

@@ -6,6 +6,7 @@
 #include <saltus/timefreezing/refinement/phase_resimulation.hxx>
 #include <saltus/timefreezing/refinement/schedule_edits.hxx>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <ostream>
@@ -108,13 +109,20 @@ void edit_schedule(const S& scene, const Ocp& ocp, const OcpHorizon<S>& horizon,
     ScheduleEdit record = *edit;
     record.schedule_after = describe(scene, guess->schedule);
     if (options.progress) *options.progress << "refinement: edit " << record.kind << " in phase " << record.phase << " at t = " << record.t << "\n";
-    auto [edited_nlp, edited_sol] = solve_schedule(scene, ocp, horizon, *guess, options, out);
+    RefinementOptions edited_options = options;
+    edited_options.ipopt.max_iter = std::min(options.ipopt.max_iter, options.edits.max_iter);
+    auto [edited_nlp, edited_sol] = solve_schedule(scene, ocp, horizon, *guess, edited_options, out);
     const bool better = out.solves.back().succeeded && edited_sol.constraint_violation <= 1e-6 &&
                         edited_sol.objective < sol.objective - 1e-9 * std::max(1.0, std::abs(sol.objective));
     if (!better) {
       record.kind += " (rejected: " + (out.solves.back().succeeded ? std::string("no lower cost") : out.solves.back().ipopt_status) + ")";
       out.edits.push_back(record);
-      out.schedule_check_passed = true;  // the edit the multipliers asked for did not lower the cost
+      // Passed when the edit the multipliers asked for solved without lowering the cost; an edit
+      // whose solve failed leaves the question open.
+      out.schedule_check_passed = out.solves.back().succeeded;
+      if (!out.solves.back().succeeded)
+        out.message += "; the proposed " + edit->kind + " edit of phase " + std::to_string(edit->phase) + " did not solve (" +
+                       out.solves.back().ipopt_status + ")";
       return;
     }
     out.edits.push_back(record);

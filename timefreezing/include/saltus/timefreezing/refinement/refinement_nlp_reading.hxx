@@ -14,6 +14,7 @@ inline void RefinementOptions::validate() const {
   SALTUS_REQUIRE(std::isfinite(ipopt.tol) && ipopt.tol > 0.0, "refinement: ipopt.tol must be > 0, got ", ipopt.tol);
   SALTUS_REQUIRE(ipopt.max_iter >= 0, "refinement: ipopt.max_iter must be >= 0, got ", ipopt.max_iter);
   SALTUS_REQUIRE(edits.max_edits >= 0, "refinement: edits.max_edits must be >= 0, got ", edits.max_edits);
+  SALTUS_REQUIRE(edits.max_iter >= 0, "refinement: edits.max_iter must be >= 0, got ", edits.max_iter);
   SALTUS_REQUIRE(std::isfinite(edits.active_tolerance) && edits.active_tolerance >= 0.0,
                  "refinement: edits.active_tolerance must be >= 0, got ", edits.active_tolerance);
   SALTUS_REQUIRE(std::isfinite(edits.multiplier_threshold) && edits.multiplier_threshold >= 0.0,

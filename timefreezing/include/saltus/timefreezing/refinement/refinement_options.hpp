@@ -37,6 +37,11 @@ struct RefinementEdits {
   double multiplier_threshold = 1e-6;
   /// A phase wants to vanish when its duration is <= vanishing_duration [s] at the optimum.
   double vanishing_duration = 1e-6;
+  /// Ipopt iterations at most for the solve of an edited schedule (>= 0; capped by
+  /// RefinementIpopt::max_iter). An edit that does not solve is rejected; measured on the
+  /// plank-box (h = 0.02 s): the accepted lift-off edit took 107 iterations, the rejected vanish
+  /// edit ran into the 500 of max_iter (155 s).
+  int max_iter = 200;
 };
 
 /// What "refined" means (RefinementResult::stage): a converged last solve AND these checks.
