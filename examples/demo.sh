@@ -1,48 +1,53 @@
 #!/usr/bin/env bash
-# The main job: installs the Debian packages (if missing), builds Saltus, runs every example scene
-# and the contact/simulation benchmarks, prints the results and writes the report files to
-# report/ (trajectories as JSON and CSV, benchmark figures as JSON).
+# The main job: installs the Debian packages (if missing), builds the libraries, the scene library
+# and the example programs it runs (not the tests, not the benchmarks: `bash bench/run.sh`), runs
+# the example scenes, the flagship pipeline of the plank-box (discovery, refinement, analysis) and
+# the tracking designs, prints the results and writes the report files to report/ (trajectories
+# as JSON and CSV, the pipelines' reports as JSON). One progress line per stage on stderr.
 #   SALTUS_JOBS=N   parallel build jobs (default: nproc)
 set -euo pipefail
 here=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 build="$here/build"
+start=$(date +%s)
 bash "$here/.ci/install-deps.sh"
-bash "$here/.ci/configure.sh" "$here" "$build" -DCMAKE_BUILD_TYPE=Release -DSALTUS_BUILD_BENCH=ON
-cmake --build "$build" -j "${SALTUS_JOBS:-$(nproc)}"
+bash "$here/.ci/configure.sh" "$here" "$build" -DCMAKE_BUILD_TYPE=Release
+examples=(bouncing_ball guiding_example plank_box hopper spatial_box tracking_stability)
+cmake --build "$build" -j "${SALTUS_JOBS:-$(nproc)}" --target "${examples[@]}"
+echo "built in $(( $(date +%s) - start )) s"
 export SALTUS_REPORT_DIR="$here/report"
 mkdir -p "$SALTUS_REPORT_DIR"
 for example in bouncing_ball guiding_example plank_box hopper spatial_box; do
   echo
   "$build/examples/$example"
 done
-for bench in contact_properties simulation_accuracy jump_gains simultaneous_impact; do
-  if [ -x "$build/bench/$bench" ]; then
-    echo
-    echo "== $bench =="
-    "$build/bench/$bench"
-    "$build/bench/$bench" --json > "$SALTUS_REPORT_DIR/$bench.json"
-    echo "wrote $SALTUS_REPORT_DIR/$bench.json"
-  fi
-done
 # The guiding example's time-freezing OCP (a few seconds): JSON on stdout, progress on stderr.
 echo
 echo "== guiding_example --json (time-freezing OCP) =="
 OPENBLAS_NUM_THREADS=1 "$build/examples/guiding_example" --json | tee "$SALTUS_REPORT_DIR/guiding_example_ocp.json"
-# The flagship OCPs, one thread each and side by side on the 2 cores (one progress line per Ipopt
-# solve on stderr, prefixed): the hopper over three holes (time-freezing paper Section 6) from the
-# paper's initialisation, continuation on the holes, then the smoothing homotopy (about 15
-# minutes; it does not converge yet, issue "Optimal references for the flagship scenes": the JSON
-# says how far it got), and the plank-box flat landing (about 2 minutes; it converges, and its
-# JSON has the recovered events, the event-driven re-simulation's, and the analysis of that
-# reference: jump gains, an LQR tracking design, its stability check and 100 perturbed runs).
+# The flagship pipeline of the plank-box flat landing, one thread (progress lines on stderr):
+# discovery by the time-freezing homotopy until its contact schedule settles, the mode-schedule
+# refinement (the exact reference), its re-simulations, then the analysis of the refined reference
+# (jump gains, an LQR tracking design, its stability check and 100 perturbed runs). About 4
+# minutes. The hopper over three holes is not run here: its homotopy does not converge and its
+# discovery finds no contact schedule (docs/refinement.md; `build/examples/hopper --json`, about
+# 15 minutes, and `build/bench/hopper_discovery` reproduce it).
 ocp_summary() {
   python3 - "$1" <<'PY'
 import json, sys
 d = json.load(open(sys.argv[1]))
-print(f'converged {d["converged"]}  complementarity {d["complementarity"]:.2e}  path violation {d["max_path_violation"]:.2e}'
-      f'  target error {d["target_error"]:.2e}  objective {d["objective"]:.4g}  Ipopt iterations {d["ipopt_iterations"]}'
+refined = d.get("refinement") is not None
+print(f'{"relaxed (discovery): " if refined else ""}converged {d["converged"]}  complementarity {d["complementarity"]:.2e}'
+      f'  path violation {d["max_path_violation"]:.2e}  target error {d["target_error"]:.2e}'
+      f'  objective {d.get("relaxed_objective", d["objective"]):.4g}  Ipopt iterations {d["ipopt_iterations"]}'
       f'  {d["solve_seconds"]:.0f} s  ({d["message"]})')
-for e in d.get("recovered_events", []):
+if "stage" in d:
+    print(f'stage: {d["stage"]}')
+    if refined:
+        r = d["refinement"]
+        print(f'  schedule {d["schedule"]}; relaxed objective {d["relaxed_objective"]:.4f} -> refined {r["objective"]:.4f};'
+              f' mode validity {r["mode_validity_violation"]:.1e}; per-phase re-simulation {r["phase_resim_max_error"]:.1e};'
+              f' open loop {r["open_loop"]["max_error"]:.1e}; discovery {d["discovery_seconds"]:.0f} s, refinement {r["refinement_seconds"]:.0f} s')
+for e in ([] if refined else d.get("recovered_events", [])):
     print(f'  event t = {e["t"]:.6f}: {"impact" if e["impact"] else "mode change"}, {", ".join(e["guards"])}'
           f'  ({e["mode_before"]} -> {e["mode_after"]})')
 if d.get("resim_max_error") is not None:
@@ -66,18 +71,12 @@ if a is not None:
 PY
 }
 echo
-echo "== hopper --json (time-freezing OCP over three holes) and plank_box --json (flat landing), in parallel =="
-( OPENBLAS_NUM_THREADS=1 "$build/examples/plank_box" --json > "$SALTUS_REPORT_DIR/plank_box_ocp.json" \
-    2> >(sed 's/^/[plank_box] /' >&2) ) &
-plank_box_job=$!
-OPENBLAS_NUM_THREADS=1 "$build/examples/hopper" --json > "$SALTUS_REPORT_DIR/hopper_ocp.json" 2> >(sed 's/^/[hopper] /' >&2) ||
-  echo "hopper --json: not converged (see $SALTUS_REPORT_DIR/hopper_ocp.json)"
-wait "$plank_box_job" || echo "plank_box --json: not converged (see $SALTUS_REPORT_DIR/plank_box_ocp.json)"
-echo "hopper over three holes:"
-ocp_summary "$SALTUS_REPORT_DIR/hopper_ocp.json"
-echo "plank-box flat landing:"
+echo "== plank_box --json (the flat landing: discovery, refinement, analysis) =="
+OPENBLAS_NUM_THREADS=1 "$build/examples/plank_box" --json > "$SALTUS_REPORT_DIR/plank_box_ocp.json" ||
+  echo "plank_box --json: the reference is not refined (see $SALTUS_REPORT_DIR/plank_box_ocp.json)"
+echo "plank-box flat landing (the relaxed solution where discovery stopped, then the refinement):"
 ocp_summary "$SALTUS_REPORT_DIR/plank_box_ocp.json"
-echo "wrote $SALTUS_REPORT_DIR/hopper_ocp.json and $SALTUS_REPORT_DIR/plank_box_ocp.json"
+echo "wrote $SALTUS_REPORT_DIR/plank_box_ocp.json"
 # Tracking designs along references with impacts: the stability check against 200 nonlinear
 # closed-loop runs per design on all cores (a minute; progress lines on stderr).
 echo
@@ -95,11 +94,5 @@ s = d["parallel_speedup"]
 print(f'Monte Carlo speed-up on {s["threads"]} threads: {s["speedup"]} ({s["one_thread_seconds"]} s -> {s["all_threads_seconds"]} s)')
 PY
 echo "wrote $SALTUS_REPORT_DIR/tracking_stability.json"
-# Time-freezing + FESD against closed forms (about 5 minutes): run once; its progress lines (one per
-# configuration, on stderr) are the printed results, the table is in the JSON.
-if [ -x "$build/bench/fesd_accuracy" ]; then
-  echo
-  echo "== fesd_accuracy =="
-  OPENBLAS_NUM_THREADS=1 "$build/bench/fesd_accuracy" --json > "$SALTUS_REPORT_DIR/fesd_accuracy.json"
-  echo "wrote $SALTUS_REPORT_DIR/fesd_accuracy.json"
-fi
+echo
+echo "main job done in $(( $(date +%s) - start )) s; report files in $SALTUS_REPORT_DIR"
