@@ -10,7 +10,7 @@ shift || true
 # A new build directory is configured with clang unless CXX is set: on this project's 2-core
 # machine clang 14 at -O2 builds the library, scenes, examples and tests in 458 s (a fresh clone)
 # against GCC 12's 927 s (the scenes' template instantiations: GCC's front end alone takes 110 s
-# on the flagship OCP test, clang's 34 s; README, "Build and test times"). libomp-dev: SUNDIALS'
+# on the flagship OCP test, clang's 34 s; docs/build.md). libomp-dev: SUNDIALS'
 # CMake package asks for OpenMP, which clang finds only with LLVM's OpenMP runtime installed.
 # An existing build directory keeps the compiler it was configured with (examples/demo.sh, which
 # shares build/, configures a new one with the system's default compiler); the consumer test

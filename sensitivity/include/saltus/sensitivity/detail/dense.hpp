@@ -3,7 +3,7 @@
 // decompositions in the scene's templates: each scene's sensitivity translation unit then
 // generated its own JacobiSVD, EigenSolver, SelfAdjointEigenSolver, QR and LU code for its own
 // sizes: two thirds of that unit's compile time with GCC 12 (hopper: 272 s, 90 s without them;
-// README, "Build and test times"). These calls
+// docs/build.md). These calls
 // run a few hundred times per analysis, never in the simulator's step, so the allocation of a
 // dynamic-size decomposition costs nothing measurable. Internal header.
 #pragma once
