@@ -193,8 +193,15 @@ OpenLoopResimulation resimulate_open_loop(const S& scene, const HybridTrajectory
   SimulationOptions options = simulation;
   options.breakpoints = element_times;
   Simulator<S> sim(scene, options);
-  const HybridTrajectory<S> run = sim.run(traj.state(0, traj.t_begin()), traj.t_begin(), traj.t_end(), traj.input);
   OpenLoopResimulation out;
+  HybridTrajectory<S> run;
+  try {
+    run = sim.run(traj.state(0, traj.t_begin()), traj.t_begin(), traj.t_end(), traj.input);
+  } catch (const Error& e) {
+    out.max_error = std::numeric_limits<double>::quiet_NaN();
+    out.note = std::string("the simulation failed: ") + e.what();
+    return out;
+  }
   const double tolerance = 1e-6 * std::max(1.0, std::abs(traj.t_end()));
   for (double t : element_times) {
     const VecT<double, 2 * S::nq> x_sim = detail::state_before_events(run, t, tolerance);

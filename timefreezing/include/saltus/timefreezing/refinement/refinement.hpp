@@ -105,6 +105,7 @@ struct OpenLoopResimulation {
   double max_error = 0.0;
   double compared_until = 0.0;  ///< the last boundary compared [s] (the horizon's end)
   int events = 0;               ///< events of the open-loop simulation (the schedule has P - 1)
+  std::string note;             ///< "" or why there is no comparison (max_error NaN: the simulation failed)
 };
 
 template <Scene S>

@@ -32,7 +32,7 @@ inline nlohmann::ordered_json finite_or_null(double v) {
 ///   phase_resimulation          [{phase, max_error, end_error, start_projection, event_time_error,
 ///                               x_plus_error, event_guards_match, next_mode_matches, compared_until,
 ///                               unplanned_events, note}] (event_time_error null where no event)
-///   open_loop                   {max_error, compared_until, events}
+///   open_loop                   {max_error, compared_until, events, note}
 ///   implied_rows                [description]
 ///   ipopt_iterations, refinement_seconds
 template <Scene S>
@@ -75,7 +75,7 @@ nlohmann::ordered_json to_json(const S& scene, const RefinementResult<S>& r) {
                       {"unplanned_events", p.unplanned_events}, {"note", p.note}});
   j["phase_resimulation"] = phases;
   j["open_loop"] = {{"max_error", finite_or_null(r.open_loop.max_error)}, {"compared_until", r.open_loop.compared_until},
-                    {"events", r.open_loop.events}};
+                    {"events", r.open_loop.events}, {"note", r.open_loop.note}};
   json implied = json::array();
   for (const ImpliedRow& row : r.implied_rows) implied.push_back(row.description);
   j["implied_rows"] = implied;
