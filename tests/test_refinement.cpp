@@ -222,6 +222,39 @@ TEST(ScheduleRefinement, AScheduleThatCannotReachItsTargetSaysSo) {
   EXPECT_NE(r.message.find("Ipopt"), std::string::npos) << r.message;
 }
 
+/// A sticking stance that ends in a release while the input pushes sideways: the cost wants
+/// u = (2, 15) N throughout (15 N > m g lifts the mass), the stance lasts at least 0.3 s. At the
+/// release the whole contact force vanishes: lambda_n = 0 (the guard) and lambda_t = 0 (the
+/// friction cone with lambda_n = 0), so the push has to be off there; without the tangential row
+/// the release point kept lambda_t = -2 N against lambda_n = 0 (mode validity violation 2).
+struct PushAndLift {
+  template <class T>
+  T running_cost(const VecT<T, 4>&, const VecT<T, 2>& u) const {
+    return (u[0] - T(2.0)) * (u[0] - T(2.0)) + (u[1] - T(15.0)) * (u[1] - T(15.0));
+  }
+};
+
+TEST(ScheduleRefinement, AReleaseFromStickLeavesNoTangentialForce) {
+  ScheduleGuess<PointMass> g;
+  g.schedule.phases = {closed_mode(0), open_mode()};
+  g.schedule.events = {guards_between(frictional_mass(), g.schedule.phases[0], g.schedule.phases[1])};
+  g.event_times = {0.5};
+  g.state = [](int p, double t) { return p == 0 ? Vec<4>(0, 0, 0, 0) : Vec<4>(0, 0.5 * (t - 0.5) * (t - 0.5), 0, t - 0.5); };
+  g.input = [](double) { return Vec<2>(0, 10); };
+  OcpHorizon<PointMass> h;
+  h.x0.setZero();
+  h.final_time = 1.0;
+  RefinementOptions o;
+  o.grid.max_element_duration = 0.05;
+  o.min_phase_duration = 0.3;
+  o.edits.max_edits = 0;
+  const RefinementResult<PointMass> r = refine_schedule(frictional_mass(), PushAndLift{}, h, g, o);
+  ASSERT_TRUE(r.converged) << r.message;
+  EXPECT_LE(r.mode_validity_violation, 1e-9);
+  EXPECT_NEAR(r.event_times[0], 0.3, 1e-6);  // the stance as short as allowed
+  EXPECT_LE(r.phase_resim_max_error, 1e-8);
+}
+
 /// A stance built to want a lift-off: a frictionless mass slides on the table to x = 1 at rest at
 /// T = 1 while the cost asks for an upward thrust u2 ~ 15 N > m g around t = 0.5. On the table
 /// lambda_n = m g - u2 >= 0 holds the thrust at m g with a positive multiplier: the edit inserts a

@@ -32,7 +32,8 @@
 // EVENTS (the boundary between phase p and p + 1, at x- = the last stage of phase p, u- = its last
 // input, t = t_{p+1}), with the hybrid core's event physics:
 //     touchdown of i:   h_n,i(q-) = 0 and zeta_n,i(x-) <= 0 (approaching)
-//     release of i:     lambda_n,i(x-, u-) = 0   (the flow of m_p)
+//     release of i:     lambda_n,i(x-, u-) = 0   (the flow of m_p); released from stick also
+//                       lambda_t,i(x-, u-) = 0 (the cone rows, dropped at x-, would leave it free)
 //     stop of i:        zeta_t,i(x-) = 0
 //     slip onset of i:  lambda_t,i(x-, u-) + s mu lambda_n,i(x-, u-) = 0   (s: the slip sign of
 //                       m_{p+1}; friction opposes the slip)
@@ -218,13 +219,17 @@ class ScheduleRefinementNlp final : public Mpcc {
     ImpactMode<nc> impulse_mode{};
     bool impact = false;
     std::vector<Guard> imposed_guards;   // after dropping the implied ones
+    // released from stick: lambda_t = 0 as well (the whole force vanishes; a slipping contact's
+    // lambda_t = -s mu lambda_n vanishes with lambda_n), rows after the guards
+    std::vector<int> released_sticking;
     std::vector<int> approach_contacts;  // touchdowns: zeta_n <= 0
     std::vector<int> separating_contacts;
     int impulse_rows = 0;
     int first_row = 0;
     int row_count() const {
-      return static_cast<int>(imposed_guards.size() + approach_contacts.size() + separating_contacts.size()) + nx +
-             impulse_rows;
+      return static_cast<int>(imposed_guards.size() + released_sticking.size() + approach_contacts.size() +
+                              separating_contacts.size()) +
+             nx + impulse_rows;
     }
   };
 

@@ -97,6 +97,7 @@ VecT<T, ScheduleRefinementNlp<S, Ocp>::event_outputs> ScheduleRefinementNlp<S, O
     }
     ++k;
   }
+  for (int i : ev.released_sticking) out[k++] = fws.force[i].tangent[0];
   k = 2 * nc;
   for (int i : ev.approach_contacts) out[k++] = fws.kin.contacts[i].zeta_n;
   VecT<T, nx> x_plus = x_minus;

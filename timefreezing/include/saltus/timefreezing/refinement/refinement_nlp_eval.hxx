@@ -185,7 +185,7 @@ void ScheduleRefinementNlp<S, Ocp>::constraints(const Eigen::Ref<const Eigen::Ve
     const EventRows& ev = events_[static_cast<std::size_t>(b)];
     const auto& phi = event_value_[static_cast<std::size_t>(b)];
     int row = ev.first_row;
-    for (std::size_t k = 0; k < ev.imposed_guards.size(); ++k) g[row++] = phi[static_cast<int>(k)];
+    for (std::size_t k = 0; k < ev.imposed_guards.size() + ev.released_sticking.size(); ++k) g[row++] = phi[static_cast<int>(k)];
     for (std::size_t k = 0; k < ev.approach_contacts.size(); ++k) g[row++] = phi[2 * nc + static_cast<int>(k)];
     for (int i = 0; i < nx; ++i) g[row++] = x[start_index(b + 1) + i] - phi[3 * nc + i];
     for (int k = 0; k < ev.impulse_rows; ++k) g[row++] = phi[3 * nc + nx + k];
@@ -232,7 +232,7 @@ void ScheduleRefinementNlp<S, Ocp>::walk_jacobian(Emit&& emit) const {
       for (int k = 0; k < count; ++k, ++row)
         for (int a = 0; a < nwe; ++a) emit(row, event_global(b, a), sign * jb(first_output + k, a));
     };
-    rows_from(0, static_cast<int>(ev.imposed_guards.size()), 1.0);
+    rows_from(0, static_cast<int>(ev.imposed_guards.size() + ev.released_sticking.size()), 1.0);
     rows_from(2 * nc, static_cast<int>(ev.approach_contacts.size()), 1.0);
     for (int i = 0; i < nx; ++i) emit(row + i, start_index(b + 1) + i, 1.0);
     rows_from(3 * nc, nx, -1.0);
@@ -281,7 +281,8 @@ VecT<double, ScheduleRefinementNlp<S, Ocp>::event_outputs> ScheduleRefinementNlp
   const EventRows& ev = events_[static_cast<std::size_t>(b)];
   VecT<double, event_outputs> weight = VecT<double, event_outputs>::Zero();
   int row = ev.first_row;
-  for (std::size_t k = 0; k < ev.imposed_guards.size(); ++k) weight[static_cast<int>(k)] = lambda[row++];
+  for (std::size_t k = 0; k < ev.imposed_guards.size() + ev.released_sticking.size(); ++k)
+    weight[static_cast<int>(k)] = lambda[row++];
   for (std::size_t k = 0; k < ev.approach_contacts.size(); ++k) weight[2 * nc + static_cast<int>(k)] = lambda[row++];
   for (int i = 0; i < nx; ++i) weight[3 * nc + i] = -lambda[row++];
   for (int k = 0; k < ev.impulse_rows; ++k) weight[3 * nc + nx + k] = lambda[row++];

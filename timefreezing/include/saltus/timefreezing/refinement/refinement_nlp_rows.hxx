@@ -201,6 +201,9 @@ void ScheduleRefinementNlp<S, Ocp>::find_implied_guards() {
         detail::append_row(K, row);
       }
     ev.imposed_guards = se.guards;
+    for (const Guard& g : se.guards)
+      if (g.kind == GuardKind::Release && before[g.contact].mode == ContactMode::Stick && scene_.contact(g.contact).tangents() > 0)
+        ev.released_sticking.push_back(g.contact);
     VecT<double, event_outputs> ev_value;
     MatT<double, event_outputs, nwe> ev_jacobian;
     detail::local_jacobian<nwe, event_outputs>([&](const auto& w) { return event_block(b, w, fws, jws); },
@@ -303,7 +306,7 @@ void ScheduleRefinementNlp<S, Ocp>::bounds(Eigen::Ref<Eigen::VectorXd> x_lower, 
     }
   }
   for (const EventRows& ev : events_) {
-    const int approach = ev.first_row + static_cast<int>(ev.imposed_guards.size());
+    const int approach = ev.first_row + static_cast<int>(ev.imposed_guards.size() + ev.released_sticking.size());
     g_lower.segment(approach, static_cast<int>(ev.approach_contacts.size())).setConstant(-inf);
     const int signs = approach + static_cast<int>(ev.approach_contacts.size()) + nx;
     g_upper.segment(signs, ev.impulse_rows + static_cast<int>(ev.separating_contacts.size())).setConstant(inf);
