@@ -6,13 +6,13 @@
 //                 [--landing-only] [--ipopt NAME=VALUE]... [--kappa K] [--sigma0 S] [--progress]
 //
 // --finite-elements replaces the default N_fe = 1, 2, 4, 8 (the budget rule drops the last one).
-// --refine sets MpccSolverOptions::complementarity_refinement (in (0, 1e-9)) for the guiding
+// --refine sets MpccSolverOptions::Homotopy::complementarity_refinement (in (0, 1e-9)) for the guiding
 // example: each control interval's converged homotopy goes on towards that residual.
 // --contact-side sets FesdOptions::regularisation.contact_side (>= 0; scheme "fesd+side" when > 0) for both
 // examples (default: 0 for the guiding example, the landing's own 1e-2); --landing-only runs the
 // frictional landing alone. --ipopt passes an Ipopt option to
 // every solve of both examples (as in hopper_ocp), --kappa K (in (0, 1)) and --sigma0 S (> 0) set
-// the homotopy's MpccSolverOptions::kappa and sigma_0 (any of the three adds "+opts" to the scheme),
+// the homotopy's MpccSolverOptions::Homotopy::kappa and sigma_0 (any of the three adds "+opts" to the scheme),
 // --progress prints one line per Ipopt solve on stderr.
 // SALTUS_BENCH_TRACE=1 prints, per configuration, the error of every element boundary's state
 // against the closed form y(tau) (exact_state below): where along the horizon the error arises;
@@ -184,7 +184,7 @@ double parse_number(const char* text) {
   return end != text && *end == '\0' && std::isfinite(x) ? x : std::numeric_limits<double>::quiet_NaN();
 }
 
-/// MpccSolverOptions::complementarity_refinement of the guiding example's runs (--refine).
+/// MpccSolverOptions::Homotopy::complementarity_refinement of the guiding example's runs (--refine).
 double refinement = 0.0;
 /// FesdOptions::regularisation.contact_side of both examples' runs (--contact-side; < 0: the example's
 /// own, 0 for the guiding example, 1e-2 for the frictional landing).
@@ -195,9 +195,9 @@ std::vector<timefreezing::IpoptOption> ipopt_overrides;
 double kappa_override = 0.0, sigma0_override = 0.0;
 bool progress = false;
 void apply_solver_flags(timefreezing::MpccSolverOptions& solver) {
-  solver.ipopt_options.insert(solver.ipopt_options.end(), ipopt_overrides.begin(), ipopt_overrides.end());
-  if (kappa_override > 0.0) solver.kappa = kappa_override;
-  if (sigma0_override > 0.0) solver.sigma_0 = sigma0_override;
+  solver.ipopt.options.insert(solver.ipopt.options.end(), ipopt_overrides.begin(), ipopt_overrides.end());
+  if (kappa_override > 0.0) solver.homotopy.kappa = kappa_override;
+  if (sigma0_override > 0.0) solver.homotopy.sigma_0 = sigma0_override;
   if (progress) solver.progress = &std::cerr;
 }
 /// "+opts" when --ipopt, --kappa or --sigma0 changed the solver.
@@ -230,7 +230,7 @@ Row run_guiding(const std::string& scheme, int stages, int finite_elements) {
   if (contact_side >= 0.0) o.regularisation.contact_side = contact_side;
   const auto start = std::chrono::steady_clock::now();
   MpccSolverOptions solver;
-  solver.complementarity_refinement = refinement;
+  solver.homotopy.complementarity_refinement = refinement;
   apply_solver_flags(solver);
   const auto sim = simulate_time_freezing(system, Vec<2>(0, 1), Vec<2>(0, 0), o, Example3Input{}, solver);
   r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

@@ -2,29 +2,23 @@
 // second homotopy of the variants that change the relaxation on the way ("smoothing, then ...").
 //
 //   NAME [--json] [--only VARIANT] [--max-steps K] [--integrated-gap] [--velocity-cross]
-//        [--elastic] [--gap-scale K] [--contact-side W]
-//        [--element-length-freedom G] [--warm-start primal|primal-dual] [--warm-start-below S]
-//        [--kappa K]
+//        [--gap-scale K] [--contact-side W]
+//        [--element-length-freedom G] [--warm-start primal|primal-dual] [--kappa K]
 //        [--polish-below S] [--polish-max-iter K] [--max-iter K] [--ipopt OPTION=VALUE]...
 //
 // --max-steps K overrides the homotopy's step budget; --integrated-gap solves every variant with the gap switching
 // functions read from the integrated gaps (FesdOptions::switching.integrated_gap); --velocity-cross with
 // cross-complementarity on the velocity switching functions too
-// (FesdOptions::switching.velocity_detection); --elastic with the l-infinity elastic steering of the
-// inequality-relaxed pairs (MpccSolverOptions::elastic_infinity) for every Scholtes or Smoothing
-// solve (a Penalty variant or stage runs without it: it has no relaxation rows to hold the slack);
-// --gap-scale K sets the gaps' switching-function scale K_gap in (0, 1e6] [1/m]
+// (FesdOptions::switching.velocity_detection); --gap-scale K sets the gaps' switching-function scale K_gap in (0, 1e6] [1/m]
 // (FesdOptions::switching.scale[0]); --contact-side W sets the contact-side selection's weight
 // rho_c in [0, 1e3] (FesdOptions::regularisation.contact_side; 0 switches it off) for every variant;
 // --element-length-freedom G sets gamma_h in [0, 1] (FesdOptions::grid.element_length_freedom: every
 // element length in [(1 - G) h0, (1 + G) h0]; the default 1 lets an element shrink to length 0);
-// --kappa K sets the homotopy's decrease factor in (0, 1) (MpccSolverOptions::kappa);
+// --kappa K sets the homotopy's decrease factor in (0, 1) (MpccSolverOptions::Homotopy::kappa);
 // --warm-start says what every solve after the first
 // (continuation stages, homotopy steps, retries, polishes) starts from (MpccSolverOptions::
-// warm_start: the previous primal-dual solution, the default, or its x alone); --warm-start-below S
-// (with primal-only starts only) starts the homotopy's solves with sigma <= S from the previous
-// primal-dual solution instead (MpccSolverOptions::warm_start_below); --polish-below and
-// --polish-max-iter set MpccSolverOptions::polish_below and polish_max_iter; --ipopt passes an
+// warm_start: the previous primal-dual solution, the default, or its x alone); --polish-below and
+// --polish-max-iter set MpccSolverOptions::Polish::below and max_iter; --ipopt passes an
 // Ipopt option to every solve (an integer or a number when VALUE parses as one, else a string),
 // e.g. `--ipopt mumps_pivtol=1e-4 --ipopt print_timing_statistics=yes --ipopt output_file=ip.log
 // --ipopt file_print_level=5`.
@@ -47,34 +41,29 @@ namespace saltus::bench {
 struct OcpBenchArgs {
   bool json = false;
   std::string only;   ///< one variant by name; empty: all
-  int max_steps = -1; ///< > 0: MpccSolverOptions::max_homotopy_steps
-  bool elastic = false;  ///< MpccSolverOptions::elastic_infinity for every Scholtes or Smoothing solve
+  int max_steps = -1; ///< > 0: MpccSolverOptions::Homotopy::max_steps
   double gap_scale = 0.0;  ///< > 0: FesdOptions::switching.scale[0] (K_gap) for every variant
   double contact_side = -1.0;  ///< >= 0: FesdOptions::regularisation.contact_side (rho_c) for every variant
   double element_length_freedom = -1.0;  ///< in [0, 1]: FesdOptions::grid.element_length_freedom (gamma_h)
   bool integrated_gap = false;  ///< FesdOptions::switching.integrated_gap for every variant
   bool velocity_cross = false;  ///< FesdOptions::switching.velocity_detection for every variant
   int warm_start = -1;  ///< 1 primal-dual, 0 primal only: MpccSolverOptions::warm_start; -1: the variant's
-  double polish_below = -1.0;  ///< >= 0: MpccSolverOptions::polish_below
-  double warm_start_below = -1.0;  ///< >= 0: MpccSolverOptions::warm_start_below
-  int polish_max_iter = -1;    ///< > 0: MpccSolverOptions::polish_max_iter
-  int max_iter = -1;           ///< > 0: MpccSolverOptions::max_iter (Ipopt iterations per homotopy step)
-  double kappa = -1.0;         ///< in (0, 1): MpccSolverOptions::kappa
+  double polish_below = -1.0;  ///< >= 0: MpccSolverOptions::Polish::below
+  int polish_max_iter = -1;    ///< > 0: MpccSolverOptions::Polish::max_iter
+  int max_iter = -1;           ///< > 0: MpccSolverOptions::IpoptSettings::max_iter (per homotopy step)
+  double kappa = -1.0;         ///< in (0, 1): MpccSolverOptions::Homotopy::kappa
   std::vector<timefreezing::IpoptOption> ipopt_options;
 
   /// The command line's share of a variant's solver options: the step budget, kappa, the warm
   /// start, the polish and the Ipopt options.
   void apply(timefreezing::MpccSolverOptions& s) const {
-    if (max_steps > 0) s.max_homotopy_steps = max_steps;
-    if (polish_below >= 0.0) s.polish_below = polish_below;
+    if (max_steps > 0) s.homotopy.max_steps = max_steps;
+    if (polish_below >= 0.0) s.polish.below = polish_below;
     if (warm_start >= 0) s.warm_start = warm_start == 1;
-    if (warm_start_below >= 0.0) s.warm_start_below = warm_start_below;
-    // Penalty has no relaxation rows to hold the slack: its variants run without it.
-    if (elastic && s.relaxation != timefreezing::MpccSolverOptions::Relaxation::Penalty) s.elastic_infinity = true;
-    if (polish_max_iter > 0) s.polish_max_iter = polish_max_iter;
-    if (max_iter > 0) s.max_iter = max_iter;
-    if (kappa > 0.0) s.kappa = kappa;
-    s.ipopt_options.insert(s.ipopt_options.end(), ipopt_options.begin(), ipopt_options.end());
+    if (polish_max_iter > 0) s.polish.max_iter = polish_max_iter;
+    if (max_iter > 0) s.ipopt.max_iter = max_iter;
+    if (kappa > 0.0) s.homotopy.kappa = kappa;
+    s.ipopt.options.insert(s.ipopt.options.end(), ipopt_options.begin(), ipopt_options.end());
   }
   /// The command line's share of a variant's grid options: the integrated gap, the velocities' switch detection, the gap scale, the contact-side weight, the
   /// element lengths' freedom.
@@ -135,9 +124,9 @@ inline std::optional<OcpBenchArgs> parse_ocp_bench_args(int argc, char** argv, c
   const auto usage = [program] {
     std::fprintf(stderr,
                  "usage: %s [--json] [--only NAME] [--max-steps K] [--integrated-gap] [--velocity-cross] "
-                 "[--elastic] [--gap-scale K] [--contact-side W] [--element-length-freedom G] [--warm-start primal|primal-dual] [--warm-start-below S] [--kappa K] [--polish-below S] [--polish-max-iter K] [--max-iter K] [--ipopt NAME=VALUE]...\n"
+                 "[--gap-scale K] [--contact-side W] [--element-length-freedom G] [--warm-start primal|primal-dual] [--kappa K] [--polish-below S] [--polish-max-iter K] [--max-iter K] [--ipopt NAME=VALUE]...\n"
                  "  (NAME non-empty; --max-steps 1..1000; --max-iter, --polish-max-iter 1..100000; --gap-scale in (0, 1e6];\n"
-                 "   --contact-side in [0, 1e3]; --element-length-freedom in [0, 1]; --kappa in (0, 1); --warm-start default primal-dual; --polish-below, --warm-start-below in [0, 1])\n",
+                 "   --contact-side in [0, 1e3]; --element-length-freedom in [0, 1]; --kappa in (0, 1); --warm-start default primal-dual; --polish-below in [0, 1])\n",
                  program);
     return std::optional<OcpBenchArgs>();
   };
@@ -147,7 +136,6 @@ inline std::optional<OcpBenchArgs> parse_ocp_bench_args(int argc, char** argv, c
       a.only = argv[++i];
       if (a.only.empty()) return usage();  // an empty name would run every variant
     }
-    else if (std::strcmp(argv[i], "--elastic") == 0) a.elastic = true;
     else if (std::strcmp(argv[i], "--integrated-gap") == 0) a.integrated_gap = true;
     else if (std::strcmp(argv[i], "--velocity-cross") == 0) a.velocity_cross = true;
     else if (std::strcmp(argv[i], "--max-steps") == 0 && i + 1 < argc) {
@@ -167,8 +155,6 @@ inline std::optional<OcpBenchArgs> parse_ocp_bench_args(int argc, char** argv, c
       if (kind == "primal") a.warm_start = 0;
       else if (kind == "primal-dual") a.warm_start = 1;
       else return usage();
-    } else if (std::strcmp(argv[i], "--warm-start-below") == 0 && i + 1 < argc) {
-      if (!number_in(argv[++i], [](double s) { return s >= 0.0 && s <= 1.0; }, a.warm_start_below)) return usage();
     } else if (std::strcmp(argv[i], "--polish-max-iter") == 0 && i + 1 < argc) {
       if (!integer_in(argv[++i], 1, 100000, a.polish_max_iter)) return usage();
     } else if (std::strcmp(argv[i], "--max-iter") == 0 && i + 1 < argc) {
@@ -208,12 +194,10 @@ inline timefreezing::MpccSolution continue_homotopy(const timefreezing::Mpcc& pr
                                                     double sigma_0, int steps) {
   const timefreezing::MpccStart from{first.x, first.constraint_multipliers, first.bound_multipliers_lower,
                                      first.bound_multipliers_upper};
-  options.relaxation = relaxation;
-  // The elastic slack needs relaxation rows (MpccSolverOptions::elastic_infinity): not under Penalty.
-  if (relaxation == timefreezing::MpccSolverOptions::Relaxation::Penalty) options.elastic_infinity = false;
-  options.sigma_0 = sigma_0;
-  options.max_homotopy_steps = std::max(1, steps);
-  options.polish = true;
+  options.homotopy.relaxation = relaxation;
+  options.homotopy.sigma_0 = sigma_0;
+  options.homotopy.max_steps = std::max(1, steps);
+  options.polish.enabled = true;
   timefreezing::MpccSolution p = timefreezing::solve_mpcc(problem, from, options);
   p.steps.insert(p.steps.begin(), first.steps.begin(), first.steps.end());
   p.ipopt_iterations += first.ipopt_iterations;

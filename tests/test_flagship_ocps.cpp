@@ -114,7 +114,7 @@ TEST(HopperOverThreeHoles, FeasibilityReportNamesTheWorstRow) {
   EXPECT_EQ(Ocp::feasibility(clean).worst_row, -1);
 }
 
-// The one-hole test bed (bench/hopper_ocp --one-hole): its own target, horizon, grid and hole
+// The one-hole test bed (bench/experiments/hopper_ocp --one-hole): its own target, horizon, grid and hole
 // continuation, the flagship's rows; its feasibility report measures the target error against its
 // own target, and its FESD MPCC reads that target in the terminal rows.
 TEST(HopperOverOneHole, TargetGridAndRowsAreTheShortTask) {
@@ -176,8 +176,8 @@ TEST(HopperOverOneHole, TargetGridAndRowsAreTheShortTask) {
 // Known weakness of this check (bench/README.md, "Warm starts below a sigma"): the landing beyond
 // the hole ends its element with the foot on the ground moving up (J_n v = +0.52 m/s after -3.6
 // inside the element, a leg swing the coarse grid does not resolve); this optimum's recovery
-// reads it as a touchdown, another optimum of the bed (MpccSolverOptions::warm_start_below =
-// 1e-6) as an impact without a guard, which fails the one-guard assertion below.
+// reads it as a touchdown, another optimum of the bed (primal-dual warm starts below sigma =
+// 1e-6, docs/decisions/mpcc-warm-start-below.md) as an impact without a guard, which fails the one-guard assertion below.
 TEST(HopperOverOneHole, CoarseGridConvergesAndJumpsTheHole) {
 #if defined(SALTUS_TESTS_UNDER_SANITIZERS)
   GTEST_SKIP() << "about 2.5 minutes in Release: run in the release stage only";

@@ -571,7 +571,7 @@ TEST(TimeFreezingSimulation, GuidingExampleReachesTheRadauOrder) {
   o.grid.horizon = 3.5;
   o.regularisation.contact_side = 1e-2;
   MpccSolverOptions solver;
-  solver.complementarity_refinement = 1e-14;
+  solver.homotopy.complementarity_refinement = 1e-14;
   std::vector<double> errors;
   for (const int nfe : {4, 8}) {
     o.grid.finite_elements = nfe;
@@ -666,7 +666,7 @@ TEST(TimeFreezingSimulation, IntegratedGapOfANonlinearGapConvergesToTheGap) {
 // residual of 1e-9 lets the gap drift to about -1.6e-5 (lambda and alpha both ~1e-5..1e-4) and the
 // clock creep 5e-6 while the mass should stand still, and the drift stays in q2 for the rest of the
 // motion. Two remedies: refinement past convergence to 1e-14 (MpccSolverOptions::
-// complementarity_refinement) shrinks it below 1e-7; the contact-side selection
+// Homotopy::complementarity_refinement) shrinks it below 1e-7; the contact-side selection
 // (FesdOptions::regularisation.contact_side = 1e-2) removes it. First 4 control intervals: free fall,
 // touchdown, the frozen phase, sliding to tau = 1 (t = 1/2: q = (0.875, 0), v = (3.5, 0)).
 TEST(TimeFreezingSimulation, FrozenPhaseDriftIsRemovedBySideSelectionOrRefinement) {
@@ -694,7 +694,7 @@ TEST(TimeFreezingSimulation, FrozenPhaseDriftIsRemovedBySideSelectionOrRefinemen
   MpccSolverOptions solver;
   const Vec<5> plain = error_at_the_end(no_side, solver, "no side selection");
   EXPECT_GT(std::abs(plain[1]), 1e-6) << "the drift this test is about (if it vanished, update the docs)";
-  solver.complementarity_refinement = 1e-14;
+  solver.homotopy.complementarity_refinement = 1e-14;
   const Vec<5> refined = error_at_the_end(no_side, solver, "no side selection, refined to 1e-14");
   EXPECT_LE(refined.cwiseAbs().maxCoeff(), 1e-7);
   // With the selection the end state is exact to the homotopy's tolerance; what remains is a remnant
@@ -795,7 +795,7 @@ TEST(TimeFreezingSimulation, PlankBoxFlatLandingAgreesWithTheEventDrivenSimulato
   // before the state carried the integrated gaps, by Ipopt's path); with them 1,449 iterations, 15 s.
   o.switching.integrated_gap = true;
   MpccSolverOptions solver;
-  solver.sigma_0 = 1e-3;
+  solver.homotopy.sigma_0 = 1e-3;
   const auto sim = simulate_time_freezing(system, Vec<4>(x0.head<4>()), Vec<4>(x0.tail<4>()), o,
                                           ConstantInput3{scene.lowering_input(2.0)}, solver);
   ASSERT_TRUE(sim.converged()) << sim.solution.message;
@@ -1286,7 +1286,7 @@ TEST(TimeFreezingOcp, ContinuationOnTheTargetReachesIt) {
   for (const MpccHomotopyStep& s : r.continuation_steps) {
     EXPECT_TRUE(s.ipopt_succeeded) << s.ipopt_status;
     EXPECT_FALSE(s.polish);
-    EXPECT_DOUBLE_EQ(s.sigma, solver.sigma_0);
+    EXPECT_DOUBLE_EQ(s.sigma, solver.homotopy.sigma_0);
     iterations += s.ipopt_iterations;
   }
   for (const MpccHomotopyStep& s : r.solution.steps) iterations += s.ipopt_iterations;

@@ -9,7 +9,7 @@
 //   u = (tau_hip, tau_knee)           [N m]
 //
 // Derivation (Lagrange's equations, written out here and checked against automatic
-// differentiation of the same Lagrangian in tests/test_scenes.cpp):
+// differentiation of the same Lagrangian in tests/scene_battery.hpp, the scene batteries):
 //   with s1 = sin phi_hip, c1 = cos phi_hip, s12 = sin(phi_hip + phi_knee), c12 = cos(...),
 //   thigh centre of mass  p1 = (x + d1 s1, z - d1 c1),
 //   knee                  pk = (x + l1 s1, z - l1 c1),

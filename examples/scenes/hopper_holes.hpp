@@ -1,7 +1,7 @@
 // The flagship OCP of the time-freezing paper (Section 6): the one-legged hopper (scenes/hopper.hpp)
 // travels from rest at x = 0 to x = 3 in T = 2.5 s over three holes, minimising the integral of
 // u'u over physical time. Shared by examples/hopper.cpp (--json), tests/test_flagship_ocps.cpp and
-// bench/hopper_ocp.cpp.
+// bench/experiments/hopper_ocp.cpp.
 //
 // q = (x, z, phi_hip, phi_knee), u = (tau_hip, tau_knee) with |u_i| <= 60 N m; foot contact with
 // mu = 0.8, e_n = 0, auxiliary acceleration a_n = 200 (paper).
@@ -134,18 +134,18 @@ struct HopperOverThreeHoles {
     return stages;
   }
   /// The paper's homotopy (sigma_0 = 1, kappa = 0.1, 10 steps, at most 1500 Ipopt iterations per
-  /// step) with the smoothing relaxation (mpcc_solver.hpp: the stage-wise pairs as equalities
+  /// step) with the smoothing relaxation (mpcc/solve.hpp: the stage-wise pairs as equalities
   /// G H = sigma; the paper's Scholtes inequalities leave the step functions free in a band and
   /// Ipopt wanders); Ipopt tol 1e-8 (1e-10 only adds iterations at mu = 1e-11 on these OCPs:
   /// solve_time_freezing_ocp's docstring).
   static timefreezing::MpccSolverOptions solver() {
     timefreezing::MpccSolverOptions s;
-    s.relaxation = timefreezing::MpccSolverOptions::Relaxation::Smoothing;
-    s.sigma_0 = 1.0;
-    s.kappa = 0.1;
-    s.max_homotopy_steps = 10;
-    s.max_iter = 1500;
-    s.tol = 1e-8;
+    s.homotopy.relaxation = timefreezing::MpccSolverOptions::Relaxation::Smoothing;
+    s.homotopy.sigma_0 = 1.0;
+    s.homotopy.kappa = 0.1;
+    s.homotopy.max_steps = 10;
+    s.ipopt.max_iter = 1500;
+    s.ipopt.tol = 1e-8;
     return s;
   }
 
@@ -207,7 +207,7 @@ struct HopperOverThreeHoles {
 };
 
 /// The same hopper over the first hole only, the shorter task of the hopper's test (a shorter
-/// horizon, 8 of the flagship's 20 control intervals; bench/hopper_ocp --one-hole; bench/README.md,
+/// horizon, 8 of the flagship's 20 control intervals; bench/experiments/hopper_ocp --one-hole; bench/README.md,
 /// "The one-hole test bed"):
 /// T = 1 s, target q(T) = (1, 0.4, 0, 0), N = 8 control intervals (0.125 s each, as the
 /// flagship's), 3 finite elements, n_s = 2; the same path rows (holes 2 and 3 lie beyond the
@@ -247,7 +247,7 @@ struct HopperOverOneHole : HopperOverThreeHoles {
   static timefreezing::MpccSolverOptions solver() {
     timefreezing::MpccSolverOptions s = HopperOverThreeHoles::solver();
     s.warm_start = false;
-    s.max_homotopy_steps = 11;
+    s.homotopy.max_steps = 11;
     return s;
   }
   static std::vector<HopperOverOneHole> hole_continuation() {

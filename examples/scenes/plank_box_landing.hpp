@@ -49,7 +49,7 @@ struct PlankBoxFlatLanding {
 
   PlankBox plank_box{};
   /// |theta - phi| <= flatness_tolerance at every stage point [rad]; 0 (the default): the box
-  /// exactly parallel to the plank. A positive tolerance is a measured variant (bench/plank_box_ocp).
+  /// exactly parallel to the plank. A positive tolerance is a measured variant (bench/experiments/plank_box_ocp).
   double flatness_tolerance = 0.0;
 
   static Vec<4> q0() { return PlankBox{}.flat_state(start_along, clearance).head<4>(); }
@@ -160,14 +160,14 @@ struct PlankBoxFlatLanding {
   /// ends a hair above it, so the first polish comes after sigma = 1e-5; it succeeds in 101).
   static timefreezing::MpccSolverOptions solver() {
     timefreezing::MpccSolverOptions s;
-    s.relaxation = timefreezing::MpccSolverOptions::Relaxation::Smoothing;
-    s.sigma_0 = 1e-2;
-    s.kappa = 0.1;
-    s.max_homotopy_steps = 10;
-    s.tol = 1e-8;
-    s.max_iter = 1500;
-    s.polish_below = 1e-4;
-    s.polish_max_iter = 500;
+    s.homotopy.relaxation = timefreezing::MpccSolverOptions::Relaxation::Smoothing;
+    s.homotopy.sigma_0 = 1e-2;
+    s.homotopy.kappa = 0.1;
+    s.homotopy.max_steps = 10;
+    s.ipopt.tol = 1e-8;
+    s.ipopt.max_iter = 1500;
+    s.polish.below = 1e-4;
+    s.polish.max_iter = 500;
     return s;
   }
 };
@@ -181,7 +181,7 @@ struct PlankBoxFlatLanding {
 /// that converge take <= 213; each of the two that fail then costs 220, not 1500), the branch NLP
 /// from complementarity 2e-5 on with at most 100 iterations (measured: the polishes after sigma =
 /// 5.6e-5 and 3.2e-5 fail at their limits, the one after 1.8e-5 succeeds in 20), and MUMPS'
-/// workspace at 100 % (MpccSolverOptions::mumps_mem_percent: a third faster on this size). The
+/// workspace at 100 % (Ipopt's mumps_mem_percent, MpccSolverOptions::IpoptSettings: a third faster on this size). The
 /// same homotopy path with 300 / 1e-4 / 100: 1,408 iterations; with these: 1,048.
 /// Among the shorter tasks tried, the others failed, hovered (objective 95-100, no contact) or
 /// took minutes (bench/README.md).
@@ -201,10 +201,10 @@ struct PlankBoxShortLanding : PlankBoxFlatLanding {
   }
   static timefreezing::MpccSolverOptions solver() {
     timefreezing::MpccSolverOptions s = PlankBoxFlatLanding::solver();
-    s.max_iter = 220;
-    s.polish_below = 2e-5;
-    s.polish_max_iter = 100;
-    s.mumps_mem_percent = 100;
+    s.ipopt.max_iter = 220;
+    s.polish.below = 2e-5;
+    s.polish.max_iter = 100;
+    s.ipopt.options.push_back({"mumps_mem_percent", 100});
     return s;
   }
   template <class Points>
@@ -215,7 +215,7 @@ struct PlankBoxShortLanding : PlankBoxFlatLanding {
 
 /// A constant input u = (F_x, F_y, tau) on the box, as an input law of simulate_time_freezing (the
 /// box lowered onto the plank in tests/test_time_freezing.cpp; the piecewise-constant re-simulation
-/// of bench/plank_box_refinement.cpp).
+/// of bench/experiments/plank_box_refinement.cpp).
 struct PlankBoxConstantInput {
   Vec<3> u;
   template <class T>

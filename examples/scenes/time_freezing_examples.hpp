@@ -107,8 +107,8 @@ struct PointMassToTheTarget {
   }
   static timefreezing::MpccSolverOptions solver() {
     timefreezing::MpccSolverOptions s;
-    s.relaxation = timefreezing::MpccSolverOptions::Relaxation::Penalty;
-    s.tol = 1e-8;
+    s.homotopy.relaxation = timefreezing::MpccSolverOptions::Relaxation::Penalty;
+    s.ipopt.tol = 1e-8;
     return s;
   }
   static Vec<2> q0() { return Vec<2>(0, 1); }

@@ -60,7 +60,7 @@ TimeFreezingOcpResult<S> solve_time_freezing_ocp_from_guess(const TimeFreezingSy
                                                             const MpccSolverOptions& solver = {});
 
 /// A continuation on the OCP's data before the homotopy: the relaxed NLP at the first relaxation
-/// parameter solver.sigma_0 is solved for each OCP of `continuation` in turn (one homotopy step
+/// parameter solver.homotopy.sigma_0 is solved for each OCP of `continuation` in turn (one homotopy step
 /// each, no polish), the first from FesdMpcc's initial point and each later one from the previous
 /// one's primal-dual solution (the same Ocp type on the same grid: the problems have the same
 /// variables, only bounds or data differ); then the whole homotopy runs on `ocp` from the last of

@@ -141,8 +141,8 @@ TimeFreezingOcpResult<S> solve_time_freezing_ocp_by_continuation(const TimeFreez
                                                                  const MpccSolverOptions& solver) {
   SALTUS_REQUIRE(!continuation.empty(), "solve_time_freezing_ocp_by_continuation: the continuation is empty");
   MpccSolverOptions one_step = solver;
-  one_step.max_homotopy_steps = 1;
-  one_step.polish = false;
+  one_step.homotopy.max_steps = 1;
+  one_step.polish.enabled = false;
   MpccStart start;
   std::vector<MpccHomotopyStep> steps;
   int iterations = 0;

@@ -20,7 +20,7 @@ namespace saltus::timefreezing {
 
 struct DiscoveryOptions {
   /// Homotopy steps at most (>= 1); each is one relaxed solve at sigma_k = sigma_0 kappa^k of the
-  /// solver's options (MpccSolverOptions::sigma_0, kappa), warm-started from the one before.
+  /// solver's options (MpccSolverOptions::Homotopy::sigma_0, kappa), warm-started from the one before.
   int max_steps = 6;
   /// Stop when this many consecutive steps give the same schedule (phases and guards; the event
   /// times may move), >= 1; 1 stops after the first step that gives a schedule.
@@ -62,7 +62,7 @@ struct DiscoveryResult {
 };
 
 /// Runs the homotopy of the time-freezing OCP `ocp` from (q0, v0) on the grid `fesd` with the
-/// solver's relaxation (solver.sigma_0, solver.kappa; one Ipopt solve per step, no polish), extracts
+/// solver's relaxation (solver.homotopy.sigma_0, solver.homotopy.kappa; one Ipopt solve per step, no polish), extracts
 /// the schedule of every step's relaxed solution (the scene's contacts: `scene` must be the
 /// system's scene) and stops when options.agreeing_steps consecutive steps agree, or after
 /// options.max_steps, or at a step Ipopt does not solve (the result keeps the last solved step).

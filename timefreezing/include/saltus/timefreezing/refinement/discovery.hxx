@@ -52,14 +52,14 @@ DiscoveryResult<S> discover_schedule(const S& scene, const TimeFreezingSystem<S>
   start.x.resize(problem.variable_count());
   problem.initial_point(start.x);
   MpccSolverOptions one_step = solver;
-  one_step.max_homotopy_steps = 1;
-  one_step.polish = false;
+  one_step.homotopy.max_steps = 1;
+  one_step.polish.enabled = false;
   DiscoveryResult<S> out;
   std::string previous;
   int agreeing = 0;
-  double sigma = solver.sigma_0;
-  for (int k = 0; k < options.max_steps; ++k, sigma *= solver.kappa) {
-    one_step.sigma_0 = sigma;
+  double sigma = solver.homotopy.sigma_0;
+  for (int k = 0; k < options.max_steps; ++k, sigma *= solver.homotopy.kappa) {
+    one_step.homotopy.sigma_0 = sigma;
     MpccSolution solution = solve_mpcc(problem, start, one_step);
     DiscoveryStep step = detail::discovery_step(k, sigma, solution);
     const bool solved = !solution.steps.empty() && solution.steps.back().ipopt_succeeded;

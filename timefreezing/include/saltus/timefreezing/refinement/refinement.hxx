@@ -20,17 +20,16 @@ namespace detail {
 /// one Ipopt solve of the plain NLP (its homotopy has nothing to relax or polish).
 inline MpccSolution solve_refinement_nlp(const Mpcc& nlp, const RefinementIpopt& o) {
   MpccSolverOptions s;
-  s.max_homotopy_steps = 1;
-  s.polish = false;
-  s.tol = o.tol;
-  s.max_iter = o.max_iter;
-  s.print_level = o.print_level;
-  // Exact mode validity: Ipopt relaxes every bound (inequality rows included) by its
-  // bound_relax_factor, 1e-8 relative by default, which leaves validity rows at -1e-8 .. -1e-7
-  // (the plank-box's slide at h = 0.05: 7.7e-8 with the default, 1.2e-13 with 0). The user's
-  // options come after and may set it again.
-  s.ipopt_options.push_back({"bound_relax_factor", 0.0});
-  s.ipopt_options.insert(s.ipopt_options.end(), o.options.begin(), o.options.end());
+  s.homotopy.max_steps = 1;
+  s.polish.enabled = false;
+  s.ipopt.tol = o.tol;
+  s.ipopt.max_iter = o.max_iter;
+  s.ipopt.print_level = o.print_level;
+  // Exact mode validity needs Ipopt's bound_relax_factor = 0 (a solver default,
+  // MpccSolverOptions::IpoptSettings): Ipopt's own 1e-8 relative relaxation of every bound leaves
+  // validity rows at -1e-8 .. -1e-7 (the plank-box's slide at h = 0.05: 7.7e-8 with it, 1.2e-13
+  // with 0). The user's options come after and may set it again.
+  s.ipopt.options = o.options;
   return solve_mpcc(nlp, s);
 }
 
