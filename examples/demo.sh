@@ -30,7 +30,7 @@ OPENBLAS_NUM_THREADS=1 "$build/examples/guiding_example" --json | tee "$SALTUS_R
 # (jump gains, an LQR tracking design, its stability check and 100 perturbed runs). About 4
 # minutes. The hopper over three holes is not run here: its homotopy does not converge and its
 # discovery finds no contact schedule (docs/refinement.md; `build/examples/hopper --json`, about
-# 15 minutes, and `build/bench/hopper_discovery` reproduce it).
+# 15 minutes, and `build/bench/experiments/hopper_discovery` reproduce it).
 ocp_summary() {
   python3 - "$1" <<'PY'
 import json, sys

@@ -31,7 +31,7 @@
 //    cbrt, hypot or floor for AutoDiffScalar.
 //  - abs'(0) is +1 in Eigen (it was 0 in Saltus' former dual number).
 //  - Decompositions (LLT, LU, QR) of nested AD matrices do not compile: Saltus factorises values
-//    only (hybrid/linear_solve.hpp).
+//    only (hybrid/contact/linear_solve.hpp).
 #pragma once
 
 #include <Eigen/Core>

@@ -1,5 +1,5 @@
 // The linearised time-triggered hybrid system along a reference (thesis appendix C; DESIGN.md,
-// "Reference spreading", hybrid/reference_spreading.hpp): on each extended segment i
+// "Reference spreading", hybrid/reference/reference_spreading.hpp): on each extended segment i
 //     z' = A_i(t) z + B_i(t) v(t),   A_i = df_i/dx, B_i = df_i/du at (x_i(t), u_i(t)),
 // where x_i is segment i continued past its events with its own mode's flow and its own input
 // u_i(t) = law(t, x_i(t), mode_i), and at the nominal event time t_i (the end of segment i)

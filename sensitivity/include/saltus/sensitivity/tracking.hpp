@@ -2,7 +2,7 @@
 // (reference spreading: thesis 3.1.2; appendix C for the jumps, appendix D for simultaneous ones).
 //
 // The controller. A reference-spreading tracking controller compares the plant with the reference
-// segment that has seen the same events, whatever the time (hybrid/reference_spreading.hpp):
+// segment that has seen the same events, whatever the time (hybrid/reference/reference_spreading.hpp):
 //     u = u_i(t) + K_i(t) (x - x_i(t)),                                                     (RS)
 // i the reference segment the plant is in, x_i, u_i the extended segment i (past its nominal
 // interval by its own mode's flow and input), K_i(t) (nu x nx) a gain schedule per segment. The

@@ -27,7 +27,7 @@ inline std::filesystem::path report_directory() {
 /// <mode after>" (contacts by their scene names, modes as describe() writes them), then the
 /// status, the number of events, the integrator's steps and right-hand-side evaluations and the
 /// wall time; a trajectory no integrator produced (statistics all zero: e.g. one recovered from
-/// a time-freezing solution, timefreezing/simulation.hpp) says so instead of "0 steps".
+/// a time-freezing solution, timefreezing/drivers/simulate.hpp) says so instead of "0 steps".
 template <Scene S>
 void print_events(const S& scene, const HybridTrajectory<S>& traj, std::FILE* out = stdout) {
   for (const auto& ev : traj.events) {

@@ -27,8 +27,8 @@ int main(int argc, char** argv) {
   const scenes::Hopper hopper{};
   for (int k = 1; k <= steps; ++k) {
     MpccSolverOptions solver = Ocp::solver();
-    solver.max_homotopy_steps = k;
-    solver.polish = false;
+    solver.homotopy.max_steps = k;
+    solver.polish.enabled = false;
     const auto r = solve_time_freezing_ocp_by_continuation(Ocp::system(), Ocp::hole_continuation(), Ocp{}, Ocp::q0(),
                                                            Ocp::v0(), Ocp::grid(), solver);
     const auto& last = r.solution.steps.back();

@@ -3,7 +3,7 @@
 //   hopper_refinement [stance [h [max_iter [height]]]]     (defaults 0.3 0.025 3000 0.1)
 //
 // Discovery by the time-freezing homotopy finds no contact schedule on this OCP (the relaxed
-// hopper floats down to sigma = 0.01: bench/hopper_discovery), so the schedule here is a user's
+// hopper floats down to sigma = 0.01: bench/experiments/hopper_discovery), so the schedule here is a user's
 // guess, the footsteps the holes leave: four stances (the foot sticking) at x = 0, 1, 2, 3 of
 // `stance` seconds each, three flights in between of (T - 4 stance) / 3. The motion guessed: in a
 // stance the hip above the foot at height 0.4, at rest; in a flight the hip from one foothold to the

@@ -164,7 +164,7 @@ Row simulate(const Controls& c, int elements, const std::string& reference_prefi
   piece.grid.control_intervals = 1;
   piece.grid.finite_elements = elements;
   MpccSolverOptions solver;
-  solver.sigma_0 = 1e-3;
+  solver.homotopy.sigma_0 = 1e-3;
   Row row;
   row.elements = elements;
   row.converged = true;
@@ -181,13 +181,13 @@ Row simulate(const Controls& c, int elements, const std::string& reference_prefi
     // step, sigma = 1e-3, in one interval of the 2- and of the 4-element simulations) is solved again
     // from a looser first relaxation, sigma_0 = 1e-2, then 1e-1; every attempt's iterations count.
     TimeFreezingSimulation<Scene> sim;
-    for (double sigma_0 : {solver.sigma_0, 1e-2, 1e-1}) {
+    for (double sigma_0 : {solver.homotopy.sigma_0, 1e-2, 1e-1}) {
       MpccSolverOptions attempt = solver;
-      attempt.sigma_0 = sigma_0;
+      attempt.homotopy.sigma_0 = sigma_0;
       sim = simulate_time_freezing(Ocp::system(), q, v, piece, ConstantInput{c.u[k]}, attempt);
       row.iterations += sim.solution.ipopt_iterations;
       row.seconds += sim.solution.seconds;
-      if (sigma_0 != solver.sigma_0)
+      if (sigma_0 != solver.homotopy.sigma_0)
         row.retries.push_back("interval " + std::to_string(k) + " from sigma_0 = " + (sigma_0 < 0.05 ? "1e-2" : "1e-1") +
                               (sim.converged() ? ": converged" : ": not converged"));
       if (sim.converged()) break;

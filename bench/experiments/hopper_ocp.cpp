@@ -2,7 +2,7 @@
 // Section 6), under the solver and formulation variants the issue asks to measure one by one.
 //
 //   hopper_ocp [--one-hole] [--json] [--only NAME] [--max-steps K] [--integrated-gap]
-//              [--velocity-cross] [--elastic] [--gap-scale K] [--contact-side W]
+//              [--velocity-cross] [--gap-scale K] [--contact-side W]
 //              [--element-length-freedom G]
 //              [--warm-start primal|primal-dual] [--polish-below S] [--polish-max-iter K] [--max-iter K]
 //              [--kappa K] [--ipopt NAME=VALUE]...
@@ -26,7 +26,7 @@
 // iterations per step, Ipopt tol 1e-8; one
 // progress line per Ipopt solve on stderr. Columns, per variant:
 //   conv          the homotopy converged (complementarity <= 1e-9 at a successful step)
-//   steps         Ipopt solves run (continuation stages, homotopy steps, retries, polish attempts)
+//   steps         Ipopt solves run (continuation stages, homotopy steps, retries, polishes)
 //   iters         total Ipopt iterations (per solve in the JSON)
 //   compl         max_j |G_j H_j| at the returned point
 //   path viol     largest violation of the 11 path rows at every stage point, at the FULL holes
@@ -78,8 +78,6 @@ struct Variant {
   /// > 0: a continuation on a_n at sigma_0 (with_an_continuation): the hole continuation runs with
   /// this a_n, then one relaxed NLP per larger a_n of 50, 100, then the homotopy with a_n = 200.
   double first_auxiliary_acceleration = 0.0;
-  /// MpccSolverOptions::polish_fallback on, with polish_max_iter = 500
-  bool polish_fallback = false;
   /// With smoothing_steps: the continued homotopy reads the integrated gaps
   /// (FesdOptions::switching.integrated_gap; the first one reads gap(q)).
   bool then_integrated_gap = false;
@@ -128,18 +126,14 @@ std::vector<Variant> variants() {
        "as smoothing-then-side, but the selection is switched on at the last solved sigma (1e-3): that NLP is solved "
        "again with the term, then the homotopy goes on",
        R::Smoothing, false, true, 0, false, 4, 1e-3, 0.0, 2, R::Smoothing, 1e-2},
-      {"polish-fallback",
-       "the default with the polish's fallback (MpccSolverOptions::polish_fallback: the biactive pairs flipped, all, "
-       "then one at a time) and 500 iterations per polish attempt",
-       R::Smoothing, false, true, 0, false, 0, 0.0, 0.0, 2, R::Penalty, 0.0, 0.0, true},
       {"then-integrated-gap",
        "the default's continuation and first 4 steps (sigma 1 .. 1e-3) reading gap(q), then the same smoothing from "
        "sigma = 1e-3 reading the integrated gaps (FesdOptions::integrated_gap), polished as --polish-below says",
-       R::Smoothing, false, true, 0, false, 4, 1e-3, 0.0, 2, R::Smoothing, 0.0, 0.0, false, true},
+       R::Smoothing, false, true, 0, false, 4, 1e-3, 0.0, 2, R::Smoothing, 0.0, 0.0, true},
       {"wall-then-integrated-gap",
        "the default's whole homotopy (10 steps) reading gap(q), then one smoothing step at the sigma it stopped at "
        "reading the integrated gaps, polished as --polish-below says (use --polish-below 1)",
-       R::Smoothing, false, true, 0, false, 10, -1.0, 0.0, 2, R::Smoothing, 0.0, 0.0, false, true},
+       R::Smoothing, false, true, 0, false, 10, -1.0, 0.0, 2, R::Smoothing, 0.0, 0.0, true},
   };
 }
 
@@ -150,8 +144,8 @@ template <class Ocp>
 TimeFreezingOcpResult<scenes::Hopper> with_an_continuation(double first, const Ocp& ocp, const FesdOptions& grid,
                                                             const MpccSolverOptions& s) {
   MpccSolverOptions one = s;
-  one.max_homotopy_steps = 1;
-  one.polish = false;
+  one.homotopy.max_steps = 1;
+  one.polish.enabled = false;
   const TimeFreezingSystem<scenes::Hopper> soft{scenes::Hopper{}, first};
   TimeFreezingOcpResult<scenes::Hopper> r =
       solve_time_freezing_ocp_by_continuation(soft, Ocp::hole_continuation(), ocp, Ocp::q0(), Ocp::v0(), grid, one);
@@ -209,16 +203,12 @@ int run(const std::optional<bench::OcpBenchArgs>& args) {
     std::fprintf(stderr, "== %s: %s\n", v.name, v.what);
     const Ocp ocp;
     MpccSolverOptions s = Ocp::solver();
-    s.relaxation = v.relaxation;
+    s.homotopy.relaxation = v.relaxation;
     s.progress = &std::cerr;
-    if (v.polish_fallback) {
-      s.polish_fallback = true;
-      s.polish_max_iter = 500;
-    }
     args->apply(s);
     if (v.smoothing_steps > 0) {
-      s.max_homotopy_steps = v.smoothing_steps;
-      s.polish = false;
+      s.homotopy.max_steps = v.smoothing_steps;
+      s.polish.enabled = false;
     }
     const int scene_intervals = Ocp::grid().grid.control_intervals;
     FesdOptions grid = Ocp::grid(v.control_intervals > 0 ? v.control_intervals
@@ -254,7 +244,7 @@ int run(const std::optional<bench::OcpBenchArgs>& args) {
     for (const MpccHomotopyStep& st : r.solution.steps) per_step.push_back(st.ipopt_iterations);
     const std::size_t solves = per_step.size();
     if (json)
-      rows.push_back({{"variant", v.name}, {"what", v.what}, {"elastic_infinity", args->elastic}, {"gap_scale", grid.switching.scale[0]}, {"contact_side_weight", grid.regularisation.contact_side}, {"element_length_freedom", grid.grid.element_length_freedom}, {"warm_start", s.warm_start}, {"control_intervals", grid.grid.control_intervals},
+      rows.push_back({{"variant", v.name}, {"what", v.what}, {"gap_scale", grid.switching.scale[0]}, {"contact_side_weight", grid.regularisation.contact_side}, {"element_length_freedom", grid.grid.element_length_freedom}, {"warm_start", s.warm_start}, {"control_intervals", grid.grid.control_intervals},
                       {"converged", r.converged()}, {"solves", solves},
                       {"ipopt_iterations", r.solution.ipopt_iterations}, {"iterations_per_solve", per_step},
                       {"complementarity", r.solution.complementarity}, {"max_path_violation", f.path_violation},

@@ -2,7 +2,7 @@
 // formulation variants measured one by one (bench/README.md, "Plank-box flat landing").
 //
 //   plank_box_ocp [--short] [--json] [--only NAME] [--max-steps K] [--integrated-gap] [--velocity-cross]
-//                 [--elastic] [--gap-scale K] [--contact-side W]
+//                 [--gap-scale K] [--contact-side W]
 //                 [--element-length-freedom G]
 //                 [--warm-start primal|primal-dual] [--kappa K]
 //                 [--polish-below S] [--polish-max-iter K] [--max-iter K] [--ipopt NAME=VALUE]...
@@ -13,7 +13,7 @@
 // Every variant starts from the contact-implicit initialisation (the start state at every stage
 // point, zero inputs) on the default grid (N = 15, 2 elements, n_s = 2) with the default homotopy
 // (smoothing from sigma_0 = 1e-2, kappa = 0.1, 10 steps of at most 1500 Ipopt iterations); one
-// progress line per Ipopt solve on stderr. Columns as bench/hopper_ocp.cpp's; `flat` is the largest
+// progress line per Ipopt solve on stderr. Columns as bench/experiments/hopper_ocp.cpp's; `flat` is the largest
 // |theta - phi| over the stage points [rad]. The flags: ocp_bench_support.hpp; they are applied
 // after each variant's own settings, so --integrated-gap overrides `gap-of-q` and
 // `before-2026-12-01`, and --polish-below the `*late-polish` variants.
@@ -55,13 +55,11 @@ struct Variant {
   double contact_side_weight = 0.0;  ///< FesdOptions::regularisation.contact_side
   MpccSolverOptions::Relaxation then = MpccSolverOptions::Relaxation::Penalty;
   double then_side_weight = 0.0;
-  /// MpccSolverOptions::polish_fallback on, with polish_max_iter = 500
-  bool polish_fallback = false;
   /// The gap switching functions read gap(q) (FesdOptions::switching.integrated_gap = false; the default
   /// reads the integrated gaps since 2026-12-01).
   bool gap_of_q = false;
   /// The polish of the default before 2026-12-01: only after the homotopy's last step, 100
-  /// iterations (MpccSolverOptions::polish_below = 0, polish_max_iter = 100).
+  /// iterations (MpccSolverOptions::Polish::below = 0, max_iter = 100).
   bool late_polish = false;
 };
 
@@ -91,18 +89,14 @@ std::vector<Variant> variants() {
        "the default's first 3 smoothing steps (1e-2 .. 1e-4), then the same smoothing with the contact-side "
        "selection 1e-2 from 1e-5 (alpha_gap is free in the touchdown element: the impact ran the clock)",
        0.0, 3, 1e-5, false, 0.0, MpccSolverOptions::Relaxation::Smoothing, 1e-2},
-      {"polish-fallback",
-       "the default with the polish's fallback (MpccSolverOptions::polish_fallback: the biactive pairs flipped, all, "
-       "then one at a time) and 500 iterations per polish attempt",
-       0.0, 0, 0.0, false, 0.0, MpccSolverOptions::Relaxation::Penalty, 0.0, true},
       {"gap-of-q", "the default reading gap(q) instead of the integrated gaps (same polish)", 0.0, 0, 0.0, false, 0.0,
-       MpccSolverOptions::Relaxation::Penalty, 0.0, false, true},
+       MpccSolverOptions::Relaxation::Penalty, 0.0, true},
       {"before-2026-12-01",
        "the default of before 2026-12-01: gap(q), the polish only after the last step (100 iterations)", 0.0, 0, 0.0,
-       false, 0.0, MpccSolverOptions::Relaxation::Penalty, 0.0, false, true, true},
+       false, 0.0, MpccSolverOptions::Relaxation::Penalty, 0.0, true, true},
       {"integrated-gap-late-polish",
        "the default with the polish only after the last step (100 iterations): the integrated gaps alone", 0.0, 0,
-       0.0, false, 0.0, MpccSolverOptions::Relaxation::Penalty, 0.0, false, false, true},
+       0.0, false, 0.0, MpccSolverOptions::Relaxation::Penalty, 0.0, false, true},
   };
 }
 
@@ -123,15 +117,11 @@ int run(const std::optional<bench::OcpBenchArgs>& args) {
     Ocp ocp;
     ocp.flatness_tolerance = v.flatness_tolerance;
     MpccSolverOptions s = Ocp::solver();
-    if (v.scholtes) s.relaxation = MpccSolverOptions::Relaxation::Scholtes;
+    if (v.scholtes) s.homotopy.relaxation = MpccSolverOptions::Relaxation::Scholtes;
     s.progress = &std::cerr;
-    if (v.polish_fallback) {
-      s.polish_fallback = true;
-      s.polish_max_iter = 500;
-    }
     if (v.late_polish) {
-      s.polish_below = 0.0;
-      s.polish_max_iter = 100;
+      s.polish.below = 0.0;
+      s.polish.max_iter = 100;
     }
     FesdOptions grid = Ocp::grid();
     if (v.gap_of_q) grid.switching.integrated_gap = false;
@@ -145,14 +135,14 @@ int run(const std::optional<bench::OcpBenchArgs>& args) {
       start.x.resize(problem.variable_count());
       problem.initial_point(start.x);
       MpccSolverOptions first = s;
-      first.max_homotopy_steps = v.smoothing_steps;
-      first.polish = false;
+      first.homotopy.max_steps = v.smoothing_steps;
+      first.polish.enabled = false;
       const MpccSolution a = solve_mpcc(problem, start, first);
       FesdOptions then_grid = grid;
       then_grid.regularisation.contact_side = v.then_side_weight;
       const FesdMpcc<scenes::PlankBox, Ocp> then_problem(Ocp::system(), ocp, Ocp::q0(), Ocp::v0(), then_grid);
       r.solution = bench::continue_homotopy(then_problem, a, s, v.then, v.then_sigma_0,
-                                            s.max_homotopy_steps - v.smoothing_steps);
+                                            s.homotopy.max_steps - v.smoothing_steps);
       const auto pts = then_problem.points(r.solution.x);
       r.points.assign(pts.begin(), pts.end());
     } else {
