@@ -5,9 +5,9 @@
 set -euo pipefail
 # Only what the build uses. ninja-build: the generator (it compiles a target's objects while its
 # dependencies still link); ccache: cached rebuilds; coinor-libipopt-dev: Ipopt 3.11 with MUMPS for
-# timefreezing/ (found through pkg-config).
+# timefreezing/ (found through pkg-config); python3-matplotlib: the main job's figures (examples/plot_report.py).
 packages=(build-essential cmake ninja-build ccache pkg-config libeigen3-dev libboost-dev libsundials-dev
-          nlohmann-json3-dev libgtest-dev libgmock-dev libbenchmark-dev coinor-libipopt-dev "$@")
+          nlohmann-json3-dev libgtest-dev libgmock-dev libbenchmark-dev coinor-libipopt-dev python3-matplotlib "$@")
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

@@ -3,7 +3,9 @@
 # and the example programs it runs (not the tests, not the benchmarks: `bash bench/run.sh`), runs
 # the example scenes, the flagship pipeline of the plank-box (discovery, refinement, analysis) and
 # the tracking designs, prints the results and writes the report files to report/ (trajectories
-# as JSON and CSV, the pipelines' reports as JSON). One progress line per stage on stderr.
+# as JSON and CSV, the pipelines' reports as JSON, the refined plank-box reference as CSV), the
+# figures (report/figures/*.png) and report/index.html, one page with all of them. One progress
+# line per stage on stderr.
 #   SALTUS_JOBS=N   parallel build jobs (default: nproc)
 set -euo pipefail
 here=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
@@ -94,5 +96,11 @@ s = d["parallel_speedup"]
 print(f'Monte Carlo speed-up on {s["threads"]} threads: {s["speedup"]} ({s["one_thread_seconds"]} s -> {s["all_threads_seconds"]} s)')
 PY
 echo "wrote $SALTUS_REPORT_DIR/tracking_stability.json"
+# The figures and the page that shows them (Debian's python3 with python3-matplotlib).
+echo
+echo "== figures =="
+python=/usr/bin/python3
+[ -x "$python" ] || python=python3
+"$python" "$here/examples/plot_report.py" "$SALTUS_REPORT_DIR"
 echo
 echo "main job done in $(( $(date +%s) - start )) s; report files in $SALTUS_REPORT_DIR"

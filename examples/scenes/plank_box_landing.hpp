@@ -211,6 +211,20 @@ struct PlankBoxShortLanding : PlankBoxFlatLanding {
   static Feasibility feasibility(const Points& points) {
     return feasibility_against(points, PlankBoxShortLanding{}.terminal_lower());
   }
+  /// The start, this T and the input bounds for the mode-schedule refinement.
+  static timefreezing::OcpHorizon<PlankBox> refinement_horizon() {
+    timefreezing::OcpHorizon<PlankBox> h = PlankBoxFlatLanding::refinement_horizon();
+    h.final_time = horizon;
+    return h;
+  }
+  /// The coarse refinement of the test (tests/test_flagship_ocps.cpp): elements of at most
+  /// 0.02 s, no schedule edit (the check only).
+  static timefreezing::RefinementOptions refinement() {
+    timefreezing::RefinementOptions o;
+    o.grid.max_element_duration = 0.02;
+    o.edits.max_edits = 0;
+    return o;
+  }
 };
 
 /// A constant input u = (F_x, F_y, tau) on the box, as an input law of simulate_time_freezing (the
@@ -235,3 +249,4 @@ SALTUS_DECLARE_TIME_FREEZING_OCP(saltus::scenes::PlankBox, saltus::scenes::Plank
 SALTUS_DECLARE_SCHEDULE_REFINEMENT_SCENE(saltus::scenes::PlankBox)
 SALTUS_DECLARE_SCHEDULE_REFINEMENT(saltus::scenes::PlankBox, saltus::scenes::PlankBoxFlatLanding)
 SALTUS_DECLARE_TIME_FREEZING_OCP(saltus::scenes::PlankBox, saltus::scenes::PlankBoxShortLanding)
+SALTUS_DECLARE_SCHEDULE_REFINEMENT(saltus::scenes::PlankBox, saltus::scenes::PlankBoxShortLanding)

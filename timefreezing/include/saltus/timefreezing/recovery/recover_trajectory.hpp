@@ -18,11 +18,12 @@ struct TrajectoryRecoveryOptions {
   /// A contact is closed at a point where its gap is <= gap_tolerance [m] and its normal velocity
   /// |J_n v| <= velocity_tolerance [m/s] (a point that reaches the surface at a negative J_n v, the
   /// end of a flight, is not closed); a closed contact with friction slips where |J_t v| >
-  /// velocity_tolerance (with that sign) and sticks where not. Both > 0. Sized above the
+  /// tangential_velocity_tolerance [m/s] (with that sign) and sticks where not. All > 0. Sized above the
   /// discretisation's residual drift (a frozen phase's gap of -1.6e-5 without the contact-side
   /// selection, fesd.hpp) and below the motions' own scales.
   double gap_tolerance = 1e-4;
   double velocity_tolerance = 1e-4;
+  double tangential_velocity_tolerance = 1e-4;
   /// Elements whose clock advances by at most frozen_tolerance * h are frozen (as recover_reference);
   /// so are those detail::element_frozen adds (a frozen first stage, a crept clock with a velocity
   /// jump).

@@ -68,11 +68,11 @@ class TrajectoryRecovery {
   }
   /// One contact's state at one point: 0 open, 1 stick, 2 slip+, 3 slip-, 4 closed frictionless.
   int contact_class(const Vec<nsw>& c, int i) const {
-    const double vel_tol = options_.velocity_tolerance;
-    if (!(c[3 * i] <= options_.gap_tolerance && std::abs(c[3 * i + 1]) <= vel_tol)) return 0;  // open, or approaching
+    if (!(c[3 * i] <= options_.gap_tolerance && std::abs(c[3 * i + 1]) <= options_.velocity_tolerance))
+      return 0;  // open, or approaching
     if (!frictional(i)) return 4;
     const double vt = c[3 * i + 2];
-    return std::abs(vt) <= vel_tol ? 1 : (vt > 0.0 ? 2 : 3);
+    return std::abs(vt) <= options_.tangential_velocity_tolerance ? 1 : (vt > 0.0 ? 2 : 3);
   }
   static ContactState to_state(int cls) {
     switch (cls) {
@@ -118,7 +118,7 @@ class TrajectoryRecovery {
   /// functions at x+).
   ImpulseMode impulse_role(int i, const Vec<nsw>& c_plus) const {
     const double vt = c_plus[3 * i + 2];
-    if (!frictional(i) || std::abs(vt) <= options_.velocity_tolerance)
+    if (!frictional(i) || std::abs(vt) <= options_.tangential_velocity_tolerance)
       return ImpulseMode{ImpulseRole::Stick, Eigen::Vector2d::Zero()};
     return ImpulseMode{ImpulseRole::Slip, Eigen::Vector2d(vt > 0.0 ? 1.0 : -1.0, 0.0)};
   }
@@ -356,9 +356,10 @@ HybridTrajectory<S> recover_trajectory(const TimeFreezingSystem<S>& system,
                                        const TrajectoryRecoveryOptions& options) {
   auto positive = [](double v) { return std::isfinite(v) && v > 0.0; };
   SALTUS_REQUIRE(positive(options.gap_tolerance) && positive(options.velocity_tolerance) &&
-                     positive(options.frozen_tolerance),
+                     positive(options.tangential_velocity_tolerance) && positive(options.frozen_tolerance),
                  "recover_trajectory: the tolerances must be finite and > 0, got gap ", options.gap_tolerance,
-                 ", velocity ", options.velocity_tolerance, ", frozen ", options.frozen_tolerance);
+                 ", velocity ", options.velocity_tolerance, ", tangential velocity ",
+                 options.tangential_velocity_tolerance, ", frozen ", options.frozen_tolerance);
   SALTUS_REQUIRE(positive(options.closing_weight_tolerance) && options.closing_weight_tolerance < 1.0,
                  "recover_trajectory: closing_weight_tolerance must be in (0, 1), got ", options.closing_weight_tolerance);
   const ImportedReference<S> samples = recover_reference<S>(points, stages, options.frozen_tolerance);

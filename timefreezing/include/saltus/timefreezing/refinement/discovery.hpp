@@ -18,6 +18,35 @@
 
 namespace saltus::timefreezing {
 
+/// How discovery reads the contacts of a relaxed solution: recover_trajectory with its gap and
+/// normal-velocity tolerances widened to the relaxation of the step, sigma_k:
+///   gap_tolerance      = min(gap_max,      max(recovery.gap_tolerance,      gap_per_sigma      * sigma_k))  [m],
+///   velocity_tolerance = min(velocity_max, max(recovery.velocity_tolerance, velocity_per_sigma * sigma_k))  [m/s].
+/// The default (both factors 0) is the exact reading. A relaxed stance keeps its contact only
+/// within the relaxation (G H <= sigma lets the gap and the normal velocity sit away from zero
+/// while the contact force acts), and whether the widened reading helps depends on the OCP
+/// (docs/refinement.md, "Discovery"; measured, one thread):
+/// - plank-box short landing (scenes::PlankBoxShortLanding): at sigma = 1e-2 the landed box rests
+///   1e-4 m above the plank creeping upward at 4e-3 .. 6e-3 m/s; the exact reading sees no contact
+///   and discovery settles on a hover (refined objective 97.3 against the relaxed 58.6); with
+///   factors 0.1 and 1 the first step gives "land flat, slide, lift off" (refined 38.6 at h = 0.02).
+/// - plank-box flat landing (the flagship): the exact reading settles on "land flat, slide, lift
+///   off" at sigma = 1e-2, 1e-3; with factors 0.1 and 1 the step at sigma = 1e-3 extends the
+///   contact into the box's near-rest before the lift-off and reads a stick phase there, which
+///   the steps after agree on and whose refinement fails.
+/// The tangential velocity tolerance is never widened (with it widened too the flagship's first
+/// step already read the stick phase). Factors >= 0, caps > 0.
+struct RelaxedContactReading {
+  double gap_per_sigma = 0.0;       ///< [m per unit of sigma]
+  double velocity_per_sigma = 0.0;  ///< [m/s per unit of sigma]
+  double gap_max = 1e-3;            ///< [m], the extraction's micro_flight_gap
+  double velocity_max = 1e-2;       ///< [m/s]
+  TrajectoryRecoveryOptions recovery;  ///< the tolerances' floor and the other reading options
+
+  /// recover_trajectory's options at relaxation sigma (>= 0).
+  TrajectoryRecoveryOptions at(double sigma) const;
+};
+
 struct DiscoveryOptions {
   /// Homotopy steps at most (>= 1); each is one relaxed solve at sigma_k = sigma_0 kappa^k of the
   /// solver's options (MpccSolverOptions::Homotopy::sigma_0, kappa), warm-started from the one before.
@@ -26,6 +55,7 @@ struct DiscoveryOptions {
   /// times may move), >= 1; 1 stops after the first step that gives a schedule.
   int agreeing_steps = 2;
   ScheduleExtractionOptions extraction;
+  RelaxedContactReading reading;
   std::ostream* progress = nullptr;  ///< one line per homotopy step when not null; not owned
 
   /// Throws InvalidArgument naming the first field out of its domain.
@@ -48,8 +78,12 @@ struct DiscoveryStep {
 
 template <Scene S>
 struct DiscoveryResult {
-  /// the last step's relaxed solution, its reference and its trajectory
+  /// the last step's relaxed solution, its reference and its trajectory (read with the exact
+  /// tolerances of recover_trajectory)
   TimeFreezingOcpResult<S> relaxed;
+  /// the last step's relaxed solution read with DiscoveryOptions::reading (sigma-scaled
+  /// tolerances): the trajectory `discovered` is extracted from
+  HybridTrajectory<S> relaxed_reading;
   /// the schedule of the last step and its guess for refine_schedule (valid when `settled` or
   /// when the last step gave a schedule; `schedule_found` says which)
   ExtractedSchedule<S> discovered;

@@ -5,14 +5,29 @@
 #include <saltus/timefreezing/refinement/discovery.hpp>
 #include <saltus/timefreezing/refinement/schedule_extraction.hxx>
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <ostream>
 #include <sstream>
 #include <utility>
 
 namespace saltus::timefreezing {
 
+inline TrajectoryRecoveryOptions RelaxedContactReading::at(double sigma) const {
+  TrajectoryRecoveryOptions o = recovery;
+  o.gap_tolerance = std::min(gap_max, std::max(o.gap_tolerance, gap_per_sigma * sigma));
+  o.velocity_tolerance = std::min(velocity_max, std::max(o.velocity_tolerance, velocity_per_sigma * sigma));
+  return o;
+}
+
 inline void DiscoveryOptions::validate() const {
+  SALTUS_REQUIRE(std::isfinite(reading.gap_per_sigma) && reading.gap_per_sigma >= 0.0,
+                 "DiscoveryOptions::reading.gap_per_sigma must be finite and >= 0, got ", reading.gap_per_sigma);
+  SALTUS_REQUIRE(std::isfinite(reading.velocity_per_sigma) && reading.velocity_per_sigma >= 0.0,
+                 "DiscoveryOptions::reading.velocity_per_sigma must be finite and >= 0, got ", reading.velocity_per_sigma);
+  SALTUS_REQUIRE(reading.gap_max > 0.0 && reading.velocity_max > 0.0, "DiscoveryOptions::reading: gap_max and velocity_max must be > 0, got ",
+                 reading.gap_max, " and ", reading.velocity_max);
   SALTUS_REQUIRE(max_steps >= 1, "DiscoveryOptions::max_steps must be >= 1, got ", max_steps);
   SALTUS_REQUIRE(agreeing_steps >= 1, "DiscoveryOptions::agreeing_steps must be >= 1, got ", agreeing_steps);
 }
@@ -73,8 +88,9 @@ DiscoveryResult<S> discover_schedule(const S& scene, const TimeFreezingSystem<S>
                       solution.bound_multipliers_upper};
     out.relaxed = detail::read_solution<S>(problem, std::move(solution), fesd);
     out.schedule_found = false;
+    out.relaxed_reading = recover_trajectory<S>(system, out.relaxed.points, fesd.grid.stages, options.reading.at(sigma));
     try {
-      out.discovered = extract_schedule(scene, out.relaxed.trajectory, options.extraction);
+      out.discovered = extract_schedule(scene, out.relaxed_reading, options.extraction);
       out.schedule_found = true;
       step.schedule = describe(scene, out.discovered.guess.schedule);
     } catch (const Error& e) {
