@@ -135,7 +135,7 @@ def plot_plank_box(report, figures, scene, columns, events):
     ax.set_aspect("equal")
     ax.set_xlabel("x [m]")
     ax.set_ylabel("y [m]")
-    ax.legend(fontsize=7, loc="upper right")
+    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))
     ax.set_title(f"{scene}: box and plank poses (the hinge at the origin)")
     name = save(fig, figures, f"{scene}_motion.png")
     what = ("the refined optimal reference: landing flat, sliding and lifting off to the target" if scene.endswith("refined")
