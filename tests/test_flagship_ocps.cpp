@@ -165,15 +165,15 @@ TEST(HopperOverOneHole, TargetGridAndRowsAreTheShortTask) {
 // N = 8 of the flagship's 0.125 s intervals, over the first hole) with its own settings (its
 // docstring: the contact-side selection, primal-only warm starts, 11 steps). Measured: converged
 // at sigma = 1e-10, 5,373 Ipopt iterations, 153 s with another solve on the machine
-// (bench/README.md, "The one-hole bed converges"); over the minute. The gait found: a hop
+// (bench/experiments/README.md, "The one-hole bed converges"); over the minute. The gait found: a hop
 // and a bounce, a slide to the hole's near edge, a jump over it (lift-off at foot x = 0.246,
 // touchdown at 0.951), a brief slip and a stop, a small hop to x = 1. Checked as a structure that
 // another gait would also pass: every touchdown lands outside the hole, one flight crosses it,
 // and no lift-off comes last (the target, fixed, puts the foot on the ground).
 // The event-driven re-simulation under the optimal torques is printed, not bounded: it leaves the
 // reference (measured 291 at t = 1: the hopper is unstable open loop, and the simulator's first
-// event comes at t = 0.05, where the reference still sticks), bench/README.md says more.
-// Known weakness of this check (bench/README.md, "Warm starts below a sigma"): the landing beyond
+// event comes at t = 0.05, where the reference still sticks), bench/experiments/README.md says more.
+// Known weakness of this check (bench/experiments/README.md, "Warm starts below a sigma"): the landing beyond
 // the hole ends its element with the foot on the ground moving up (J_n v = +0.52 m/s after -3.6
 // inside the element, a leg swing the coarse grid does not resolve); this optimum's recovery
 // reads it as a touchdown, another optimum of the bed (primal-dual warm starts below sigma =

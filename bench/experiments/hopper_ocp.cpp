@@ -8,16 +8,16 @@
 //              [--kappa K] [--ipopt NAME=VALUE]...
 //
 // --one-hole runs the variants on scenes::HopperOverOneHole instead: T = 1 s over the first hole,
-// N = 8 of the flagship's 20 intervals, which meets the same wall (bench/README.md, "The one-hole
+// N = 8 of the flagship's 20 intervals, which meets the same wall (bench/experiments/README.md, "The one-hole
 // test bed"); hop-guess (a three-hop guess) is skipped there, and `--one-hole --only hop-guess` is
 // refused. On --one-hole every variant starts from that bed's own settings, which converge there
 // (HopperOverOneHole: the contact-side selection 1e-2, so `side` is `default` there, primal-only
 // warm starts, 11 steps; the two-phase variants' second phase keeps its own budget and weight); the
-// one-hole measurements before bench/README.md's "The one-hole bed converges" ran with the
+// one-hole measurements before bench/experiments/README.md's "The one-hole bed converges" ran with the
 // flagship's, which are `--contact-side 0 --warm-start primal-dual --max-steps 10` now. The
 // other flags: ocp_bench_support.hpp.
 // --max-steps K overrides the homotopy's step budget (10; --one-hole: 11); --ipopt passes an Ipopt option to every
-// solve (ocp_bench_support.hpp; the measurements of bench/README.md's hopper section use both).
+// solve (ocp_bench_support.hpp; the measurements of bench/experiments/README.md's hopper section use both).
 //
 // Every variant but hop-guess starts from the paper's initialisation (the start state at every stage point,
 // zero torques; FesdMpcc::initial_point), on the paper's grid (N = 20, 3 elements, n_s = 2; N = 8
@@ -34,7 +34,7 @@
 //   J             objective (the integral of u'u over physical time plus the two penalties)
 //   status        Ipopt's status of the last solve
 //   seconds       wall time of the solve (one thread: run with OPENBLAS_NUM_THREADS=1)
-// bench/README.md ("Hopper over three holes") has the table of a run and what it shows.
+// bench/experiments/README.md ("Hopper over three holes") has the table of a run and what it shows.
 #include "scenes/hopper_holes.hpp"
 
 #include <saltus/timefreezing/drivers/optimal_control.hpp>

@@ -1,5 +1,5 @@
 // The plank-box's flagship OCP, the flat landing (scenes/plank_box_landing.hpp), under the
-// formulation variants measured one by one (bench/README.md, "Plank-box flat landing").
+// formulation variants measured one by one (bench/experiments/README.md, "Plank-box flat landing").
 //
 //   plank_box_ocp [--short] [--json] [--only NAME] [--max-steps K] [--integrated-gap] [--velocity-cross]
 //                 [--gap-scale K] [--contact-side W]

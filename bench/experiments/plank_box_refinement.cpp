@@ -1,4 +1,4 @@
-// Is the plank-box flagship's re-simulation distance the discretisation's error? (bench/README.md,
+// Is the plank-box flagship's re-simulation distance the discretisation's error? (bench/experiments/README.md,
 // "Plank-box flat landing", the refinement table.)
 //
 //   plank_box_refinement [--elements M1,M2,...] [--controls FILE] [--reference-prefix P]
@@ -275,7 +275,7 @@ int main(int argc, char** argv) {
       std::fprintf(help ? stdout : stderr,
                    "usage: plank_box_refinement [--elements M1,M2,...] [--controls FILE] [--reference-prefix P]\n"
                    "  the plank-box flagship's optimal inputs integrated again with M elements per control\n"
-                   "  interval (default 2,4,8,16) and re-simulated (bench/README.md); --controls FILE reads\n"
+                   "  interval (default 2,4,8,16) and re-simulated (bench/experiments/README.md); --controls FILE reads\n"
                    "  the inputs from FILE if it exists, else solves the OCP and writes them there;\n"
                    "  --reference-prefix P writes each simulation's reference (samples, segments, events) to\n"
                    "  P<M>.json.\n");

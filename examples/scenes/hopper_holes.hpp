@@ -115,7 +115,7 @@ struct HopperOverThreeHoles {
   /// T~ = T with the terminal clock constraint t(T~) = T, speed of time s in [1, 5] with
   /// rho_s = 0.01, heuristic step equilibration rho_h = 1, |u_i| <= 60; one change:
   /// cross-complementarity for the gap only (FesdOptions::switching.velocity_detection = false: the
-  /// foot's velocities change sign in flight, bench/README.md).
+  /// foot's velocities change sign in flight, bench/experiments/README.md).
   static timefreezing::FesdOptions grid(int control_intervals = 20, int finite_elements = 3, int stages = 2) {
     return terminal_clock_grid(horizon, control_intervals, finite_elements, stages,
                                Eigen::VectorXd::Constant(2, -torque_limit), Eigen::VectorXd::Constant(2, torque_limit));
@@ -155,7 +155,7 @@ struct HopperOverThreeHoles {
   /// foot touches the ground at x = 0, 1, 2, 3 and is 0.14 m up over each hole's centre, outside
   /// every hole: the smallest ellipse value along the guess is 1.47 > 1), the joint angles 0. It
   /// says where the feet go, not how: it is not dynamically consistent (no stance, no push-off).
-  /// Measured (bench/README.md, `hopper_ocp --only hop-guess`): from it the default homotopy meets
+  /// Measured (bench/experiments/README.md, `hopper_ocp --only hop-guess`): from it the default homotopy meets
   /// its wall at sigma ~ 1e-2, two decades before its first failure from the start state (1e-4).
   static Vec<8> hop_guess(double t) {
     constexpr double height = 0.14, pi = std::numbers::pi;
@@ -207,14 +207,14 @@ struct HopperOverThreeHoles {
 };
 
 /// The same hopper over the first hole only, the shorter task of the hopper's test (a shorter
-/// horizon, 8 of the flagship's 20 control intervals; bench/experiments/hopper_ocp --one-hole; bench/README.md,
+/// horizon, 8 of the flagship's 20 control intervals; bench/experiments/hopper_ocp --one-hole; bench/experiments/README.md,
 /// "The one-hole test bed"):
 /// T = 1 s, target q(T) = (1, 0.4, 0, 0), N = 8 control intervals (0.125 s each, as the
 /// flagship's), 3 finite elements, n_s = 2; the same path rows (holes 2 and 3 lie beyond the
 /// target: the foot ends on the ground in [0.75, 1.25]), start, torque bounds, a_n and hole
 /// continuation. hop_guess (three hops over 2.5 s) does not describe this task.
 /// Its solver settings are the flagship's with three changes, which make it converge
-/// (bench/README.md, "The one-hole bed converges"; measured with `hopper_ocp --one-hole`, a
+/// (bench/experiments/README.md, "The one-hole bed converges"; measured with `hopper_ocp --one-hole`, a
 /// scratch driver and the test HopperOverOneHole.CoarseGridConvergesAndJumpsTheHole):
 /// - the contact-side selection rho_c = 1e-2 (grid(); FesdOptions::regularisation.contact_side): it pushes
 ///   alpha_gap to 0 in the relaxed stances, where a fractional alpha_gap next to the sliding mode

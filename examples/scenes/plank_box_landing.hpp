@@ -2,7 +2,7 @@
 // the plank, lands FLAT on it (both bottom corners at once: a planned simultaneous impact), slides
 // along it and lifts off again to stop above the plank's far end, minimising the integral of u'u
 // over physical time with bounded inputs. Shared by examples/plank_box.cpp (--json),
-// tests/test_flagship_ocps.cpp and bench/README.md.
+// tests/test_flagship_ocps.cpp and bench/experiments/README.md.
 //
 // q = (x, y, theta, phi): box centre [m], box angle, plank angle [rad]; u = (F_x, F_y, tau) on the
 // box, |F| <= 20 N, |tau| <= 5 N m; both corners C_L, C_R with mu = 0.4, e_n = 0; the plank is
@@ -116,14 +116,14 @@ struct PlankBoxFlatLanding {
   /// runs slower than tau while the box slides, a_n / (a_n + g) for a resting box; terminal clock;
   /// gap-only cross-complementarity), the bounds of u, the gap scale, and the integrated gaps
   /// (FesdOptions::switching.integrated_gap: with gap(q) the branch NLP of the sliding stance is
-  /// overdetermined and the homotopy stalls at complementarity 8.4e-7; bench/README.md).
+  /// overdetermined and the homotopy stalls at complementarity 8.4e-7; bench/experiments/README.md).
   static timefreezing::FesdOptions grid(int control_intervals = 15, int finite_elements = 2, int stages = 2) {
     timefreezing::FesdOptions o =
         terminal_clock_grid(horizon, control_intervals, finite_elements, stages,
                             Vec<3>(-force_limit, -force_limit, -torque_limit), Vec<3>(force_limit, force_limit, torque_limit));
     // The gaps in units of 1 cm (K_gap = 100 /m): a relaxation
     // parameter sigma then leaves a phantom support of a_n sigma / (100 gap) in flight
-    // (bench/README.md, "Plank-box flat landing": with K_gap = 1 the first relaxed NLPs float the
+    // (bench/experiments/README.md, "Plank-box flat landing": with K_gap = 1 the first relaxed NLPs float the
     // box for free and the homotopy fails at sigma = 0.1).
     o.switching.scale = {100.0, 1.0, 1.0};
     // The corners' gaps on the rotating plank are nonlinear in q: read the integrated gaps
@@ -175,7 +175,7 @@ struct PlankBoxFlatLanding {
 /// A shorter flat landing, the coarse grid of the OCP test (tests/test_flagship_ocps.cpp): the same
 /// box, plank, inputs, flatness row and start, T = 1 s on N = 10 intervals of 0.1 s (the
 /// flagship's interval length), target centre at 0.55 m from the hinge, 5 cm above the level
-/// plank, at rest. Its optimum (measured, bench/README.md "Plank-box flat landing"): lands flat
+/// plank, at rest. Its optimum (measured, bench/experiments/README.md "Plank-box flat landing"): lands flat
 /// at t = 0.3, slides, and lifts off at 0.6 still sliding (no stop: the slide is too short).
 /// Solver: the flagship's homotopy with at most 220 Ipopt iterations per step (measured: the steps
 /// that converge take <= 213; each of the two that fail then costs 220, not 1500), the branch NLP
@@ -184,7 +184,7 @@ struct PlankBoxFlatLanding {
 /// workspace at 100 % (Ipopt's mumps_mem_percent, MpccSolverOptions::IpoptSettings: a third faster on this size). The
 /// same homotopy path with 300 / 1e-4 / 100: 1,408 iterations; with these: 1,048.
 /// Among the shorter tasks tried, the others failed, hovered (objective 95-100, no contact) or
-/// took minutes (bench/README.md).
+/// took minutes (bench/experiments/README.md).
 struct PlankBoxShortLanding : PlankBoxFlatLanding {
   static constexpr double horizon = 1.0;        ///< T [s]
   static constexpr double target_along = 0.55;  ///< [m]

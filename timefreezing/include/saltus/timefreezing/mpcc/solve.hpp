@@ -18,7 +18,7 @@
 //       by 1e-6): the hopper standing still took 1465 iterations at sigma = 1 (to Ipopt's
 //       acceptable level only); with the equality each stage's alpha is a smooth sigmoid of its
 //       switching function, and the same problem took 140, 23, 56, 56, 13, 17 iterations for
-//       sigma = 1 .. 1e-5 (bench/README.md, "Hopper over three holes").
+//       sigma = 1 .. 1e-5 (bench/experiments/README.md, "Hopper over three holes").
 //   Penalty (elastic): step k solves
 //       min f(x) + rho_k sum_j G_j(x) H_j(x)   s.t. the same, without the rows G_j H_j <= sigma_k,
 //   with sigma_{k+1} = kappa sigma_k, sigma_0 given, rho_k = 1 / sigma_k (a sigma_k within 1e-12
