@@ -23,7 +23,7 @@ else
   bash "$here/.ci/install-deps.sh"
 fi
 jobs=${SALTUS_JOBS:-$(nproc)}
-# Benchmarks are built and run by the main job (examples/demo.sh), not here: they add minutes of
+# Benchmarks are built and run by bash bench/run.sh, not here: they add minutes of
 # compile time to every CI run and test nothing the suites do not.
 bash "$here/.ci/configure.sh" "$here" "$build" -DCMAKE_BUILD_TYPE=Release -DSALTUS_BUILD_BENCH=OFF "$@"
 cmake --build "$build" -j "$jobs"

@@ -56,7 +56,7 @@ struct TrajectoryRecoveryOptions {
 ///   closing weight there, with the tolerances of TrajectoryRecoveryOptions. A frictionless
 ///   contact (or mu = 0) that is closed is ContactState::slip(0), as the simulator stores it. A
 ///   switch inside an element (the grid did not locate it, e.g. a slip-stick with
-///   velocity_switch_detection = false) appears at the element boundary next to it.
+///   switching.velocity_detection = false) appears at the element boundary next to it.
 /// - Segments: one per run of flowing elements with the same mode. Dense output: per element the
 ///   polynomial through its start point and its n_s stage points, in physical time (degree n_s;
 ///   exact where the clock runs at a constant rate: Theta = 1). Where the stage clocks are not
@@ -77,7 +77,7 @@ struct TrajectoryRecoveryOptions {
 ///   the motion over clock_advance there. The same when the run ends before the impact does (a
 ///   contact with gap <= gap_tolerance still approaching, J_n v < -velocity_tolerance, at the
 ///   run's end: the last part of the impact was resolved by the next, flowing element, which
-///   velocity_switch_detection = false allows; the plank-box flagship's landing): x+ is the first
+///   switching.velocity_detection = false allows; the plank-box flagship's landing): x+ is the first
 ///   stage point of that element from which on no such contact approaches, held over its clock
 ///   advance.
 /// - Mode changes without impact: x- = x+ = the boundary state; guards per contact: Touchdown
@@ -85,7 +85,7 @@ struct TrajectoryRecoveryOptions {
 ///   open), Stop (slip -> stick), SlipOnset (stick -> slip, or a reversal of the slip direction).
 /// - Absorbed impacts: a touchdown at J_n v(x-) < -velocity_tolerance that is not a frozen run is
 ///   an impact the discretisation absorbed into a flowing element (the clock ran through it).
-///   That is the rule, not the exception, under FesdOptions::velocity_switch_detection = false
+///   That is the rule, not the exception, under FesdOptions::switching.velocity_detection = false
 ///   (the flagship OCPs' setting): the end of an impact is a switch of J_n v, which the grid then
 ///   does not locate, so an impact shorter than its element ends inside it (the plank-box flat
 ///   landing: J_n v = -1.04 m/s against a_n = 50 lasts about 1.04 / 50 = 0.02 of numerical time at
