@@ -29,7 +29,6 @@
 
 #include <cstdio>
 #include <cstring>
-#include <fstream>
 #include <iostream>
 #include <optional>
 
@@ -75,10 +74,7 @@ int optimal_flat_landing() {
   const HybridTrajectory<scenes::PlankBox>* reference =
       refined && refined->converged ? &refined->trajectory : (resim ? &resim->trajectory : nullptr);
   if (refined && refined->converged) {  // the refined reference's files (stdout carries the JSON report)
-    std::ofstream json(report_directory() / "plank_box_refined.json"), csv(report_directory() / "plank_box_refined.csv");
-    write_json(json, refined->trajectory, scene);
-    write_csv(csv, refined->trajectory, 0.005, scene);
-    std::cerr << "wrote " << (report_directory() / "plank_box_refined.csv").string() << " and .json\n";
+    write_trajectory_files(scene, refined->trajectory, "plank_box_refined", 0.005, report_directory(), stderr);
   }
   if (reference) {
     ReferenceAnalysisOptions<scenes::PlankBox> analysis = scenes::plank_box_tracking(100);

@@ -48,11 +48,12 @@ void print_events(const S& scene, const HybridTrajectory<S>& traj, std::FILE* ou
 }
 
 /// Writes <directory>/<name>.json (write_json: segments and events) and <directory>/<name>.csv
-/// (write_csv: samples every dt seconds, both sides of every event) and prints their paths.
-/// Throws InvalidArgument when a file cannot be opened for writing.
+/// (write_csv: samples every dt seconds, both sides of every event) and prints their paths to
+/// `log` (stderr where stdout carries a report). Throws InvalidArgument when a file cannot be
+/// opened for writing.
 template <Scene S>
 void write_trajectory_files(const S& scene, const HybridTrajectory<S>& traj, const std::string& name, double dt,
-                            const std::filesystem::path& directory = report_directory()) {
+                            const std::filesystem::path& directory = report_directory(), std::FILE* log = stdout) {
   const auto json_path = directory / (name + ".json"), csv_path = directory / (name + ".csv");
   std::ofstream json(json_path);
   SALTUS_REQUIRE(json.good(), "cannot write ", json_path.string());
@@ -60,7 +61,7 @@ void write_trajectory_files(const S& scene, const HybridTrajectory<S>& traj, con
   std::ofstream csv(csv_path);
   SALTUS_REQUIRE(csv.good(), "cannot write ", csv_path.string());
   write_csv(csv, traj, dt, scene);
-  std::printf("  wrote %s and %s\n", json_path.c_str(), csv_path.c_str());
+  std::fprintf(log, "  wrote %s and %s\n", json_path.c_str(), csv_path.c_str());
 }
 
 }  // namespace saltus
