@@ -1,6 +1,6 @@
 // The hopper over three holes refined from a footstep schedule (docs/refinement.md, "Hopper").
 //
-//   hopper_refinement [stance [h [max_iter [end_stance]]]]     (defaults 0.45 0.02 1000 0.3)
+//   hopper_refinement [stance [h [max_iter [end_stance [cone_margin]]]]]   (defaults 0.45 0.02 1000 0.3 0)
 //
 // Discovery by the time-freezing homotopy gives no usable schedule on this OCP (docs/refinement.md,
 // "Hopper over three holes"), so the schedule here is a user's guess, the footsteps the holes
@@ -115,6 +115,7 @@ int main(int argc, char** argv) {
   const double stance = argc > 1 ? std::atof(argv[1]) : 0.45, h = argc > 2 ? std::atof(argv[2]) : 0.02;
   const int max_iter = argc > 3 ? std::atoi(argv[3]) : 1000;
   const double end_stance = argc > 4 ? std::atof(argv[4]) : 0.3;
+  const double cone_margin = argc > 5 ? std::atof(argv[5]) : 0.0;  // RefinementOptions::stick_cone_margin
   const Hopper hopper{};
   const ScheduleGuess<Hopper> guess = footstep_guess(hopper, stance, end_stance);
   std::cout << "schedule: " << describe(hopper, guess.schedule) << "\n";
@@ -128,6 +129,7 @@ int main(int argc, char** argv) {
   options.grid.max_element_duration = h;
   options.ipopt.max_iter = max_iter;
   options.edits.max_edits = 0;
+  options.stick_cone_margin = cone_margin;
   const RefinementResult<Hopper> r = refine_schedule(hopper, Ocp{}, horizon, guess, options);
   std::cout << r.stage << " (" << r.message << ")\n  objective " << r.objective << ", mode validity "
             << r.mode_validity_violation << ", path rows " << r.path_violation << ", target " << r.terminal_violation
