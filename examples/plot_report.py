@@ -266,7 +266,38 @@ def plot_plank_box_analysis(report, figures):
         ax2.tick_params(axis="x", labelsize=7)
         out.append((save(fig, figures, "plank_box_analysis.png"),
                     "plank-box refined reference: the jump gain of each event (conewise at the simultaneous landing and lift-off, with its number of pieces), the tracking design's verdict with its bounds, and the Monte Carlo runs (kept the event sequence, shrank, failed)."))
+    amplification = plot_amplifications(figures, a) if a else None
+    if amplification:
+        out.append(amplification)
     return out, d
+
+
+def plot_amplifications(figures, analysis):
+    """Each Monte Carlo run's simulated amplification against its first-order prediction."""
+    amp = analysis.get("monte_carlo", {}).get("amplifications")
+    if not amp or not amp.get("predicted"):
+        return None
+    fig, ax = plt.subplots(figsize=(5, 4.2))
+    kept = amp["kept_event_sequence"]
+    for flag, colour, label in ((True, "tab:green", "kept the event sequence"), (False, "tab:red", "other events")):
+        xs = [p for p, k in zip(amp["predicted"], kept) if k == flag]
+        ys = [o for o, k in zip(amp["observed"], kept) if k == flag]
+        if xs:
+            ax.loglog(xs, ys, "o", ms=3, color=colour, label=f"{label} ({len(xs)})")
+    lo = min(min(amp["predicted"]), min(amp["observed"]))
+    hi = max(max(amp["predicted"]), max(amp["observed"]))
+    ax.loglog([lo, hi], [lo, hi], color="0.4", lw=0.8, ls="--", label="simulated = first order")
+    upper = analysis.get("upper_bound")
+    if isinstance(upper, (int, float)):
+        ax.axvline(upper, color="tab:blue", lw=0.8, label="stability check's upper bound")
+    ax.set_xlabel("first-order amplification |z(T)| / |d|")
+    ax.set_ylabel("simulated |x(T) - x_ref(T)| / |eps d|")
+    ax.legend(fontsize=7)
+    ax.grid(alpha=0.3, which="both")
+    name = save(fig, figures, "plank_box_monte_carlo.png")
+    return name, ("plank-box tracking analysis: each Monte Carlo run's simulated amplification of its initial "
+                  "deviation at T against the first-order prediction of the same deviation (on the dashed line "
+                  "they agree), and the stability check's upper bound a(T).")
 
 
 def summary_rows(d):
