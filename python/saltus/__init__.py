@@ -1,0 +1,54 @@
+"""Saltus: hybrid mechanical systems with impacts and Coulomb friction, from Python.
+
+The compiled module ``saltus._saltus`` binds the C++ library's scene library:
+
+Scenes (immutable, picklable)
+    ``BouncingBall``, ``PointMass`` (the guiding example), ``PlankBox``; ``nq``, ``nx = 2 nq``,
+    ``nu``, ``nc`` and ``contacts`` describe them.
+Simulation
+    ``simulate(scene, x0, t0, t_final, input=None, options=None)`` returns the scene's
+    ``Trajectory``: ``segments`` (``Segment.times`` (n,) s, ``Segment.states`` (n, nx)),
+    ``events`` (``Event.t``, ``guards``, ``mode_before``, ``mode_after``, ``x_minus``,
+    ``x_plus``), ``sample(times)`` (n, nx), ``inputs(times)`` (n, nu), ``to_json()``,
+    ``to_csv(dt)``. ``input``: None, a constant u (nu,), or a Python callable ``u(t, x)``.
+    ``references``: the library's reference motions, with their C++ input laws.
+Jump gains
+    ``jump_gains(trajectory)``: per event ``JumpGain.G_z`` (nx, nx), ``G_v`` (nx, nu),
+    ``dt_dz``, ``dt_dv``.
+Tracking and stability (PointMass, PlankBox)
+    ``linearise(reference)``, ``lqr_design(lin, Q, R, Q_final)`` or
+    ``constant_gains(lin, pd_gain(Kp, Kd))``, ``tracking(lin, gains)`` with
+    ``check_stability()``, ``check_periodic_stability(period)``, ``monte_carlo(runs)``.
+    ``saltus.distributed`` runs Monte Carlo batches and gain sweeps on a Dask cluster.
+Errors
+    the C++ exception types with their names and messages: ``Error`` (a ``RuntimeError``),
+    ``InvalidArgument`` (also a ``ValueError``), ``NumericalFailure``, ``ContactProblemFailure``,
+    ``NonSpdMassMatrix``, ``InternalError``, ``GrazingEvent``, ``SimultaneousActivation``,
+    ``UnplannedEvent``.
+
+Units are the scenes' (SI: m, rad, s, kg, N, N m); states are x = (q, v).
+"""
+
+from . import _saltus  # noqa: F401
+from ._saltus import (  # noqa: F401  (the public names)
+    BouncingBall,
+    ContactProblemFailure,
+    Error,
+    GrazingEvent,
+    IntegratorKind,
+    InternalError,
+    InvalidArgument,
+    NonSpdMassMatrix,
+    NumericalFailure,
+    PlankBox,
+    PointMass,
+    SimulationOptions,
+    SimultaneousActivation,
+    UnplannedEvent,
+)
+
+__all__ = [
+    "BouncingBall", "PointMass", "PlankBox", "SimulationOptions", "IntegratorKind",
+    "Error", "InvalidArgument", "NumericalFailure", "ContactProblemFailure", "NonSpdMassMatrix",
+    "InternalError", "GrazingEvent", "SimultaneousActivation", "UnplannedEvent",
+]
