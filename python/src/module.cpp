@@ -9,4 +9,6 @@ PYBIND11_MODULE(_saltus, m) {
   using namespace saltus::python;
   bind_errors(m);  // first: the exception translator applies to everything bound after it
   bind_scenes(m);
+  bind_simulation(m);
+  bind_jump_gains(m);
 }
