@@ -29,7 +29,9 @@ Errors
 Units are the scenes' (SI: m, rad, s, kg, N, N m); states are x = (q, v).
 """
 
-from . import _saltus  # noqa: F401
+import numpy as _np
+
+from . import _saltus
 from ._saltus import (  # noqa: F401  (the public names)
     BouncingBall,
     ContactProblemFailure,
@@ -40,23 +42,44 @@ from ._saltus import (  # noqa: F401  (the public names)
     InternalError,
     InvalidArgument,
     JumpGain,
+    MonteCarloReport,
     NonSpdMassMatrix,
     NumericalFailure,
+    PeriodicStabilityReport,
     PlankBox,
     PointMass,
     Segment,
     SimulationOptions,
     SimultaneousActivation,
+    StabilityReport,
     UnplannedEvent,
+    constant_gains,
     jump_gains,
+    linearise,
+    lqr_design,
     references,
     simulate,
+    tracking,
 )
 
 __all__ = [
     "BouncingBall", "PointMass", "PlankBox", "SimulationOptions", "IntegratorKind",
     "simulate", "references", "Segment", "Event",
     "jump_gains", "JumpGain",
+    "linearise", "lqr_design", "constant_gains", "pd_gain", "tracking",
+    "StabilityReport", "PeriodicStabilityReport", "MonteCarloReport",
     "Error", "InvalidArgument", "NumericalFailure", "ContactProblemFailure", "NonSpdMassMatrix",
     "InternalError", "GrazingEvent", "SimultaneousActivation", "UnplannedEvent",
 ]
+
+
+def pd_gain(Kp, Kd):
+    """The gain K = -[Kp, Kd] (nu, nx) of a PD law u = ... - Kp (q - q_i) - Kd (v - v_i).
+
+    Kp, Kd: (nu, nq) arrays (N/m and N s/m for translations, N m/rad and N m s/rad for rotations).
+    """
+    Kp = _np.atleast_2d(_np.asarray(Kp, dtype=float))
+    Kd = _np.atleast_2d(_np.asarray(Kd, dtype=float))
+    if Kp.shape != Kd.shape:
+        raise InvalidArgument(f"pd_gain: Kp has shape {Kp.shape}, Kd {Kd.shape}: they must agree")
+    return -_np.hstack([Kp, Kd])

@@ -11,4 +11,5 @@ PYBIND11_MODULE(_saltus, m) {
   bind_scenes(m);
   bind_simulation(m);
   bind_jump_gains(m);
+  bind_tracking(m);
 }
