@@ -6,45 +6,6 @@
 
 namespace saltus::python {
 
-namespace {
-
-/// One event's gain as Python sees it (scene-independent: dynamic sizes).
-struct PyJumpGain {
-  double t = 0.0;                   ///< s, the event time
-  Eigen::MatrixXd G_z, G_v;         ///< (nx, nx), (nx, nu)
-  Eigen::RowVectorXd dt_dz, dt_dv;  ///< (nx,), (nu,): first-order shift of the event time, s per unit deviation
-  Eigen::VectorXd f_minus, f_plus;  ///< (nx,): the flows before and after
-  double jump_map_residual = 0.0;
-  int transitions = 0;
-};
-
-FeedbackTreatment feedback_from(const std::string& s) {
-  if (s == "closed_loop") return FeedbackTreatment::ClosedLoop;
-  if (s == "signal") return FeedbackTreatment::Signal;
-  throw InvalidArgument(detail::concat("feedback must be 'closed_loop' or 'signal', got '", s, "'"));
-}
-
-template <Scene S>
-std::vector<PyJumpGain> gains_of(const PyTrajectory<S>& t, const std::string& feedback, double grazing_threshold) {
-  JumpGainOptions options;
-  options.feedback = feedback_from(feedback);
-  options.grazing_threshold = grazing_threshold;
-  std::vector<JumpGain<S>> gains;
-  {
-    py::gil_scoped_release release;  // a Python input law takes the GIL back per call
-    gains = jump_gains(*t.scene, t.trajectory, options);
-  }
-  std::vector<PyJumpGain> out;
-  for (std::size_t i = 0; i < gains.size(); ++i) {
-    const JumpGain<S>& g = gains[i];
-    out.push_back({t.trajectory.events[i].t, g.G_z, g.G_v, g.dt_dz, g.dt_dv, g.f_minus, g.f_plus, g.jump_map_residual,
-                   g.transitions});
-  }
-  return out;
-}
-
-}  // namespace
-
 void bind_jump_gains(py::module_& m) {
   py::class_<PyJumpGain>(m, "JumpGain",
                          "The first-order jump gain of one event: z+ = G_z z- + G_v v-, z the state deviation from "
@@ -69,12 +30,9 @@ void bind_jump_gains(py::module_& m) {
       "grazing_threshold: relative |gamma_dot| below which the crossing is grazing. Raises saltus.GrazingEvent, "
       "saltus.SimultaneousActivation (simultaneous guards that a perturbation separates: conewise gain), "
       "saltus.ContactProblemFailure.";
-  m.def("jump_gains", &gains_of<scenes::BouncingBall>, py::arg("trajectory"), py::arg("feedback") = "closed_loop",
-        py::arg("grazing_threshold") = 1e-8, doc);
-  m.def("jump_gains", &gains_of<scenes::PointMass>, py::arg("trajectory"), py::arg("feedback") = "closed_loop",
-        py::arg("grazing_threshold") = 1e-8);
-  m.def("jump_gains", &gains_of<scenes::PlankBox>, py::arg("trajectory"), py::arg("feedback") = "closed_loop",
-        py::arg("grazing_threshold") = 1e-8);
+  bind_jump_gains_of<scenes::BouncingBall>(m, doc);
+  bind_jump_gains_of<scenes::PointMass>(m);
+  bind_jump_gains_of<scenes::PlankBox>(m);
 }
 
 }  // namespace saltus::python
