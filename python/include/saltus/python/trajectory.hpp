@@ -40,13 +40,13 @@ struct PyTrajectory {
   std::string name;  ///< for repr: the reference's name, or "simulation"
 };
 
-/// The scene's name in messages: S::name where the scene has one.
+/// " for the scene <S::name>" in messages, where the scene has a name.
 template <Scene S>
-const char* scene_label() {
+std::string scene_label() {
   if constexpr (requires { S::name; })
-    return S::name;
+    return std::string(" for the scene ") + S::name;
   else
-    return "of the call";
+    return "";
 }
 
 /// x as the scene's fixed-size state; @throws InvalidArgument naming `what` on a wrong size (the
@@ -54,8 +54,7 @@ const char* scene_label() {
 template <Scene S>
 Vec<2 * S::nq> to_state(const Eigen::VectorXd& x, const char* what) {
   constexpr int nx = 2 * S::nq;
-  SALTUS_REQUIRE(x.size() == nx, what, " has size ", x.size(), ", expected nx = 2 nq = ", nx, " for the scene ",
-                 scene_label<S>());
+  SALTUS_REQUIRE(x.size() == nx, what, " has size ", x.size(), ", expected nx = 2 nq = ", nx, scene_label<S>());
   return x;
 }
 
