@@ -14,7 +14,9 @@ Simulation
     ``references``: the library's reference motions, with their C++ input laws.
 Jump gains
     ``jump_gains(trajectory)``: per event ``JumpGain.G_z`` (nx, nx), ``G_v`` (nx, nu),
-    ``dt_dz``, ``dt_dv``.
+    ``dt_dz``, ``dt_dv``. ``conewise_gain(trajectory, event)``: the conewise gain of a
+    simultaneous event, ``pieces`` (``ConewisePiece.order``, ``G_z``, ``G_v``, ``cone_z``,
+    ``cone_v``), ``evaluate(z, v)``.
 Tracking and stability (PointMass, PlankBox)
     ``linearise(reference)``, ``lqr_design(lin, Q, R, Q_final)`` or
     ``constant_gains(lin, pd_gain(Kp, Kd))``, ``tracking(lin, gains)`` with
@@ -34,6 +36,7 @@ import numpy as _np
 from . import _saltus
 from ._saltus import (  # noqa: F401  (the public names)
     BouncingBall,
+    ConewisePiece,
     ContactProblemFailure,
     Error,
     Event,
@@ -53,6 +56,7 @@ from ._saltus import (  # noqa: F401  (the public names)
     SimultaneousActivation,
     StabilityReport,
     UnplannedEvent,
+    conewise_gain,
     constant_gains,
     jump_gains,
     linearise,
@@ -65,7 +69,7 @@ from ._saltus import (  # noqa: F401  (the public names)
 __all__ = [
     "BouncingBall", "PointMass", "PlankBox", "SimulationOptions", "IntegratorKind",
     "simulate", "references", "Segment", "Event",
-    "jump_gains", "JumpGain",
+    "jump_gains", "JumpGain", "conewise_gain", "ConewisePiece",
     "linearise", "lqr_design", "constant_gains", "pd_gain", "tracking",
     "StabilityReport", "PeriodicStabilityReport", "MonteCarloReport",
     "Error", "InvalidArgument", "NumericalFailure", "ContactProblemFailure", "NonSpdMassMatrix",

@@ -88,3 +88,31 @@ def test_simultaneous_touchdowns_raise_simultaneous_activation():
     assert len(traj.events[0].guards) == 2
     with pytest.raises(saltus.SimultaneousActivation):
         saltus.jump_gains(traj)
+
+
+def test_flat_landing_has_a_conewise_gain_of_two_pieces():
+    """The plank-box landing flat: one piece per touchdown order, each applied on its own cone."""
+    box = saltus.PlankBox()
+    traj = saltus.simulate(box, box.flat_state(), 0.0, 0.3, input=box.lowering_input(), options=tight())
+    gain = saltus.conewise_gain(traj, 0)
+    assert gain.t == traj.events[0].t
+    assert gain.build_all() == 2
+    orders = sorted(tuple(g[0][1] for g in p.order) for p in gain.pieces)
+    assert orders == [("C_L", "C_R"), ("C_R", "C_L")]
+    a, b = gain.pieces
+    assert a.G_z.shape == (8, 8) and a.G_v.shape == (8, 3) and a.cone_z.shape[1] == 8
+    assert np.linalg.norm(a.G_z - b.G_z) > 1e-3  # a genuinely conewise map
+    rng = np.random.default_rng(20261204)
+    seen = set()
+    for _ in range(20):
+        z, v = rng.standard_normal(8), rng.standard_normal(3)
+        p = gain.piece(z, v)
+        seen.add(tuple(g[0][1] for g in p.order))
+        assert np.all(p.cone_z @ z + p.cone_v @ v >= -1e-12)  # the deviation lies in its piece's cone
+        np.testing.assert_allclose(gain.evaluate(z, v), p.G_z @ z + p.G_v @ v, rtol=1e-12, atol=1e-12)
+        np.testing.assert_allclose(gain.evaluate(3.0 * z, 3.0 * v), 3.0 * gain.evaluate(z, v), rtol=1e-12, atol=1e-12)
+    assert len(seen) == 2
+    with pytest.raises(saltus.InvalidArgument, match="event index 1 out of range"):
+        saltus.conewise_gain(traj, 1)
+    with pytest.raises(saltus.InvalidArgument, match="z has size 4"):
+        gain.evaluate(np.zeros(4))

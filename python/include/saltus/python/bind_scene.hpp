@@ -1,5 +1,5 @@
 // A user's own scene in Python, in an extension module of the user's own: one macro binds the
-// scene (default-constructed), simulate(), its trajectory, jump_gains() and the tracking designs
+// scene (default-constructed), simulate(), its trajectory, jump_gains(), conewise_gain() and the tracking designs
 // with their stability check and Monte Carlo batch, exactly as saltus binds the scene library's:
 //
 //   // my_scene_python.cpp
@@ -38,7 +38,8 @@ void bind_scene_functions(py::module_& m, const std::string& name) {
   bind_trajectory<S>(m, name,
                      "Event-driven simulation of the scene from x0 (nx = 2 nq) at t0 to t_final [s] under `input` "
                      "(None, a constant u (nu,), or a Python callable u(t, x)); see saltus.simulate.");
-  bind_jump_gains_of<S>(m, "The jump gain of every event of `trajectory`; see saltus.jump_gains.");
+  bind_jump_gains_of<S>(m, name, "The jump gain of every event of `trajectory`; see saltus.jump_gains.",
+                        "The conewise gain of a simultaneous event; see saltus.conewise_gain.");
   bind_scene_tracking<S>(m, name);
 }
 
