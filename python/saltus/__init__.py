@@ -22,6 +22,10 @@ Tracking and stability (PointMass, PlankBox)
     ``constant_gains(lin, pd_gain(Kp, Kd))``, ``tracking(lin, gains)`` with
     ``check_stability()``, ``check_periodic_stability(period)``, ``monte_carlo(runs)``.
     ``saltus.distributed`` runs Monte Carlo batches and gain sweeps on a Dask cluster.
+Optimal references
+    ``optimal_control.point_mass_to_the_target(progress=None)``: time-freezing discovery and the
+    mode-schedule refinement; the refined reference comes back as a trajectory to analyse. The
+    progress lines go to the callable given, or to the logger "saltus".
 Errors
     the C++ exception types with their names and messages: ``Error`` (a ``RuntimeError``),
     ``InvalidArgument`` (also a ``ValueError``), ``NumericalFailure``, ``ContactProblemFailure``,
@@ -61,6 +65,7 @@ from ._saltus import (  # noqa: F401  (the public names)
     jump_gains,
     linearise,
     lqr_design,
+    optimal_control,
     references,
     simulate,
     tracking,
@@ -70,7 +75,7 @@ __all__ = [
     "BouncingBall", "PointMass", "PlankBox", "SimulationOptions", "IntegratorKind",
     "simulate", "references", "Segment", "Event",
     "jump_gains", "JumpGain", "conewise_gain", "ConewisePiece",
-    "linearise", "lqr_design", "constant_gains", "pd_gain", "tracking",
+    "linearise", "lqr_design", "constant_gains", "pd_gain", "tracking", "optimal_control",
     "StabilityReport", "PeriodicStabilityReport", "MonteCarloReport",
     "Error", "InvalidArgument", "NumericalFailure", "ContactProblemFailure", "NonSpdMassMatrix",
     "InternalError", "GrazingEvent", "SimultaneousActivation", "UnplannedEvent",

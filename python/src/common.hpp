@@ -21,5 +21,6 @@ void bind_scenes(py::module_& m);
 void bind_simulation(py::module_& m);
 void bind_jump_gains(py::module_& m);
 void bind_tracking(py::module_& m);
+void bind_optimal_control(py::module_& m);
 
 }  // namespace saltus::python
