@@ -11,6 +11,7 @@ Simulation
     ``events`` (``Event.t``, ``guards``, ``mode_before``, ``mode_after``, ``x_minus``,
     ``x_plus``), ``sample(times)`` (n, nx), ``inputs(times)`` (n, nu), ``to_json()``,
     ``to_csv(dt)``. ``input``: None, a constant u (nu,), or a Python callable ``u(t, x)``.
+    ``polish(scene, csv)``: a reference read back from CSV and re-simulated.
     ``references``: the library's reference motions, with their C++ input laws.
 Jump gains
     ``jump_gains(trajectory)``: per event ``JumpGain.G_z`` (nx, nx), ``G_v`` (nx, nu),
@@ -66,6 +67,7 @@ from ._saltus import (  # noqa: F401  (the public names)
     linearise,
     lqr_design,
     optimal_control,
+    polish,
     references,
     simulate,
     tracking,
@@ -73,7 +75,7 @@ from ._saltus import (  # noqa: F401  (the public names)
 
 __all__ = [
     "BouncingBall", "PointMass", "PlankBox", "SimulationOptions", "IntegratorKind",
-    "simulate", "references", "Segment", "Event",
+    "simulate", "polish", "references", "Segment", "Event",
     "jump_gains", "JumpGain", "conewise_gain", "ConewisePiece",
     "linearise", "lqr_design", "constant_gains", "pd_gain", "tracking", "optimal_control",
     "StabilityReport", "PeriodicStabilityReport", "MonteCarloReport",

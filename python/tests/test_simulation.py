@@ -131,3 +131,14 @@ def test_scenes_and_options_pickle():
     o.breakpoints = [0.5]
     back = pickle.loads(pickle.dumps(o))
     assert back.relative_tolerance == 1e-12 and back.breakpoints == [0.5]
+
+
+def test_a_reference_written_as_csv_is_read_back_and_polished():
+    """to_csv, then polish: the re-simulation under the sampled input finds the same events."""
+    ref = saltus.references.example3()
+    out = saltus.polish(ref.scene, ref.to_csv(0.001), ref.options)
+    assert out["imported_events"] == 2 and out["simulated_events"] == 2
+    np.testing.assert_allclose(out["trajectory"].event_times, ref.event_times, atol=1e-9)
+    assert out["state_distance"] < 1e-9  # the input is piecewise linear: its samples interpolate it exactly
+    with pytest.raises(saltus.InvalidArgument, match="no column 'v0'"):
+        saltus.polish(ref.scene, "t,segment,mode,q0\n0,0,\"table:open\",x\n")

@@ -1,13 +1,14 @@
 // Binding a scene's simulation for Python: the trajectory as Python holds it (with its own copy of
 // the scene and the options it was simulated with), simulate(scene, x0, t0, t_final, input,
 // options) for the scene, the trajectory's segments (dense output as NumPy arrays), events, dense
-// sampling, JSON and CSV. Used by the module saltus._saltus for the scene library's scenes and by
+// sampling, JSON and CSV, and polish(scene, csv): a reference read back from CSV, re-simulated. Used by the module saltus._saltus for the scene library's scenes and by
 // a user's own extension module (bind_scene.hpp).
 //
 // The GIL is released while the simulator runs; an input law written in Python takes it back for
 // each call (each right-hand side evaluation: that is the speed cost of a Python law).
 #pragma once
 
+#include <saltus/hybrid/reference/resimulation.hpp>
 #include <saltus/hybrid/simulation/simulator.hpp>
 #include <saltus/hybrid/vocabulary/trajectory_io.hpp>
 
@@ -289,6 +290,37 @@ void bind_trajectory(py::module_& m, const std::string& scene_name, const char* 
                               t.trajectory.events.size(), " events on [", t.trajectory.t_begin(), ", ",
                               t.trajectory.t_end(), "] s, status ", to_string(t.trajectory.status), ")");
       });
+
+  m.def(
+      "polish",
+      [](const S& scene, const std::string& csv, const std::optional<SimulationOptions>& options) {
+        std::istringstream in(csv);
+        const ImportedReference<S> imported = read_reference_csv<S>(in);
+        auto out = std::make_shared<T>();
+        out->scene = std::make_shared<const S>(scene);
+        out->options = options.value_or(SimulationOptions{});
+        out->name = "polished";
+        PolishResult<S> r;
+        {
+          py::gil_scoped_release release;
+          r = polish(*out->scene, imported, out->options);
+        }
+        out->trajectory = std::move(r.trajectory);
+        py::dict d;
+        d["trajectory"] = out;
+        d["state_distance"] = r.state_distance;
+        d["worst_sample_time"] = r.worst_sample_time;
+        d["event_time_distance"] = r.event_time_distance;
+        d["imported_events"] = r.imported_events;
+        d["simulated_events"] = r.simulated_events;
+        return d;
+      },
+      py::arg("scene"), py::arg("csv"), py::arg("options") = py::none(),
+      "Reads a reference in the C++ side's CSV (Trajectory.to_csv, or another optimiser's samples t, segment, mode, "
+      "q.., v.., u..) and re-simulates it under its own input, interpolated linearly (polish). Returns a dict: "
+      "trajectory (the re-simulation), state_distance (max over the samples of |x_imported - x_simulated|_inf), "
+      "worst_sample_time [s], event_time_distance [s], imported_events, simulated_events. Raises "
+      "saltus.InvalidArgument naming the line of a malformed CSV.");
 
   m.def("simulate", &simulate<S>, py::arg("scene"), py::arg("x0"), py::arg("t0"), py::arg("t_final"),
         py::arg("input") = py::none(), py::arg("options") = py::none(), simulate_doc);
