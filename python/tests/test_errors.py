@@ -71,6 +71,21 @@ def test_bad_inputs_raise_invalid_argument():
         saltus.simulate(saltus.PointMass(), [0.0, 1.0, 0.0, 0.0], 0.0, 1.0, input=[0.0, 0.0, 0.0])
     with pytest.raises(saltus.InvalidArgument, match="the input law returned 1 values"):
         saltus.simulate(saltus.PointMass(), [0.0, 1.0, 0.0, 0.0], 0.0, 1.0, input=lambda t, x: [0.0])
+    with pytest.raises(saltus.InvalidArgument, match="the input law must return 2 numbers"):
+        saltus.simulate(saltus.PointMass(), [0.0, 1.0, 0.0, 0.0], 0.0, 1.0, input=lambda t, x: "up")
+    with pytest.raises(saltus.InvalidArgument, match="input must be None, a callable"):
+        saltus.simulate(saltus.PointMass(), [0.0, 1.0, 0.0, 0.0], 0.0, 1.0, input="up")
+
+
+def test_an_input_law_returning_nan_is_a_numerical_failure():
+    with pytest.raises(saltus.NumericalFailure, match="not finite"):
+        saltus.simulate(saltus.PointMass(), [0.0, 1.0, 0.0, 0.0], 0.0, 1.0, input=lambda t, x: np.array([math.nan, 0.0]))
+
+
+def test_non_spd_mass_matrix_raises_its_type():
+    box = saltus.PlankBox(box_mass=-1.0)
+    with pytest.raises(saltus.NonSpdMassMatrix, match="not symmetric positive definite"):
+        saltus.simulate(box, saltus.PlankBox().flat_state(), 0.0, 0.3)
 
 
 def test_an_input_law_that_raises_reaches_the_caller():

@@ -159,12 +159,25 @@ InputLaw<S> input_law(const py::object& input) {
       py::gil_scoped_acquire gil;
       py::array_t<double> xa(nx);
       std::copy(x.data(), x.data() + nx, xa.mutable_data());
-      const Eigen::VectorXd u = (*f)(t, xa).template cast<Eigen::VectorXd>();
+      const py::object value = (*f)(t, xa);
+      Eigen::VectorXd u;
+      try {
+        u = value.template cast<Eigen::VectorXd>();
+      } catch (const py::cast_error&) {
+        throw InvalidArgument(detail::concat("the input law must return ", nu, " numbers (an array of size nu), got ",
+                                             py::repr(value).template cast<std::string>(), " at t = ", t));
+      }
       SALTUS_REQUIRE(u.size() == nu, "the input law returned ", u.size(), " values at t = ", t, ", expected nu = ", nu);
       return u;
     };
   }
-  const Eigen::VectorXd u = input.cast<Eigen::VectorXd>();
+  Eigen::VectorXd u;
+  try {
+    u = input.cast<Eigen::VectorXd>();
+  } catch (const py::cast_error&) {
+    throw InvalidArgument(detail::concat("input must be None, a callable u(t, x) or ", nu, " numbers, got ",
+                                         py::repr(input).cast<std::string>()));
+  }
   SALTUS_REQUIRE(u.size() == nu, "the constant input has size ", u.size(), ", expected nu = ", nu);
   SALTUS_REQUIRE(u.allFinite(), "the constant input is not finite");
   const VecT<double, nu> uc = u;
