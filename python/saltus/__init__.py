@@ -18,8 +18,9 @@ Jump gains
     ``dt_dz``, ``dt_dv``. ``conewise_gain(trajectory, event)``: the conewise gain of a
     simultaneous event, ``pieces`` (``ConewisePiece.order``, ``G_z``, ``G_v``, ``cone_z``,
     ``cone_v``), ``evaluate(z, v)``.
-Tracking and stability (PointMass, PlankBox)
-    ``linearise(reference)``, ``lqr_design(lin, Q, R, Q_final)`` or
+Linearisation, tracking and stability (PointMass, PlankBox)
+    ``linearise(reference)`` with ``predict(z0, times)`` (the first-order prediction, (n, nx))
+    and ``state_transition(t1, t0)`` (nx, nx); ``lqr_design(lin, Q, R, Q_final)`` or
     ``constant_gains(lin, pd_gain(Kp, Kd))``, ``tracking(lin, gains)`` with
     ``check_stability()``, ``check_periodic_stability(period)``, ``monte_carlo(runs)``.
     ``saltus.distributed`` runs Monte Carlo batches and gain sweeps on a Dask cluster.

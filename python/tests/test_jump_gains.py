@@ -116,3 +116,27 @@ def test_flat_landing_has_a_conewise_gain_of_two_pieces():
         saltus.conewise_gain(traj, 1)
     with pytest.raises(saltus.InvalidArgument, match="z has size 4"):
         gain.evaluate(np.zeros(4))
+
+
+def test_first_order_prediction_across_events_has_an_eps_squared_remainder():
+    """Linearisation.predict on the point mass with friction (impact into slip, slip->stick,
+    stick->slip, release): x_eps(t) - x(t) - eps z(t) shrinks like eps^2, and the state-transition
+    matrix maps z0 to the same z(t)."""
+    ref = saltus.references.point_mass_with_friction()
+    law = lambda t, x: np.array([t * t, 2.0 * t * t])  # noqa: E731  (the reference's u, in Python)
+    x0 = ref.segments[0].states[0]
+    lin = saltus.linearise(ref, spreading=0.05, feedback="closed_loop")
+    d = np.array([0.3, -0.5, 0.2, 0.4])
+    t_end = ref.t_end
+    t = np.array([0.5 * ref.events[0].t, 0.5 * (ref.events[1].t + ref.events[2].t), t_end])
+    z = lin.predict(d, t)
+    assert z.shape == (3, 4) and len(ref.events) >= 3
+    np.testing.assert_allclose(lin.state_transition(t_end, 0.0) @ d, z[2], rtol=1e-7, atol=1e-9)
+    remainders = []
+    for eps in [1e-4, 1e-5]:
+        perturbed = saltus.simulate(ref.scene, x0 + eps * d, 0.0, t_end, input=law, options=ref.options)
+        assert len(perturbed.events) == len(ref.events)
+        remainders.append(np.abs(perturbed.sample(t) - ref.sample(t) - eps * z).max())
+    assert remainders[1] < remainders[0] / 30
+    with pytest.raises(saltus.InvalidArgument, match="outside the reference"):
+        lin.predict(d, [t_end + 1.0])

@@ -201,7 +201,41 @@ void bind_scene_tracking(py::module_& m, const std::string& scene_name) {
             for (const auto& g : l.system->gains()) out.append(py::make_tuple(Eigen::MatrixXd(g.G_z), Eigen::MatrixXd(g.G_v)));
             return out;
           },
-          "per event (G_z (nx, nx), G_v (nx, nu)) with the reference's input as a signal");
+          "per event (G_z (nx, nx), G_v (nx, nu)) with the reference's input as a signal")
+      .def(
+          "predict",
+          [](const L& l, const Eigen::VectorXd& z0, const Eigen::VectorXd& times, const std::optional<Eigen::VectorXd>& v) {
+            const Vec<nx> z = to_state<S>(z0, "z0");
+            Vec<S::nu> vc = Vec<S::nu>::Zero();
+            if (v) {
+              SALTUS_REQUIRE(v->size() == S::nu, "v has size ", v->size(), ", expected nu = ", S::nu);
+              vc = *v;
+            }
+            const auto& ref = l.reference->trajectory;
+            for (Eigen::Index k = 0; k < times.size(); ++k)
+              SALTUS_REQUIRE(times[k] >= ref.t_begin() && times[k] <= ref.t_end(), "prediction time ", times[k],
+                             " is outside the reference [", ref.t_begin(), ", ", ref.t_end(), "]");
+            RowMatrix out(times.size(), nx);
+            py::gil_scoped_release release;  // the reference's input law may be Python's
+            const Prediction<S> p = l.system->predict(z, [vc](double) { return vc; });
+            for (Eigen::Index k = 0; k < times.size(); ++k) out.row(k) = p.at(times[k]).transpose();
+            return out;
+          },
+          py::arg("z0"), py::arg("times"), py::arg("v") = py::none(),
+          "The first-order prediction z(t) (n, nx) at `times` (n,) [s] of the motion from x(t0) + eps z0 under u + eps "
+          "v (v constant (nu,), default 0): x_eps(t) = x(t) + eps z(t) + O(eps^2), z taken on the nominal segment "
+          "containing t (after the event at an event time). Raises saltus.SimultaneousActivation past a "
+          "simultaneous event in a cone whose outcome is not the nominal one.")
+      .def(
+          "state_transition",
+          [](const L& l, double t1, double t0) {
+            py::gil_scoped_release release;
+            return Eigen::MatrixXd(l.system->state_transition(t1, t0));
+          },
+          py::arg("t1"), py::arg("t0"),
+          "The state-transition matrix (nx, nx) from t0 to t1 >= t0 [s] along the nominal segments, with the jump "
+          "gains G_z at the events between. Raises saltus.SimultaneousActivation across a simultaneous event (the "
+          "map is conewise there, not a matrix).");
 
   using T = PyTracking<S>;
   py::class_<T, std::shared_ptr<T>>(m, (scene_name + "Tracking").c_str(),
