@@ -1,6 +1,7 @@
-// Binding a scene's tracking designs for Python: linearise, lqr_design, constant_gains, tracking
-// and the <scene>Tracking class (stability check, periodic check, Monte Carlo in chunks). The
-// report classes (StabilityReport, PeriodicStabilityReport, MonteCarloReport) are saltus._saltus's.
+// Binding a scene's linearisation and tracking designs for Python: linearise (with the first-order
+// prediction and the state-transition matrix), lqr_design, constant_gains, tracking and the
+// <scene>Tracking class (stability check, periodic check, Monte Carlo in chunks). The report
+// classes (StabilityReport, PeriodicStabilityReport, MonteCarloReport) are saltus._saltus's.
 #pragma once
 
 #include <saltus/python/trajectory.hpp>

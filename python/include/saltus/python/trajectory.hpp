@@ -1,8 +1,9 @@
 // Binding a scene's simulation for Python: the trajectory as Python holds it (with its own copy of
 // the scene and the options it was simulated with), simulate(scene, x0, t0, t_final, input,
 // options) for the scene, the trajectory's segments (dense output as NumPy arrays), events, dense
-// sampling, JSON and CSV, and polish(scene, csv): a reference read back from CSV, re-simulated. Used by the module saltus._saltus for the scene library's scenes and by
-// a user's own extension module (bind_scene.hpp).
+// sampling, JSON and CSV, and polish(scene, csv): a reference read back from CSV, re-simulated.
+// Used by the module saltus._saltus for the scene library's scenes and by a user's own extension
+// module (bind_scene.hpp).
 //
 // The GIL is released while the simulator runs; an input law written in Python takes it back for
 // each call (each right-hand side evaluation: that is the speed cost of a Python law).
@@ -32,7 +33,7 @@ using RowMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::R
 
 /// A simulated (or library-made) trajectory with what it needs to be read later: its scene (a
 /// copy: the Python scene object may go away), the options it was simulated with (a
-/// linearisation re-simulates micro-events with them) and the initial state.
+/// linearisation re-simulates micro-events with them) and a name.
 template <Scene S>
 struct PyTrajectory {
   std::shared_ptr<const S> scene;
@@ -67,7 +68,6 @@ Mat<N, N> to_square(const std::optional<Eigen::MatrixXd>& m, const Mat<N, N>& fa
                  N, ", ", N, ")");
   return *m;
 }
-
 
 /// A segment as Python sees it (scene-independent): the dense output's step points.
 struct PySegment {
