@@ -219,7 +219,12 @@ void bind_scene_tracking(py::module_& m, const std::string& scene_name) {
             RowMatrix out(times.size(), nx);
             py::gil_scoped_release release;  // the reference's input law may be Python's
             const Prediction<S> p = l.system->predict(z, [vc](double) { return vc; });
-            for (Eigen::Index k = 0; k < times.size(); ++k) out.row(k) = p.at(times[k]).transpose();
+            for (Eigen::Index k = 0; k < times.size(); ++k) {
+              // Element by element: GCC 12 reports a false -Wstringop-overread on the packet copy of a
+              // 2-vector into a row (nx = 2: a one-degree-of-freedom scene).
+              const Vec<nx> zk = p.at(times[k]);
+              for (int j = 0; j < nx; ++j) out(k, j) = zk[j];
+            }
             return out;
           },
           py::arg("z0"), py::arg("times"), py::arg("v") = py::none(),
