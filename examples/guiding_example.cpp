@@ -18,6 +18,7 @@
 // "mode_validity_violation", "phase_resim_max_error" and the whole result under "refinement"
 // (refinement_io.hpp); "objective" is then the refined one.
 #include <saltus/hybrid/reference/resimulation.hpp>
+#include <saltus/hybrid/dynamics/contact_forces_csv.hpp>
 #include <saltus/hybrid/vocabulary/trajectory_report.hpp>
 #include <saltus/timefreezing/drivers/optimal_control.hpp>
 #include <saltus/timefreezing/refinement/refinement_io.hpp>
@@ -128,5 +129,6 @@ int main(int argc, char** argv) {
               std::sqrt(2 / g), traj.events.at(1).t);
   std::printf("  final state error against the closed form: %.2e\n", error);
   write_trajectory_files(mass, traj, "guiding_example", 0.01);
+  write_contact_forces_file(mass, traj, "guiding_example", 0.01, report_directory());
   return error < 1e-8 ? 0 : 1;
 }

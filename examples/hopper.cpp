@@ -18,6 +18,7 @@
 // "events", "resim_max_error", ...}); progress lines (one per homotopy step) on stderr. Exit status
 // 0 only when it converged. The re-simulation needs a converged solution (null otherwise).
 #include <saltus/hybrid/reference/resimulation.hpp>
+#include <saltus/hybrid/dynamics/contact_forces_csv.hpp>
 #include <saltus/hybrid/vocabulary/trajectory_report.hpp>
 #include <saltus/timefreezing/drivers/optimal_control.hpp>
 #include "scenes/all_scenes.hpp"
@@ -87,6 +88,7 @@ int main(int argc, char** argv) {
   std::printf("hopper: landing and one hop under a joint PD controller\n");
   print_events(hopper, traj);
   write_trajectory_files(hopper, traj, "hopper", 0.005);
+  write_contact_forces_file(hopper, traj, "hopper", 0.005, report_directory());
   bool lift_off = false;
   for (const auto& ev : traj.events)
     for (const Guard& g : ev.guards()) lift_off = lift_off || g.kind == GuardKind::Release;

@@ -18,6 +18,7 @@
 // "discovery_seconds", "refinement_seconds", "schedule", "schedule_edits",
 // "mode_validity_violation", "phase_resim_max_error" and "refinement" (refinement_io.hpp); when
 // the refinement converged, the analysis is of the refined reference and "objective" its cost.
+#include <saltus/hybrid/dynamics/contact_forces_csv.hpp>
 #include <saltus/hybrid/vocabulary/trajectory_report.hpp>
 #include <saltus/sensitivity/analysis/reference_analysis_io.hpp>
 #include <saltus/timefreezing/drivers/optimal_control.hpp>
@@ -75,6 +76,7 @@ int optimal_flat_landing() {
       refined && refined->converged ? &refined->trajectory : (resim ? &resim->trajectory : nullptr);
   if (refined && refined->converged) {  // the refined reference's files (stdout carries the JSON report)
     write_trajectory_files(scene, refined->trajectory, "plank_box_refined", 0.005, report_directory(), stderr);
+    write_contact_forces_file(scene, refined->trajectory, "plank_box_refined", 0.005, report_directory(), stderr);
   }
   if (reference) {
     ReferenceAnalysisOptions<scenes::PlankBox> analysis = scenes::plank_box_tracking(100);
@@ -107,5 +109,6 @@ int main(int argc, char** argv) {
   std::printf("  landing: %zu guards at once, box velocity after (%.3e, %.3e) m/s, plank rate %.4f rad/s\n",
               landing.guards().size(), landing.x_plus[4], landing.x_plus[5], landing.x_plus[7]);
   write_trajectory_files(plank_box, traj, "plank_box", 0.005);
+  write_contact_forces_file(plank_box, traj, "plank_box", 0.005, report_directory());
   return landing.guards().size() == 2 ? 0 : 1;
 }

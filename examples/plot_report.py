@@ -2,14 +2,19 @@
 """Figures of the main job's report (examples/demo.sh): PNGs made with matplotlib and one offline
 page, report/index.html, that shows them with a caption each and the flagship's summary table.
 
-    python3 examples/plot_report.py [REPORT_DIR]     (default: report/)
+    python3 examples/plot_report.py [REPORT_DIR] [--scene NAME ...]     (default: report/)
 
 Reads what the example programs write into REPORT_DIR (trajectory_io.hpp's formats):
   <scene>.csv   the trajectory sampled in time: t, segment, mode, q0.., v0.., u0..
-  <scene>.json  its segments and events (time, impact, guards with contact and kind, modes)
+  <scene>.json  its segments and events (time, impact, guards with contact and kind, modes,
+                impulses)
+  <scene>_forces.csv   the contact forces along it (contact_forces_csv.hpp): t, segment, <contact>_n,
+                <contact>_t0..
   plank_box_ocp.json   the plank-box pipeline's report (discovery, refinement, analysis)
   hopper_gains.json    the hopper hop's jump gains per event
-and writes REPORT_DIR/figures/*.png and REPORT_DIR/index.html. A file that is missing leaves its
+and writes REPORT_DIR/figures/*.png and REPORT_DIR/index.html. The scenes are the main job's unless
+--scene names others (a user's own trajectory files, written by write_trajectory_files and
+write_contact_forces_file): each gets its states and, when its forces file is there, its forces. A file that is missing leaves its
 figure out (the page says which); a file that is there but malformed is an error naming it.
 Geometry of the drawings: scenes/plank_box.hpp and scenes/hopper.hpp (their default parameters).
 """
@@ -101,6 +106,51 @@ def plot_states(report, figures, scene, columns, events):
     fig.suptitle(f"{scene}: states and inputs (dashed: events)")
     name = save(fig, figures, f"{scene}_states.png")
     return name, f"{scene}: positions, velocities and inputs against time; dashed lines are the events ({len(events)}), named at the top."
+
+
+def read_forces(report, scene):
+    """Columns of <scene>_forces.csv as float lists, or None when the file is not there."""
+    path = os.path.join(report, scene + "_forces.csv")
+    if not os.path.exists(path):
+        return None
+    with open(path, newline="") as f:
+        rows = list(csv.reader(f))
+    if len(rows) < 2 or rows[0][:2] != ["t", "segment"] or len(rows[0]) < 3:
+        raise ValueError(f"{path}: expected a header t,segment,<contact>_n,... and samples")
+    columns = {name: [] for name in rows[0]}
+    for line, row in enumerate(rows[1:], start=2):
+        if len(row) != len(rows[0]):
+            raise ValueError(f"{path}: line {line} has {len(row)} fields, the header {len(rows[0])}")
+        for name, value in zip(rows[0], row):
+            columns[name].append(float(value))
+    return columns
+
+
+def plot_forces(report, figures, scene, forces, events):
+    """Contact forces against time (normal and tangential per contact) and the impulses as stems."""
+    impulses = [(e["t"], i) for e in events for i in e.get("impulses", [])]
+    fig, axes = plt.subplots(2 if impulses else 1, 1, sharex=True, figsize=(8, 5 if impulses else 3))
+    axes = axes if impulses else [axes]
+    for name in (k for k in forces if k not in ("t", "segment")):
+        axes[0].plot(forces["t"], forces[name], lw=1.2, label=name + (" (normal)" if name.endswith("_n") else ""))
+    mark_events(axes[0], events, label=True)
+    axes[0].set_ylabel("contact force [N]")
+    axes[0].legend(fontsize=7, loc="upper right")
+    axes[0].grid(alpha=0.3)
+    if impulses:
+        for k, contact in enumerate(sorted({i["contact"] for _, i in impulses})):
+            times = [t for t, i in impulses if i["contact"] == contact]
+            values = [i["normal"] for _, i in impulses if i["contact"] == contact]
+            axes[1].stem(times, values, linefmt=f"C{k}-", markerfmt=f"C{k}o", basefmt=" ",
+                         label=f"{contact} normal impulse")
+        axes[1].set_ylabel("impulse [N s]")
+        axes[1].legend(fontsize=7, loc="upper right")
+        axes[1].grid(alpha=0.3)
+    axes[-1].set_xlabel("t [s]")
+    fig.suptitle(f"{scene}: contact forces" + (" and impulses" if impulses else ""))
+    name = save(fig, figures, f"{scene}_forces.png")
+    return name, (f"{scene}: the contact forces of the flow in each segment's mode (zero on open contacts)"
+                  + (f"; below, the normal impulses of the {len(impulses)} impulse(s) at the impacts." if impulses else "."))
 
 
 def snapshot_times(t, events, count=6):
@@ -216,7 +266,38 @@ def plot_plank_box_analysis(report, figures):
         ax2.tick_params(axis="x", labelsize=7)
         out.append((save(fig, figures, "plank_box_analysis.png"),
                     "plank-box refined reference: the jump gain of each event (conewise at the simultaneous landing and lift-off, with its number of pieces), the tracking design's verdict with its bounds, and the Monte Carlo runs (kept the event sequence, shrank, failed)."))
+    amplification = plot_amplifications(figures, a) if a else None
+    if amplification:
+        out.append(amplification)
     return out, d
+
+
+def plot_amplifications(figures, analysis):
+    """Each Monte Carlo run's simulated amplification against its first-order prediction."""
+    amp = analysis.get("monte_carlo", {}).get("amplifications")
+    if not amp or not amp.get("predicted"):
+        return None
+    fig, ax = plt.subplots(figsize=(5, 4.2))
+    kept = amp["kept_event_sequence"]
+    for flag, colour, label in ((True, "tab:green", "kept the event sequence"), (False, "tab:red", "other events")):
+        xs = [p for p, k in zip(amp["predicted"], kept) if k == flag]
+        ys = [o for o, k in zip(amp["observed"], kept) if k == flag]
+        if xs:
+            ax.loglog(xs, ys, "o", ms=3, color=colour, label=f"{label} ({len(xs)})")
+    lo = min(min(amp["predicted"]), min(amp["observed"]))
+    hi = max(max(amp["predicted"]), max(amp["observed"]))
+    ax.loglog([lo, hi], [lo, hi], color="0.4", lw=0.8, ls="--", label="simulated = first order")
+    upper = analysis.get("upper_bound")
+    if isinstance(upper, (int, float)):
+        ax.axvline(upper, color="tab:blue", lw=0.8, label="stability check's upper bound")
+    ax.set_xlabel("first-order amplification |z(T)| / |d|")
+    ax.set_ylabel("simulated |x(T) - x_ref(T)| / |eps d|")
+    ax.legend(fontsize=7)
+    ax.grid(alpha=0.3, which="both")
+    name = save(fig, figures, "plank_box_monte_carlo.png")
+    return name, ("plank-box tracking analysis: each Monte Carlo run's simulated amplification of its initial "
+                  "deviation at T against the first-order prediction of the same deviation (on the dashed line "
+                  "they agree), and the stability check's upper bound a(T).")
 
 
 def summary_rows(d):
@@ -256,19 +337,30 @@ def write_index(report, figures_made, missing, table):
 
 
 def main(argv):
-    report = argv[1] if len(argv) > 1 else "report"
+    args = argv[1:]
+    scenes = SCENES
+    if "--scene" in args:
+        at = args.index("--scene")
+        scenes = [a for a in args[at + 1:] if not a.startswith("--")]
+        args = args[:at]
+        if not scenes:
+            raise SystemExit("plot_report: --scene needs at least one scene name")
+    report = args[0] if args else "report"
     if not os.path.isdir(report):
         raise SystemExit(f"plot_report: {report} is not a directory (run examples/demo.sh first)")
     figures = os.path.join(report, "figures")
     os.makedirs(figures, exist_ok=True)
     made, missing = [], []
-    for scene in SCENES:
+    for scene in scenes:
         data = read_trajectory(report, scene)
         if data is None:
             missing.append(scene)
             continue
         columns, events = data
         made.append(plot_states(report, figures, scene, columns, events))
+        forces = read_forces(report, scene)
+        if forces is not None:
+            made.append(plot_forces(report, figures, scene, forces, events))
         if scene.startswith("plank_box"):
             made.append(plot_plank_box(report, figures, scene, columns, events))
         if scene == "hopper":

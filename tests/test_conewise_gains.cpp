@@ -389,6 +389,13 @@ TEST(ConewiseGains, FlatBoxSlidingToAStopHasALinearGain) {
   ASSERT_EQ(gain.pieces()[0]->order.size(), 1u);
   EXPECT_EQ(gain.pieces()[0]->order[0].size(), 2u) << "both stops in one micro-event";
   EXPECT_LE(relative_difference(gain.pieces()[0]->G_z, linear.G_z), 1e-12);
+  // The numerical twin differences the same linear gain (every perturbed run stops both corners
+  // together), on the admissible directions of the sliding mode.
+  NumericalJumpGainOptions twin;
+  twin.simulation = references::tight();
+  const NumericalJumpGain<Box> numeric = numerical_jump_gain(box, traj, 0, twin);
+  EXPECT_LE(relative_difference(numeric.G_z_basis, Eigen::MatrixXd(linear.G_z * numeric.basis)), 1e-6);
+  EXPECT_LE((numeric.G_v - linear.G_v).cwiseAbs().maxCoeff(), 1e-8);  // zero: the vertical push moves no stop
   LinearisationOptions options;
   options.simulation = references::tight();
   LinearisedSystem<Box> lin(box, traj, options);
@@ -418,6 +425,10 @@ TEST(ConewiseGains, FrictionImpulseMakesOneOrderImpossible) {
   std::printf("nominal landing: mode after %s\n", describe(box, landing.mode_after).c_str());
   ConewiseJumpGain<Box> gain(box, landing, traj.input, tight_conewise());
   EXPECT_EQ(gain.build_all(), 2);
+  // Not coincident: the twin's perturbed runs land the corners apart and it says so.
+  NumericalJumpGainOptions twin;
+  twin.simulation = references::tight();
+  EXPECT_THROW(numerical_jump_gain(box, traj, 0, twin), SimultaneousActivation);
   ASSERT_EQ(gain.unrealisable_orders().size(), 1u);
   const UnrealisableOrder& impossible = gain.unrealisable_orders()[0];
   ASSERT_EQ(impossible.fired.size(), 1u);

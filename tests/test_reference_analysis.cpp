@@ -84,7 +84,8 @@ TEST(OcpAnalysis, AFailingStageIsReportedWithItsName) {
 // and for one that failed at the tracking design.
 TEST(ReferenceAnalysis, JsonKeepsTheKeysOfEachCompletedStage) {
   const auto ref = references::example3();
-  const nlohmann::ordered_json j = to_json(analyse_reference(ref.scene, ref.trajectory, ref.options, example3_lqr(4)));
+  const ReferenceAnalysis<PointMass> analysis = analyse_reference(ref.scene, ref.trajectory, ref.options, example3_lqr(4));
+  const nlohmann::ordered_json j = to_json(analysis);
   EXPECT_EQ(keys(j), (std::vector<std::string>{"linearisation_seconds", "events", "jump_gain_seconds", "design",
                                                "lqr_seconds", "verdict", "upper_bound", "lower_bound", "predicted_rate",
                                                "peak_amplification", "check_seconds", "monte_carlo", "agree", "seconds"}))
@@ -96,8 +97,24 @@ TEST(ReferenceAnalysis, JsonKeepsTheKeysOfEachCompletedStage) {
   EXPECT_EQ(keys(j["monte_carlo"]),
             (std::vector<std::string>{"runs", "kept_event_sequence", "failed", "failure_reasons", "grew", "shrank",
                                       "observed_rate_max", "predicted_rate_max", "max_log_discrepancy",
-                                      "perturbation_size", "simulation_seconds", "seconds", "threads"}));
+                                      "perturbation_size", "simulation_seconds", "seconds", "threads",
+                                      "amplifications"}));
   EXPECT_EQ(j["monte_carlo"]["runs"].get<int>(), 4);
+  // One entry per run that did not fail, the run's own numbers in the run's order.
+  const auto& amplifications = j["monte_carlo"]["amplifications"];
+  EXPECT_EQ(keys(amplifications), (std::vector<std::string>{"predicted", "observed", "kept_event_sequence"}));
+  ASSERT_TRUE(analysis.monte_carlo.has_value());
+  std::size_t k = 0;
+  for (const MonteCarloRun& run : analysis.monte_carlo->run) {
+    if (run.failed) continue;
+    ASSERT_LT(k, amplifications["predicted"].size());
+    EXPECT_EQ(amplifications["predicted"][k].get<double>(), run.predicted);
+    EXPECT_EQ(amplifications["observed"][k].get<double>(), run.observed);
+    EXPECT_EQ(amplifications["kept_event_sequence"][k].get<bool>(), run.kept_event_sequence);
+    ++k;
+  }
+  EXPECT_EQ(k, amplifications["observed"].size());
+  EXPECT_EQ(k, 4u - static_cast<std::size_t>(j["monte_carlo"]["failed"].get<int>()));
   EXPECT_EQ(j["monte_carlo"]["perturbation_size"].get<double>(), 1e-4);
   EXPECT_EQ(j["design"].get<std::string>(), "LQR, Q = I, R = 0.1 I");
   EXPECT_EQ(j["verdict"].get<std::string>(), "stable");

@@ -4,6 +4,7 @@
 
 #include "scenes/all_scenes.hpp"
 
+#include <saltus/hybrid/dynamics/contact_forces_csv.hpp>
 #include <saltus/hybrid/vocabulary/trajectory_io.hpp>
 
 #include <nlohmann/json.hpp>
@@ -170,6 +171,41 @@ TEST(TrajectoryJson, ParsesBackToTheTrajectory) {
   }
   EXPECT_TRUE(j.at("events").at(0).at("impact").get<bool>());
   EXPECT_TRUE(j.at("zeno_time").is_null());
+}
+
+// The point mass of example3 falls from 1 m (thrust 7 N sideways), lands at t = sqrt(2 / g) with the
+// impulse m sqrt(2 g) (e = 0), slides on the frictionless table with the normal force
+// m g - u_z = g (1 - 2 (t - 1)_+) and leaves it at t = 1.5: the forces CSV and the impulse in the
+// JSON events against these closed forms.
+TEST(TrajectoryReport, ContactForcesAndImpulsesAgainstClosedForms) {
+  scenes::PointMass mass;
+  const auto traj = example3();
+  ASSERT_EQ(traj.events.size(), 2u);
+  std::stringstream csv;
+  write_contact_forces_csv(csv, traj, 0.01, mass);
+  std::string line;
+  std::getline(csv, line);
+  EXPECT_EQ(line, "t,segment,table_n");
+  int rows = 0, inside_slide = 0;
+  while (std::getline(csv, line)) {
+    double t = 0.0, force = 0.0;
+    int segment = -1;
+    ASSERT_EQ(std::sscanf(line.c_str(), "%lf,%d,%lf", &t, &segment, &force), 3) << line;
+    const double expected = segment == 1 ? g * (1.0 - 2.0 * std::max(0.0, t - 1.0)) : 0.0;
+    EXPECT_NEAR(force, expected, 1e-9) << "t = " << t << ", segment " << segment;
+    inside_slide += segment == 1;
+    ++rows;
+  }
+  EXPECT_GT(rows, 200);
+  EXPECT_GT(inside_slide, 100);
+  const nlohmann::json j = to_json(traj, mass);
+  const auto& landing = j.at("events").at(0).at("impulses");
+  ASSERT_EQ(landing.size(), 1u);
+  EXPECT_EQ(landing.at(0).at("contact"), "table");
+  EXPECT_NEAR(landing.at(0).at("normal").get<double>(), std::sqrt(2.0 * g), 1e-9);
+  EXPECT_TRUE(landing.at(0).at("tangent").empty());
+  EXPECT_TRUE(j.at("events").at(1).at("impulses").empty()) << "the lift-off takes no impulse";
+  EXPECT_THROW(write_contact_forces_csv(csv, traj, 0.0, mass), InvalidArgument);
 }
 
 // The spatial box's slip modes are written with their direction "(dx,dy)": quoted, so the CSV

@@ -255,6 +255,56 @@ TEST(ScheduleRefinement, AReleaseFromStickLeavesNoTangentialForce) {
   EXPECT_LE(r.phase_resim_max_error, 1e-8);
 }
 
+/// A push the table's friction cannot hold: the cost wants u = (20, 0) N throughout while the
+/// mass sticks on the table for the whole horizon, so the optimum pushes as hard as the cone lets
+/// it, |u_1| = (1 - margin) mu m g.
+struct PushHard {
+  template <class T>
+  T running_cost(const VecT<T, 4>&, const VecT<T, 2>& u) const {
+    return (u[0] - T(20.0)) * (u[0] - T(20.0)) + u[1] * u[1];
+  }
+};
+
+/// The largest |lambda_t| / (mu lambda_n) of the first phase of `r` over its element boundaries
+/// (where its rows hold), from the flow's forces.
+double largest_cone_use(const RefinementResult<PointMass>& r) {
+  const PointMass scene = frictional_mass();
+  FlowWorkspace<PointMass> ws;
+  double largest = 0.0;
+  for (double t : r.element_times) {
+    evaluate_flow(scene, r.trajectory.segments[0].mode, r.trajectory.state(0, t), r.trajectory.input_at(0, t), ws);
+    largest = std::max(largest, std::abs(ws.force[0].tangent[0]) / (scene.contact(0).mu * ws.force[0].normal));
+  }
+  return largest;
+}
+
+// PushHard's stick uses the whole cone; with stick_cone_margin = 0.25 it uses three quarters of it
+// and pays for the weaker push. A margin outside [0, 1) is refused by name.
+TEST(ScheduleRefinement, AStickConeMarginKeepsTheStickInsideTheCone) {
+  ScheduleGuess<PointMass> g;
+  g.schedule.phases = {closed_mode(0)};
+  g.state = [](int, double) { return Vec<4>(0, 0, 0, 0); };
+  g.input = [](double) { return Vec<2>(0, 0); };
+  OcpHorizon<PointMass> h;
+  h.x0.setZero();
+  h.final_time = 1.0;
+  RefinementOptions o;
+  o.grid.max_element_duration = 0.1;
+  o.edits.max_edits = 0;
+  const RefinementResult<PointMass> edge = refine_schedule(frictional_mass(), PushHard{}, h, g, o);
+  ASSERT_TRUE(edge.converged) << edge.message;
+  EXPECT_NEAR(largest_cone_use(edge), 1.0, 1e-6);
+  o.stick_cone_margin = 0.25;
+  const RefinementResult<PointMass> inside = refine_schedule(frictional_mass(), PushHard{}, h, g, o);
+  ASSERT_TRUE(inside.converged) << inside.message;
+  EXPECT_LE(inside.mode_validity_violation, 1e-9);
+  EXPECT_NEAR(largest_cone_use(inside), 0.75, 1e-6);
+  EXPECT_GT(inside.objective, edge.objective + 1.0);
+  EXPECT_LE(inside.phase_resim_max_error, 1e-8);
+  o.stick_cone_margin = 1.0;
+  EXPECT_THROW(refine_schedule(frictional_mass(), PushHard{}, h, g, o), InvalidArgument);
+}
+
 /// A stance built to want a lift-off: a frictionless mass slides on the table to x = 1 at rest at
 /// T = 1 while the cost asks for an upward thrust u2 ~ 15 N > m g around t = 0.5. On the table
 /// lambda_n = m g - u2 >= 0 holds the thrust at m g with a positive multiplier: the edit inserts a

@@ -1,64 +1,105 @@
 // The hopper over three holes refined from a footstep schedule (docs/refinement.md, "Hopper").
 //
-//   hopper_refinement [stance [h [max_iter [height]]]]     (defaults 0.3 0.025 3000 0.1)
+//   hopper_refinement [stance [h [max_iter [end_stance [cone_margin]]]]]   (defaults 0.45 0.02 1000 0.3 0)
 //
-// Discovery by the time-freezing homotopy finds no contact schedule on this OCP (the relaxed
-// hopper floats down to sigma = 0.01: bench/experiments/hopper_discovery), so the schedule here is a user's
-// guess, the footsteps the holes leave: four stances (the foot sticking) at x = 0, 1, 2, 3 of
-// `stance` seconds each, three flights in between of (T - 4 stance) / 3. The motion guessed: in a
-// stance the hip above the foot at height 0.4, at rest; in a flight the hip from one foothold to the
-// next on an arc `height` high (the leg straight); zero torques. Neither the contact forces nor
-// the push-off are guessed. The OCP is scenes/hopper_holes.hpp as it is (T = 2.5 s, |u| <= 60, the
-// 11 path rows at the full holes, the start at rest, the target q(T) = (3, 0.4, 0, 0)). Prints the
-// refinement's progress, its result and its checks; writes the result's JSON to
-// hopper_refinement.json. About 12 minutes on one thread.
+// Discovery by the time-freezing homotopy gives no usable schedule on this OCP (docs/refinement.md,
+// "Hopper over three holes"), so the schedule here is a user's guess, the footsteps the holes
+// leave: four stances (the foot sticking) at x = 0, 1, 2, 3, the first and the last `end_stance`
+// seconds long, the two middle ones `stance`, and three flights of equal length in between. The
+// motion guessed, kinematically consistent with the schedule: in a stance the foot stays on its
+// foothold while the hip moves at constant speed from 0.15 m behind it to 0.15 m ahead (from and to
+// the start and target poses in the first and last stance), the hip-to-foot distance 0.39 m (the
+// knee bent forward, angles by inverse kinematics; 0.4 m, the leg straight, at t = 0 and T); in a
+// flight the hip moves at constant speed to the next touchdown pose on a ballistic arc (capped at
+// z = 0.54) and the joint angles go linearly from the lift-off pose to the touchdown pose;
+// velocities by central differences; zero torques. The OCP is scenes/hopper_holes.hpp as it is
+// (T = 2.5 s, |u| <= 60, the 11 path rows at the full holes, the start at rest, the target
+// q(T) = (3, 0.4, 0, 0)). Prints the refinement's progress, its result and its checks; writes the
+// result's JSON to hopper_refinement.json. About 4 minutes on one thread with the defaults
+// (docs/refinement.md, "Hopper over three holes").
 #include "scenes/all_scenes.hpp"
 #include "scenes/hopper_holes.hpp"
 
 #include <saltus/timefreezing/refinement/refinement.hxx>
 #include <saltus/timefreezing/refinement/refinement_io.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
 #include <iostream>
-#include <numbers>
+#include <vector>
 
 namespace {
 
 using saltus::scenes::Hopper;
 using Ocp = saltus::scenes::HopperOverThreeHoles;
 
-saltus::timefreezing::ScheduleGuess<Hopper> footstep_guess(const Hopper& hopper, double stance, double height) {
+constexpr double hip_offset = 0.15;      // hip ahead of / behind the foothold at lift-off / touchdown [m]
+constexpr double stance_leg = 0.39;      // hip-to-foot distance in a stance [m]
+constexpr double link_length = 0.2;      // thigh = shank (scenes/hopper.hpp)
+
+/// (phi_hip, phi_knee) that put the foot at (fx, 0) below a hip at (hx, hz), the knee bent forward.
+saltus::Vec<2> leg_angles_reaching(double hx, double hz, double fx) {
+  const double rx = fx - hx, rz = -hz, reach = std::min(std::hypot(rx, rz), 2 * link_length);
+  const double knee = -2.0 * std::acos(std::min(1.0, reach / (2 * link_length)));
+  return saltus::Vec<2>(std::atan2(rx, -rz) - knee / 2, knee);
+}
+
+/// One phase of the guessed gait: [begin, end], a stance on `foothold` or a flight from it.
+struct GuessPhase {
+  double begin = 0.0, end = 0.0;
+  bool stance = true;
+  int foothold = 0;
+};
+
+saltus::Vec<4> stance_pose(const GuessPhase& p, double t) {
+  const double s = (t - p.begin) / (p.end - p.begin), x = p.foothold;
+  const double from = p.foothold == 0 ? 0.0 : x - hip_offset, to = p.foothold == 3 ? 3.0 : x + hip_offset;
+  const double leg = p.foothold == 0 ? 0.4 + (stance_leg - 0.4) * s
+                     : p.foothold == 3 ? stance_leg + (0.4 - stance_leg) * s : stance_leg;
+  const double hx = from + (to - from) * s, hz = std::sqrt(std::max(0.04, leg * leg - (hx - x) * (hx - x)));
+  const saltus::Vec<2> a = leg_angles_reaching(hx, hz, x);
+  return saltus::Vec<4>(hx, hz, a[0], a[1]);
+}
+
+saltus::Vec<4> flight_pose(const GuessPhase& p, double t) {
+  const double s = (t - p.begin) / (p.end - p.begin), z0 = std::sqrt(stance_leg * stance_leg - hip_offset * hip_offset);
+  const double x0 = p.foothold + hip_offset, x1 = p.foothold + 1 - hip_offset;
+  const saltus::Vec<2> a0 = leg_angles_reaching(x0, z0, p.foothold), a1 = leg_angles_reaching(x1, z0, p.foothold + 1);
+  const double hz = std::min(0.54, z0 + 0.5 * 9.81 * (t - p.begin) * (p.end - t));
+  const saltus::Vec<2> a = a0 + (a1 - a0) * s;
+  return saltus::Vec<4>(x0 + (x1 - x0) * s, hz, a[0], a[1]);
+}
+
+saltus::timefreezing::ScheduleGuess<Hopper> footstep_guess(const Hopper& hopper, double stance, double end_stance) {
   using namespace saltus;
   using namespace saltus::timefreezing;
-  const double flight = (Ocp::horizon - 4 * stance) / 3.0;
+  const double flight = (Ocp::horizon - 2 * end_stance - 2 * stance) / 3.0;
+  std::vector<GuessPhase> phases;
+  double t = 0.0;
+  for (int k = 0; k < 4; ++k) {
+    const double d = (k == 0 || k == 3) ? end_stance : stance;
+    phases.push_back({t, t + d, true, k});
+    t += d;
+    if (k < 3) phases.push_back({t, t + flight, false, k});
+    if (k < 3) t += flight;
+  }
   ScheduleGuess<Hopper> g;
   Mode<1> stick, open;
   stick[0] = ContactState::stick();
-  for (int k = 0; k < 4; ++k) {
-    g.schedule.phases.push_back(stick);
-    if (k < 3) g.schedule.phases.push_back(open);
-  }
-  for (std::size_t k = 0; k + 1 < g.schedule.phases.size(); ++k)
+  for (const GuessPhase& p : phases) g.schedule.phases.push_back(p.stance ? stick : open);
+  for (std::size_t k = 0; k + 1 < phases.size(); ++k) {
     g.schedule.events.push_back(guards_between(hopper, g.schedule.phases[k], g.schedule.phases[k + 1]));
-  g.schedule = validated(hopper, g.schedule);
-  for (int k = 0; k < 3; ++k) {
-    g.event_times.push_back((k + 1) * stance + k * flight);
-    g.event_times.push_back((k + 1) * (stance + flight));
+    g.event_times.push_back(phases[k].end);
   }
-  const std::vector<double> events = g.event_times;
-  g.state = [events, flight, height](int p, double t) {
-    VecT<double, 8> x = VecT<double, 8>::Zero();
-    const int foothold = p / 2;
-    x[0] = foothold;
-    x[1] = 0.4;
-    if (p % 2 == 0) return x;
-    const double s = (t - events[static_cast<std::size_t>(p - 1)]) / flight, w = std::numbers::pi;
-    x[0] += s;
-    x[1] += height * std::sin(w * s) * std::sin(w * s);
-    x[4] = 1.0 / flight;
-    x[5] = height * 2.0 * std::sin(w * s) * std::cos(w * s) * w / flight;
+  g.schedule = validated(hopper, g.schedule);
+  g.state = [phases](int k, double t) {
+    const GuessPhase& p = phases[static_cast<std::size_t>(k)];
+    const auto pose = [&p](double s) { return p.stance ? stance_pose(p, s) : flight_pose(p, s); };
+    const double c = std::clamp(t, p.begin, p.end), a = std::max(p.begin, c - 1e-5), b = std::min(p.end, c + 1e-5);
+    VecT<double, 8> x;
+    x << pose(c), (pose(b) - pose(a)) / (b - a);
     return x;
   };
   g.input = [](double) { return VecT<double, 2>::Zero(); };
@@ -71,11 +112,12 @@ int main(int argc, char** argv) {
   using namespace saltus;
   using namespace saltus::timefreezing;
   std::cout << std::unitbuf;
-  const double stance = argc > 1 ? std::atof(argv[1]) : 0.3, h = argc > 2 ? std::atof(argv[2]) : 0.025;
-  const int max_iter = argc > 3 ? std::atoi(argv[3]) : 3000;
-  const double height = argc > 4 ? std::atof(argv[4]) : 0.1;
+  const double stance = argc > 1 ? std::atof(argv[1]) : 0.45, h = argc > 2 ? std::atof(argv[2]) : 0.02;
+  const int max_iter = argc > 3 ? std::atoi(argv[3]) : 1000;
+  const double end_stance = argc > 4 ? std::atof(argv[4]) : 0.3;
+  const double cone_margin = argc > 5 ? std::atof(argv[5]) : 0.0;  // RefinementOptions::stick_cone_margin
   const Hopper hopper{};
-  const ScheduleGuess<Hopper> guess = footstep_guess(hopper, stance, height);
+  const ScheduleGuess<Hopper> guess = footstep_guess(hopper, stance, end_stance);
   std::cout << "schedule: " << describe(hopper, guess.schedule) << "\n";
   OcpHorizon<Hopper> horizon;
   horizon.x0 << Ocp::q0(), Ocp::v0();
@@ -87,9 +129,11 @@ int main(int argc, char** argv) {
   options.grid.max_element_duration = h;
   options.ipopt.max_iter = max_iter;
   options.edits.max_edits = 0;
+  options.stick_cone_margin = cone_margin;
   const RefinementResult<Hopper> r = refine_schedule(hopper, Ocp{}, horizon, guess, options);
   std::cout << r.stage << " (" << r.message << ")\n  objective " << r.objective << ", mode validity "
             << r.mode_validity_violation << ", path rows " << r.path_violation << ", target " << r.terminal_violation
+            << ", contact drift " << r.contact_drift
             << ", per-phase re-simulation " << r.phase_resim_max_error << ", open loop " << r.open_loop.max_error << " "
             << r.open_loop.note << ", " << r.seconds << " s\n  events:";
   for (double t : r.event_times) std::cout << " " << t;

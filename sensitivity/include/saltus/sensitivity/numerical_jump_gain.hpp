@@ -84,8 +84,11 @@ struct NumericalJumpGain {
   int replays = 0;      ///< perturbed runs that needed the replay (Simulator failures)
 };
 
-/// G_z, G_v of event `e` of `traj` by re-simulation. @throws NumericalFailure, InvalidArgument,
-/// SimultaneousActivation (an event fired by several guards: numerical_conewise_piece)
+/// G_z, G_v of event `e` of `traj` by re-simulation. An event fired by several coincident guards
+/// (every perturbed run fires them together: a flat box's two corners stopping together) has its
+/// linear gain, as JumpGainSolver's. @throws NumericalFailure, InvalidArgument,
+/// SimultaneousActivation (several guards that a perturbed run fires apart: the gain is conewise,
+/// numerical_conewise_piece)
 template <Scene S>
 NumericalJumpGain<S> numerical_jump_gain(const S& scene, const HybridTrajectory<S>& traj, int e,
                                 const NumericalJumpGainOptions& options = {});

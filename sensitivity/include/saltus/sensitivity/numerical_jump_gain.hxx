@@ -72,15 +72,20 @@ NumericalJumpGain<S> numerical_jump_gain(const S& scene, const HybridTrajectory<
                 "NumericalJumpGainOptions: window and steps must be > 0");
   const Event<S>& ev = traj.events[e];
   const double ts = ev.t;
-  // Several guards at one instant: a perturbation splits the event into separate ones in an order
-  // that depends on the perturbation, so no single (two-sided) jump gain exists to difference.
-  for (std::size_t k = 0; k < ev.transitions.size(); ++k)
-    if (ev.transitions[k].guards.size() > 1)
-      throw SimultaneousActivation(detail::concat(
-          "numerical jump gain: transition ", k, " of the event at t = ", ts, " is fired by ",
-          ev.transitions[k].guards.size(), " guards at once; perturbations split it into separate events in an "
-          "order that depends on the perturbation, so the first-order map is conewise and no single gain exists "
-          "to difference (numerical_conewise_piece differences one piece inside its cone)"));
+  // Several guards at one instant: when a perturbation splits them into separate events (in an
+  // order that depends on the perturbation) the first-order map is conewise and no single gain
+  // exists to difference; when they are coincident (the same crossing for every nearby motion:
+  // jump_gain.hpp, "Coincident guards"), every perturbed run fires them together and the gain is
+  // linear. The perturbed runs decide: a run that fires a subset of a transition's guards throws
+  // SimultaneousActivation (split_event below).
+  auto split_event = [&](std::size_t k, const std::string& what) {
+    return SimultaneousActivation(detail::concat(
+        "numerical jump gain: transition ", k, " of the event at t = ", ts, " is fired by ",
+        ev.transitions[k].guards.size(), " guards at once, and a perturbed run ", what,
+        ": perturbations split it into separate events in an order that depends on the perturbation, so the "
+        "first-order map is conewise and no single gain exists to difference (numerical_conewise_piece differences "
+        "one piece inside its cone)"));
+  };
   const double w = detail::event_window(traj, e, options.window, "numerical jump gain");
   const double ta = ts - w, tb = ts + w;
 
@@ -135,6 +140,12 @@ NumericalJumpGain<S> numerical_jump_gain(const S& scene, const HybridTrajectory<
         SALTUS_CHECK_NUMERICS(end.at_guard, "numerical jump gain: a replayed run did not reach the ",
                               to_string(tr.guards.front().kind), " guard of the event at t = ", ts,
                               " within the window [", ta, ", ", tb, "] (reduce the steps or enlarge the window)");
+        for (const Guard& g : tr.guards)
+          for (int j = 0; j < sys.guards().count; ++j)
+            if (sys.guards()[j] == g && !end.fired[j])
+              throw split_event(k, detail::concat("reached the ", to_string(tr.guards.front().kind),
+                                                  " guard without the ", to_string(g.kind), " guard of contact '",
+                                                  scene.contact(g.contact).name, "'"));
         t = end.t;
         if (k == 0) event_time = t;
       }
@@ -152,6 +163,9 @@ NumericalJumpGain<S> numerical_jump_gain(const S& scene, const HybridTrajectory<
                         run.segments.back().mode == ev.mode_after, "numerical jump gain: a perturbed run through the event at t = ", ts,
                     " ended in mode '", describe(scene, run.segments.back().mode), "' after ", events,
                     " events, not in '", describe(scene, ev.mode_after), "' after one");
+      for (std::size_t k = 0; k < ev.transitions.size(); ++k)
+        if (run.events.front().transitions[k].guards.size() != ev.transitions[k].guards.size())
+          throw split_event(k, detail::concat("fired ", run.events.front().transitions[k].guards.size(), " of them"));
       event_time = run.events.front().t;
       return run.final_state();
     } catch (const NumericalFailure&) {

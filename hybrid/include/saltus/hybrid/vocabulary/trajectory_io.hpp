@@ -54,8 +54,11 @@ void write_csv(std::ostream& os, const HybridTrajectory<S>& traj, double dt, con
 ///   segments         [{mode, t_begin, t_end, steps}]: mode as describe() writes it, the
 ///                    interval in s, steps the pieces of its dense output
 ///   events           [{t, impact, guards: [{contact, kind}], mode_before, mode_after, x_minus,
-///                    x_plus}]: contact by its scene name, kind as to_string(GuardKind), x- and x+
-///                    of size 2 nq (q then v)
+///                    x_plus, impulses}]: contact by its scene name, kind as to_string(GuardKind),
+///                    x- and x+ of size 2 nq (q then v); impulses [{contact, normal, tangent}] of the
+///                    contacts that took one, per impact of the event's chain in the order applied
+///                    (N s; tangent in the contact's tangent coordinates, as many entries as it
+///                    has tangents), empty without an impact
 ///   zeno_time        the predicted accumulation time in s, null when not finite
 ///   steps, rhs_evaluations, wall_seconds   the simulation's statistics
 /// Numbers keep their double values (a dump writes the shortest text that reads back exactly);
@@ -77,13 +80,23 @@ nlohmann::ordered_json to_json(const HybridTrajectory<S>& traj, const S& scene) 
     auto guards = nlohmann::ordered_json::array();
     for (const Guard& g : ev.guards())
       guards.push_back({{"contact", scene.contact(g.contact).name}, {"kind", to_string(g.kind)}});
+    auto impulses = nlohmann::ordered_json::array();
+    for (const Transition<S>& tr : ev.transitions)
+      for (int i = 0; i < S::nc && tr.impact; ++i) {
+        if (tr.impulse_mode[i].role == ImpulseRole::None) continue;
+        auto tangent = nlohmann::ordered_json::array();
+        for (int k = 0; k < scene.contact(i).tangents(); ++k) tangent.push_back(tr.impulse[i].tangent[k]);
+        impulses.push_back(
+            {{"contact", scene.contact(i).name}, {"normal", tr.impulse[i].normal}, {"tangent", std::move(tangent)}});
+      }
     events.push_back({{"t", ev.t},
                       {"impact", ev.impact()},
                       {"guards", std::move(guards)},
                       {"mode_before", describe(scene, ev.mode_before)},
                       {"mode_after", describe(scene, ev.mode_after)},
                       {"x_minus", state(ev.x_minus)},
-                      {"x_plus", state(ev.x_plus)}});
+                      {"x_plus", state(ev.x_plus)},
+                      {"impulses", std::move(impulses)}});
   }
   nlohmann::ordered_json j = nlohmann::ordered_json::object();
   j["status"] = to_string(traj.status);

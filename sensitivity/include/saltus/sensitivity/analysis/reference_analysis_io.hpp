@@ -28,7 +28,10 @@ namespace saltus {
 ///                        over kept runs of log(observed) / (T - t0), 1/s), predicted_rate_max (the
 ///                        same of each run's first-order amplification), max_log_discrepancy (max
 ///                        |log(observed / first order)|), perturbation_size, simulation_seconds (the
-///                        closed-loop runs), seconds (with the first-order predictions), threads}
+///                        closed-loop runs), seconds (with the first-order predictions), threads,
+///                        amplifications: {predicted, observed, kept_event_sequence} per run that
+///                        did not fail (|z(T)| / |d| of the first order, |x(T) - x_j(T)| / |eps d|
+///                        simulated, in the weights of MonteCarloOptions)}
 ///   agree                monte_carlo_agrees against predicted_rate
 ///   failure, failed_at   the message and the stage (to_string(AnalysisStage)) of a failed analysis
 ///   seconds              the whole analysis
@@ -83,6 +86,18 @@ nlohmann::ordered_json to_json(const ReferenceAnalysis<S>& analysis) {
                         {"simulation_seconds", m.seconds},
                         {"seconds", analysis.seconds.monte_carlo},
                         {"threads", m.threads}};
+    // Per run that did not fail: the first-order amplification |z(T)| / |d| against the observed
+    // |x(T) - x_j(T)| / |eps d| (MonteCarloRun), and whether it kept the event sequence.
+    json predicted = json::array(), observed = json::array(), kept = json::array();
+    for (const MonteCarloRun& run : m.run) {
+      if (run.failed) continue;
+      predicted.push_back(run.predicted);
+      observed.push_back(run.observed);
+      kept.push_back(run.kept_event_sequence);
+    }
+    j["monte_carlo"]["amplifications"] = {{"predicted", std::move(predicted)},
+                                          {"observed", std::move(observed)},
+                                          {"kept_event_sequence", std::move(kept)}};
     j["agree"] = analysis.agree;
   }
   if (analysis.failed_at) {

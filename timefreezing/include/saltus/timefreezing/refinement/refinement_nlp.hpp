@@ -21,7 +21,8 @@
 // input jumps there; inequality rows >= 0), from the flow's contact forces:
 //     open contact:             h_n(q)                    (no penetration)
 //     closed contact:           lambda_n                  (no pull)
-//     sticking planar contact:  mu lambda_n - lambda_t,  mu lambda_n + lambda_t   (in the cone)
+//     sticking planar contact:  mu lambda_n - lambda_t,  mu lambda_n + lambda_t   (in the cone;
+//                               mu times 1 - RefinementOptions::stick_cone_margin, default 1)
 //     slipping planar contact:  s zeta_t                  (the slip keeps its sign s)
 // With these and the events below, the refined motion satisfies the complementarity conditions of
 // contact and Coulomb friction EXACTLY at every stage point, by construction: each contact is in

@@ -37,11 +37,12 @@ void ScheduleRefinementNlp<S, Ocp>::write_validity(int p, const FlowWorkspace<S,
       out[k++] = T(c.slip_direction[0]) * ws.kin.contacts[i].zeta_t[0];
       continue;
     }
-    T mu_lambda = T(scene_.contact(i).mu) * ws.force[i].normal, lambda_t = ws.force[i].tangent[0];
+    const double inside = 1.0 - options_.stick_cone_margin;  // RefinementOptions::stick_cone_margin
+    T mu_lambda = T(inside * scene_.contact(i).mu) * ws.force[i].normal, lambda_t = ws.force[i].tangent[0];
     if (leader[i] == i)
       for (int j = i + 1; j < nc; ++j)
         if (leader[j] == i) {
-          mu_lambda += T(scene_.contact(j).mu) * ws.force[j].normal;
+          mu_lambda += T(inside * scene_.contact(j).mu) * ws.force[j].normal;
           lambda_t += ws.force[j].tangent[0];
         }
     out[k++] = mu_lambda - lambda_t;

@@ -23,6 +23,8 @@ inline void RefinementOptions::validate() const {
                  "refinement: edits.vanishing_duration must be >= 0, got ", edits.vanishing_duration);
   SALTUS_REQUIRE(std::isfinite(min_phase_duration) && min_phase_duration >= 0.0,
                  "refinement: min_phase_duration must be >= 0, got ", min_phase_duration);
+  SALTUS_REQUIRE(stick_cone_margin >= 0.0 && stick_cone_margin < 1.0,
+                 "refinement: stick_cone_margin must lie in [0, 1), got ", stick_cone_margin);
   SALTUS_REQUIRE(implied_row_tolerance > 0.0 && implied_row_tolerance < 1.0,
                  "refinement: implied_row_tolerance must lie in (0, 1), got ", implied_row_tolerance);
   SALTUS_REQUIRE(std::isfinite(checks.mode_validity) && checks.mode_validity >= 0.0,

@@ -61,6 +61,14 @@ struct RefinementOptions {
   RefinementChecks checks;
   /// d_p >= min_phase_duration [s] for every phase (>= 0; 0: a phase may shrink to a point).
   double min_phase_duration = 0.0;
+  /// In [0, 1). A sticking contact's cone rows inside its phase are
+  /// (1 - stick_cone_margin) mu lambda_n -+ lambda_t >= 0: the refined stick keeps a relative
+  /// distance from the friction cone's edge, where the event-driven simulator's mode selection may
+  /// equally start a slip and the re-simulation departs from the reference (the hopper's stances,
+  /// docs/refinement.md). 0: the cone itself. The guards (slip onset, release) and the impact rows
+  /// keep the cone itself; mode_validity_violation reads the rows as imposed (with the margin), so
+  /// the physical cone holds with room to spare where it is small.
+  double stick_cone_margin = 0.0;
   /// An equality path row of a phase whose gradient lies in the span of the closed contacts' gap
   /// gradients (relative least-squares residual <= this, and no dependence on v and u) is implied
   /// by the mode and is not imposed inside the phase; a guard whose gradient lies in the span of
