@@ -1,0 +1,97 @@
+"""Saltus: hybrid mechanical systems with impacts and Coulomb friction, from Python.
+
+The compiled module ``saltus._saltus`` binds the C++ library's scene library:
+
+Scenes (immutable, picklable)
+    ``BouncingBall``, ``PointMass`` (the guiding example), ``PlankBox``; ``nq``, ``nx = 2 nq``,
+    ``nu``, ``nc`` and ``contacts`` describe them.
+Simulation
+    ``simulate(scene, x0, t0, t_final, input=None, options=None)`` returns the scene's
+    ``Trajectory``: ``segments`` (``Segment.times`` (n,) s, ``Segment.states`` (n, nx)),
+    ``events`` (``Event.t``, ``guards``, ``mode_before``, ``mode_after``, ``x_minus``,
+    ``x_plus``), ``sample(times)`` (n, nx), ``inputs(times)`` (n, nu), ``to_json()``,
+    ``to_csv(dt)``. ``input``: None, a constant u (nu,), or a Python callable ``u(t, x)``.
+    ``polish(scene, csv)``: a reference read back from CSV and re-simulated.
+    ``references``: the library's reference motions, with their C++ input laws.
+Jump gains
+    ``jump_gains(trajectory)``: per event ``JumpGain.G_z`` (nx, nx), ``G_v`` (nx, nu),
+    ``dt_dz``, ``dt_dv``. ``conewise_gain(trajectory, event)``: the conewise gain of a
+    simultaneous event, ``pieces`` (``ConewisePiece.order``, ``G_z``, ``G_v``, ``cone_z``,
+    ``cone_v``), ``evaluate(z, v)``.
+Linearisation, tracking and stability (PointMass, PlankBox)
+    ``linearise(reference)`` with ``predict(z0, times)`` (the first-order prediction, (n, nx))
+    and ``state_transition(t1, t0)`` (nx, nx); ``lqr_design(lin, Q, R, Q_final)`` or
+    ``constant_gains(lin, pd_gain(Kp, Kd))``, ``tracking(lin, gains)`` with
+    ``check_stability()``, ``check_periodic_stability(period)``, ``monte_carlo(runs)``.
+    ``saltus.distributed`` runs Monte Carlo batches and gain sweeps on a Dask cluster.
+Optimal references
+    ``optimal_control.point_mass_to_the_target(progress=None)``: time-freezing discovery and the
+    mode-schedule refinement; the refined reference comes back as a trajectory to analyse. The
+    progress lines go to the callable given, or to the logger "saltus".
+Errors
+    the C++ exception types with their names and messages: ``Error`` (a ``RuntimeError``),
+    ``InvalidArgument`` (also a ``ValueError``), ``NumericalFailure``, ``ContactProblemFailure``,
+    ``NonSpdMassMatrix``, ``InternalError``, ``GrazingEvent``, ``SimultaneousActivation``,
+    ``UnplannedEvent``.
+
+Units are the scenes' (SI: m, rad, s, kg, N, N m); states are x = (q, v).
+"""
+
+import numpy as _np
+
+from . import _saltus
+from ._saltus import (  # noqa: F401  (the public names)
+    BouncingBall,
+    ConewisePiece,
+    ContactProblemFailure,
+    Error,
+    Event,
+    GrazingEvent,
+    IntegratorKind,
+    InternalError,
+    InvalidArgument,
+    JumpGain,
+    MonteCarloReport,
+    NonSpdMassMatrix,
+    NumericalFailure,
+    PeriodicStabilityReport,
+    PlankBox,
+    PointMass,
+    Segment,
+    SimulationOptions,
+    SimultaneousActivation,
+    StabilityReport,
+    UnplannedEvent,
+    conewise_gain,
+    constant_gains,
+    jump_gains,
+    linearise,
+    lqr_design,
+    optimal_control,
+    polish,
+    references,
+    simulate,
+    tracking,
+)
+
+__all__ = [
+    "BouncingBall", "PointMass", "PlankBox", "SimulationOptions", "IntegratorKind",
+    "simulate", "polish", "references", "Segment", "Event",
+    "jump_gains", "JumpGain", "conewise_gain", "ConewisePiece",
+    "linearise", "lqr_design", "constant_gains", "pd_gain", "tracking", "optimal_control",
+    "StabilityReport", "PeriodicStabilityReport", "MonteCarloReport",
+    "Error", "InvalidArgument", "NumericalFailure", "ContactProblemFailure", "NonSpdMassMatrix",
+    "InternalError", "GrazingEvent", "SimultaneousActivation", "UnplannedEvent",
+]
+
+
+def pd_gain(Kp, Kd):
+    """The gain K = -[Kp, Kd] (nu, nx) of a PD law u = ... - Kp (q - q_i) - Kd (v - v_i).
+
+    Kp, Kd: (nu, nq) arrays (N/m and N s/m for translations, N m/rad and N m s/rad for rotations).
+    """
+    Kp = _np.atleast_2d(_np.asarray(Kp, dtype=float))
+    Kd = _np.atleast_2d(_np.asarray(Kd, dtype=float))
+    if Kp.shape != Kd.shape:
+        raise InvalidArgument(f"pd_gain: Kp has shape {Kp.shape}, Kd {Kd.shape}: they must agree")
+    return -_np.hstack([Kp, Kd])

@@ -1,0 +1,144 @@
+"""Simulation from Python against closed forms: the bouncing ball's flights and its Zeno time, the
+trajectory's segments, events, dense sampling, JSON and CSV, Python input laws against C++ ones."""
+import json
+import math
+import pickle
+
+import numpy as np
+import pytest
+
+import saltus
+
+G = 9.81
+
+
+def tight():
+    o = saltus.SimulationOptions()
+    o.relative_tolerance = 1e-12
+    o.absolute_tolerance = 1e-13
+    return o
+
+
+@pytest.fixture(scope="module")
+def ball_trajectory():
+    return saltus.simulate(saltus.BouncingBall(restitution=0.5), np.array([1.0, 0.0]), 0.0, 5.0, options=tight())
+
+
+def test_bouncing_ball_hits_the_ground_at_the_free_fall_time(ball_trajectory):
+    ev = ball_trajectory.events[0]
+    assert ev.t == pytest.approx(math.sqrt(2.0 / G), abs=1e-10)
+    assert ev.guards == [(0, "ground", "touchdown")]
+    assert ev.impact
+    assert ev.x_minus[0] == pytest.approx(0.0, abs=1e-12)
+    assert ev.x_plus[1] == pytest.approx(-0.5 * ev.x_minus[1], rel=1e-12)
+
+
+def test_bouncing_ball_ends_zeno_at_the_closed_form_time(ball_trajectory):
+    t_inf = math.sqrt(2.0 / G) * 1.5 / 0.5
+    assert ball_trajectory.status == "zeno"
+    assert abs(ball_trajectory.zeno_time - t_inf) < 1e-6
+    assert len(ball_trajectory.events) > 12
+
+
+def test_segments_are_arrays_that_meet_the_events(ball_trajectory):
+    segments = ball_trajectory.segments
+    events = ball_trajectory.events
+    assert len(segments) == len(ball_trajectory) == len(events) + 1 or len(segments) == len(events)
+    for i, s in enumerate(segments):
+        assert s.times.ndim == 1 and s.states.shape == (s.times.size, 2)
+        assert s.times[0] == s.t_begin and s.times[-1] == s.t_end
+        assert np.all(np.diff(s.times) > 0)
+        if i < len(events):
+            np.testing.assert_allclose(s.states[-1], events[i].x_minus, atol=1e-12)
+        if i > 0:
+            np.testing.assert_allclose(s.states[0], events[i - 1].x_plus, atol=1e-12)
+    np.testing.assert_array_equal(segments[0].states[0], [1.0, 0.0])
+    assert segments[0].contact_modes == ["open"]
+
+
+def test_dense_sampling_follows_the_parabola(ball_trajectory):
+    t = np.linspace(0.0, math.sqrt(2.0 / G) * 0.999, 50)
+    x = ball_trajectory.sample(t)
+    assert x.shape == (50, 2)
+    np.testing.assert_allclose(x[:, 0], 1.0 - 0.5 * G * t**2, atol=1e-9)
+    np.testing.assert_allclose(x[:, 1], -G * t, atol=1e-9)
+    # At an event time: the state after the event.
+    t1 = ball_trajectory.events[0].t
+    np.testing.assert_allclose(ball_trajectory.sample([t1])[0], ball_trajectory.events[0].x_plus, atol=1e-9)
+
+
+def test_json_and_csv_are_the_cpp_writers(ball_trajectory):
+    j = json.loads(ball_trajectory.to_json())
+    assert j["status"] == "zeno"
+    assert len(j["events"]) == len(ball_trajectory.events)
+    assert j["events"][0]["guards"] == [{"contact": "ground", "kind": "touchdown"}]
+    assert j["events"][0]["t"] == ball_trajectory.events[0].t
+    csv = ball_trajectory.to_csv(0.01).splitlines()
+    assert csv[0] == "t,segment,mode,q0,v0"
+    first = csv[1].split(",")
+    assert float(first[0]) == 0.0 and float(first[3]) == 1.0
+
+
+def test_example3_reference_has_its_impact_and_release():
+    ref = saltus.references.example3()
+    assert ref.scene.nu == 2 and ref.scene.nx == 4
+    times = ref.event_times
+    assert times.shape == (2,)
+    assert times[0] == pytest.approx(math.sqrt(2.0 / G), abs=1e-10)
+    assert times[1] == pytest.approx(1.5, abs=1e-8)
+    assert ref.events[1].guards == [(0, "table", "release")]
+    assert ref.events[0].mode_after == "table:closed"
+    u = ref.inputs(np.array([0.5, 1.25]))
+    np.testing.assert_allclose(u, [[7.0, 0.0], [7.0, 2 * G * 0.25]], atol=1e-12)
+
+
+def test_python_input_law_matches_the_cpp_reference():
+    """Example 3's input written in Python reproduces the C++ reference's events and states."""
+    ref = saltus.references.example3()
+
+    def u(t, x):
+        return np.array([7.0, 0.0 if t < 1.0 else 2.0 * G * (t - 1.0)])
+
+    options = ref.options
+    options.breakpoints = [1.0]
+    traj = saltus.simulate(ref.scene, [0.0, 1.0, 0.0, 0.0], 0.0, 2.0, input=u, options=options)
+    np.testing.assert_allclose(traj.event_times, ref.event_times, atol=1e-9)
+    np.testing.assert_allclose(traj.final_state, ref.final_state, rtol=1e-8, atol=1e-8)
+
+
+def test_constant_input_and_python_callable_agree():
+    scene = saltus.PointMass(friction="planar", mu=0.5)
+    x0 = [0.0, 0.3, 2.0, 0.0]
+    a = saltus.simulate(scene, x0, 0.0, 2.0, input=[1.0, 3.0])
+    b = saltus.simulate(scene, x0, 0.0, 2.0, input=lambda t, x: np.array([1.0, 3.0]))
+    assert [e.t for e in a.events] == [e.t for e in b.events]
+    np.testing.assert_array_equal(a.final_state, b.final_state)
+    assert [e.mode_after for e in a.events] == ["table:slip+", "table:stick"]
+
+
+def test_plank_box_reference_has_named_corner_modes():
+    ref = saltus.references.plank_box()
+    assert [c["name"] for c in ref.scene.contacts] == ["C_L", "C_R"]
+    assert ref.events[0].guards[0][1] == "C_R"
+    assert ref.events[-1].mode_after == "C_L:stick C_R:stick"
+
+
+def test_scenes_and_options_pickle():
+    for scene in [saltus.BouncingBall(restitution=0.3), saltus.PointMass(friction="planar", mu=0.2), saltus.PlankBox(mu=0.7)]:
+        back = pickle.loads(pickle.dumps(scene))
+        assert repr(back) == repr(scene)
+    o = tight()
+    o.breakpoints = [0.5]
+    back = pickle.loads(pickle.dumps(o))
+    assert back.relative_tolerance == 1e-12 and back.breakpoints == [0.5]
+
+
+def test_a_reference_written_as_csv_is_read_back_and_polished():
+    """to_csv, then polish: the re-simulation under the sampled input finds the same events."""
+    ref = saltus.references.example3()
+    out = saltus.polish(ref.scene, ref.to_csv(0.001), ref.options)
+    assert out["imported_events"] == 2 and out["simulated_events"] == 2
+    np.testing.assert_allclose(out["trajectory"].event_times, ref.event_times, atol=1e-9)
+    assert out["state_distance"] < 1e-9  # the input is piecewise linear: its samples interpolate it exactly
+    with pytest.raises(saltus.InvalidArgument, match="no column 'v0'"):
+        saltus.polish(ref.scene, "t,segment,mode,q0\n0,0,\"table:open\",x\n")
