@@ -53,7 +53,9 @@ void summarise(MonteCarloReport& report, double horizon) {
     std::nth_element(rates.begin(), rates.begin() + static_cast<std::ptrdiff_t>(rates.size() / 2), rates.end());
     report.observed_rate_median = rates[rates.size() / 2];
   }
-  if (rates.empty()) report.observed_rate_max = std::numeric_limits<double>::quiet_NaN();
+  if (rates.empty())  // as tracking.hxx: no kept run, no statistic of them
+    report.observed_rate_max = report.observed_rate_median = report.max_log_discrepancy =
+        std::numeric_limits<double>::quiet_NaN();
   if (!std::isfinite(report.predicted_rate_max)) report.predicted_rate_max = std::numeric_limits<double>::quiet_NaN();
   for (const auto& [reason, count] : reasons) report.failure_reasons.push_back(detail::concat(count, " x ", reason));
 }
@@ -177,10 +179,12 @@ void bind_tracking(py::module_& m) {
           "observed",
           [](const MC& r) {
             Eigen::VectorXd v(r.report.run.size());
-            for (std::size_t k = 0; k < r.report.run.size(); ++k) v[static_cast<Eigen::Index>(k)] = r.report.run[k].observed;
+            for (std::size_t k = 0; k < r.report.run.size(); ++k)
+              v[static_cast<Eigen::Index>(k)] = r.report.run[k].failed ? std::numeric_limits<double>::quiet_NaN()
+                                                                       : r.report.run[k].observed;
             return v;
           },
-          "(runs,) |x(T) - x_j(T)|_Wout / |eps d|_W of each run (0 for a failed run)")
+          "(runs,) |x(T) - x_j(T)|_Wout / |eps d|_W of each run (NaN for a failed run)")
       .def_property_readonly(
           "predicted",
           [](const MC& r) {

@@ -45,6 +45,21 @@ def test_monte_carlo_agrees_with_the_check(lqr):
     assert mc.observed.shape == (24,) and mc.predicted.shape == (24,)
 
 
+def test_a_batch_without_kept_runs_reports_no_statistic_of_them():
+    """The hop starts on the table: perturbations of its gap put the mass inside it, and every run
+    fails. The statistics of the kept runs are then NaN, never a 0 that reads as a rate, and so are
+    the failed runs' amplifications; chunks merged say the same."""
+    lin = saltus.linearise(saltus.references.point_mass_hop())
+    tracker = saltus.tracking(lin, saltus.lqr_design(lin, R=0.1 * np.eye(2)))
+    mc = tracker.monte_carlo(runs=6, threads=1)
+    assert mc.failed == 6 and mc.kept_event_sequence == 0
+    for name in ["observed_rate_max", "observed_rate_median", "max_log_discrepancy"]:
+        assert np.isnan(getattr(mc, name)), name
+    assert np.isnan(mc.observed).all()
+    merged = saltus.MonteCarloReport.merge([tracker.monte_carlo(runs=6, first=f, count=3, threads=1) for f in (0, 3)])
+    assert np.isnan(merged.observed_rate_median) and np.isnan(merged.max_log_discrepancy)
+
+
 def test_chunks_merge_into_the_whole_batch(lqr):
     whole = lqr.monte_carlo(runs=20, threads=1)
     parts = [lqr.monte_carlo(runs=20, first=f, count=c, threads=1) for f, c in [(12, 8), (0, 5), (5, 7)]]

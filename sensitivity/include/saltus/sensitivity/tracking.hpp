@@ -385,7 +385,9 @@ struct MonteCarloReport {
   int runs = 0, failed = 0, kept_event_sequence = 0;
   std::vector<MonteCarloRun> run;
   std::vector<std::string> failure_reasons;  ///< distinct, with their counts in the text
-  double observed_rate_max = 0.0;   ///< max over kept runs of log(observed) / (T - t0)
+  /// max over kept runs of log(observed) / (T - t0); this, the median and max_log_discrepancy are
+  /// NaN when no run kept the event sequence
+  double observed_rate_max = 0.0;
   double observed_rate_median = 0.0;
   double predicted_rate_max = 0.0;  ///< the same of the first-order amplifications of the same d
   /// max over kept runs of |log(observed / predicted)|: the first-order regime when small

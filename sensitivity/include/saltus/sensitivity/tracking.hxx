@@ -917,7 +917,9 @@ MonteCarloReport monte_carlo(const S& scene, const SimulationOptions& simulation
     std::nth_element(rates.begin(), rates.begin() + rates.size() / 2, rates.end());
     report.observed_rate_median = rates[rates.size() / 2];
   }
-  if (rates.empty()) report.observed_rate_max = std::numeric_limits<double>::quiet_NaN();
+  if (rates.empty())  // no kept run: no statistic of them, rather than a 0 that reads as a result
+    report.observed_rate_max = report.observed_rate_median = report.max_log_discrepancy =
+        std::numeric_limits<double>::quiet_NaN();
   if (!std::isfinite(report.predicted_rate_max)) report.predicted_rate_max = std::numeric_limits<double>::quiet_NaN();
   for (const auto& [reason, count] : reasons) report.failure_reasons.push_back(detail::concat(count, " x ", reason));
   return report;
