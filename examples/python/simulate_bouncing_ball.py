@@ -7,6 +7,9 @@ events, draws the height against time with the events marked.
 import math
 import sys
 
+if len(sys.argv) > 2 or (len(sys.argv) == 2 and sys.argv[1].startswith("-")):
+    sys.exit(__doc__)  # usage: one optional argument, the figure's path
+
 import matplotlib
 
 matplotlib.use("Agg")
