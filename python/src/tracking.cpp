@@ -20,46 +20,6 @@ namespace saltus::python {
 
 namespace {
 
-/// The summary of monte_carlo (tracking.hxx) from report.run: the same statistics in the same
-/// order, so that a merged batch reports what one call over the whole batch reports (tested:
-/// test_tracking.py compares a merged batch with one C++ call).
-void summarise(MonteCarloReport& report, double horizon) {
-  report.runs = static_cast<int>(report.run.size());
-  report.failed = report.kept_event_sequence = report.grew = report.shrank = 0;
-  report.failure_reasons.clear();
-  report.max_log_discrepancy = 0.0;
-  report.observed_rate_median = 0.0;
-  std::map<std::string, int> reasons;
-  std::vector<double> rates;
-  report.observed_rate_max = report.predicted_rate_max = -std::numeric_limits<double>::infinity();
-  for (const MonteCarloRun& r : report.run) {
-    if (r.failed) {
-      ++report.failed;
-      ++reasons[r.reason];
-      continue;
-    }
-    if (!r.kept_event_sequence) continue;
-    ++report.kept_event_sequence;
-    const double rate = std::log(r.observed) / horizon;
-    rates.push_back(rate);
-    report.observed_rate_max = std::max(report.observed_rate_max, rate);
-    if (std::isfinite(r.predicted)) {
-      report.predicted_rate_max = std::max(report.predicted_rate_max, std::log(r.predicted) / horizon);
-      report.max_log_discrepancy = std::max(report.max_log_discrepancy, std::abs(std::log(r.observed / r.predicted)));
-    }
-    (r.observed > 1 ? report.grew : report.shrank) += 1;
-  }
-  if (!rates.empty()) {
-    std::nth_element(rates.begin(), rates.begin() + static_cast<std::ptrdiff_t>(rates.size() / 2), rates.end());
-    report.observed_rate_median = rates[rates.size() / 2];
-  }
-  if (rates.empty())  // as tracking.hxx: no kept run, no statistic of them
-    report.observed_rate_max = report.observed_rate_median = report.max_log_discrepancy =
-        std::numeric_limits<double>::quiet_NaN();
-  if (!std::isfinite(report.predicted_rate_max)) report.predicted_rate_max = std::numeric_limits<double>::quiet_NaN();
-  for (const auto& [reason, count] : reasons) report.failure_reasons.push_back(detail::concat(count, " x ", reason));
-}
-
 PyMonteCarlo merge(std::vector<PyMonteCarlo> parts) {
   SALTUS_REQUIRE(!parts.empty(), "MonteCarloReport.merge: no reports");
   std::sort(parts.begin(), parts.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
@@ -79,7 +39,7 @@ PyMonteCarlo merge(std::vector<PyMonteCarlo> parts) {
     out.report.threads = std::max(out.report.threads, p.report.threads);
     next += p.report.runs;
   }
-  summarise(out.report, out.t_final - out.t0);
+  summarise_monte_carlo(out.report, out.t_final - out.t0);
   return out;
 }
 
@@ -233,7 +193,7 @@ void bind_tracking(py::module_& m) {
             r.report.seconds = t[4].cast<double>();
             r.report.threads = t[5].cast<int>();
             for (const auto& h : t[6].cast<py::list>()) r.report.run.push_back(run_from(h));
-            summarise(r.report, r.t_final - r.t0);
+            summarise_monte_carlo(r.report, r.t_final - r.t0);
             return r;
           }));
 

@@ -1,10 +1,17 @@
-// The scene-free part of tracking.hpp: verdict names and the thread pool of the Monte Carlo batch.
+// The scene-free part of tracking.hpp: verdict names, the Monte Carlo summary and the thread pool of
+// the Monte Carlo batch.
 #include <saltus/sensitivity/tracking.hpp>
 
+#include <algorithm>
 #include <atomic>
+#include <cmath>
 #include <exception>
+#include <limits>
+#include <map>
 #include <mutex>
+#include <string>
 #include <thread>
+#include <vector>
 
 namespace saltus {
 
@@ -15,6 +22,43 @@ const char* to_string(StabilityVerdict v) {
     case StabilityVerdict::Undecided: return "undecided";
   }
   return "?";
+}
+
+void summarise_monte_carlo(MonteCarloReport& report, double horizon) {
+  report.runs = static_cast<int>(report.run.size());
+  report.failed = report.kept_event_sequence = report.grew = report.shrank = 0;
+  report.failure_reasons.clear();
+  report.max_log_discrepancy = 0.0;
+  report.observed_rate_median = 0.0;
+  std::map<std::string, int> reasons;
+  std::vector<double> rates;
+  report.observed_rate_max = report.predicted_rate_max = -std::numeric_limits<double>::infinity();
+  for (const MonteCarloRun& r : report.run) {
+    if (r.failed) {
+      ++report.failed;
+      ++reasons[r.reason];
+      continue;
+    }
+    if (!r.kept_event_sequence) continue;
+    ++report.kept_event_sequence;
+    const double rate = std::log(r.observed) / horizon;
+    rates.push_back(rate);
+    report.observed_rate_max = std::max(report.observed_rate_max, rate);
+    if (std::isfinite(r.predicted)) {
+      report.predicted_rate_max = std::max(report.predicted_rate_max, std::log(r.predicted) / horizon);
+      report.max_log_discrepancy = std::max(report.max_log_discrepancy, std::abs(std::log(r.observed / r.predicted)));
+    }
+    (r.observed > 1 ? report.grew : report.shrank) += 1;
+  }
+  if (!rates.empty()) {
+    std::nth_element(rates.begin(), rates.begin() + static_cast<std::ptrdiff_t>(rates.size() / 2), rates.end());
+    report.observed_rate_median = rates[rates.size() / 2];
+  }
+  if (rates.empty())  // no kept run: no statistic of them, rather than a 0 that reads as a result
+    report.observed_rate_max = report.observed_rate_median = report.max_log_discrepancy =
+        std::numeric_limits<double>::quiet_NaN();
+  if (!std::isfinite(report.predicted_rate_max)) report.predicted_rate_max = std::numeric_limits<double>::quiet_NaN();
+  for (const auto& [reason, count] : reasons) report.failure_reasons.push_back(detail::concat(count, " x ", reason));
 }
 
 namespace detail {

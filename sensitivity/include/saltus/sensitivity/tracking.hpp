@@ -397,6 +397,11 @@ struct MonteCarloReport {
   int threads = 1;
 };
 
+/// Fills the statistics of `report` (runs, failed, kept_event_sequence, failure_reasons with their
+/// counts, the rates over `horizon` = T - t0 [s], the median, the largest log discrepancy, grew,
+/// shrank) from report.run; what monte_carlo reports, also for a batch joined from chunks.
+void summarise_monte_carlo(MonteCarloReport& report, double horizon);
+
 /// Runs options.runs closed-loop simulations of `controller` from the reference's x(t0) + eps d
 /// (scene and simulation options those of the reference), in parallel, and compares each with the
 /// first-order prediction of `closed_loop` for the same d. A run that throws is recorded with its

@@ -893,35 +893,7 @@ MonteCarloReport monte_carlo(const S& scene, const SimulationOptions& simulation
   detail::parallel_for(options.runs, threads, std::max(1, options.batch), body, after_batch);
   report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall).count();
 
-  std::map<std::string, int> reasons;
-  std::vector<double> rates;
-  report.observed_rate_max = report.predicted_rate_max = -std::numeric_limits<double>::infinity();
-  for (const MonteCarloRun& r : report.run) {
-    if (r.failed) {
-      ++report.failed;
-      ++reasons[r.reason];
-      continue;
-    }
-    if (!r.kept_event_sequence) continue;
-    ++report.kept_event_sequence;
-    const double rate = std::log(r.observed) / (T - t0);
-    rates.push_back(rate);
-    report.observed_rate_max = std::max(report.observed_rate_max, rate);
-    if (std::isfinite(r.predicted)) {
-      report.predicted_rate_max = std::max(report.predicted_rate_max, std::log(r.predicted) / (T - t0));
-      report.max_log_discrepancy = std::max(report.max_log_discrepancy, std::abs(std::log(r.observed / r.predicted)));
-    }
-    (r.observed > 1 ? report.grew : report.shrank) += 1;
-  }
-  if (!rates.empty()) {
-    std::nth_element(rates.begin(), rates.begin() + rates.size() / 2, rates.end());
-    report.observed_rate_median = rates[rates.size() / 2];
-  }
-  if (rates.empty())  // no kept run: no statistic of them, rather than a 0 that reads as a result
-    report.observed_rate_max = report.observed_rate_median = report.max_log_discrepancy =
-        std::numeric_limits<double>::quiet_NaN();
-  if (!std::isfinite(report.predicted_rate_max)) report.predicted_rate_max = std::numeric_limits<double>::quiet_NaN();
-  for (const auto& [reason, count] : reasons) report.failure_reasons.push_back(detail::concat(count, " x ", reason));
+  summarise_monte_carlo(report, T - t0);
   return report;
 }
 
