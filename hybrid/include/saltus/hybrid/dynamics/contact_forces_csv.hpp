@@ -6,7 +6,7 @@
 #pragma once
 
 #include <saltus/hybrid/dynamics/flow.hpp>
-#include <saltus/hybrid/vocabulary/trajectory.hpp>
+#include <saltus/hybrid/vocabulary/trajectory_io.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -35,21 +35,17 @@ void write_contact_forces_csv(std::ostream& os, const HybridTrajectory<S>& traj,
   }
   os << "\n";
   FlowWorkspace<S> ws;
-  for (int s = 0; s < traj.segment_count(); ++s) {
-    const auto& segment = traj.segments[s];
-    const int n = std::max(1, static_cast<int>(std::ceil((segment.t_end - segment.t_begin) / dt)));
-    for (int k = 0; k <= n; ++k) {
-      const double t = k == n ? segment.t_end : segment.t_begin + (segment.t_end - segment.t_begin) * k / n;
-      evaluate_flow(scene, segment.mode, traj.state(s, t), traj.input_at(s, t), ws);
-      os << t << "," << s;
-      for (int i = 0; i < S::nc; ++i) {
-        const bool closed = segment.mode[i].closed();
-        os << "," << (closed ? ws.force[i].normal : 0.0);
-        for (int j = 0; j < scene.contact(i).tangents(); ++j) os << "," << (closed ? ws.force[i].tangent[j] : 0.0);
-      }
-      os << "\n";
+  for_each_sample(traj, dt, [&](int s, double t) {
+    const Mode<S::nc>& mode = traj.segments[s].mode;
+    evaluate_flow(scene, mode, traj.state(s, t), traj.input_at(s, t), ws);
+    os << t << "," << s;
+    for (int i = 0; i < S::nc; ++i) {
+      const bool closed = mode[i].closed();
+      os << "," << (closed ? ws.force[i].normal : 0.0);
+      for (int j = 0; j < scene.contact(i).tangents(); ++j) os << "," << (closed ? ws.force[i].tangent[j] : 0.0);
     }
-  }
+    os << "\n";
+  });
 }
 
 /// Writes <directory>/<name>_forces.csv (write_contact_forces_csv) and prints its path to `log`.

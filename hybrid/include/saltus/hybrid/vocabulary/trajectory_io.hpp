@@ -22,6 +22,18 @@ namespace saltus {
 /// read_reference_csv reads it back exactly. Each segment gives ceil((t_end - t_begin) / dt)
 /// intervals (at least one) and both of its end points. dt in the trajectory's time unit (s).
 /// Leaves the stream's precision at 17.
+/// Calls visit(segment index, t) at the samples of write_csv: per segment ceil((t_end - t_begin) / dt)
+/// equal intervals (at least one) and both of its end points, exactly.
+template <Scene S, class Visit>
+void for_each_sample(const HybridTrajectory<S>& traj, double dt, Visit&& visit) {
+  for (int i = 0; i < traj.segment_count(); ++i) {
+    const auto& s = traj.segments[i];
+    const int n = std::max(1, static_cast<int>(std::ceil((s.t_end - s.t_begin) / dt)));
+    // The end points exactly (t_begin + (t_end - t_begin) * n / n may round past t_end).
+    for (int k = 0; k <= n; ++k) visit(i, k == n ? s.t_end : s.t_begin + (s.t_end - s.t_begin) * k / n);
+  }
+}
+
 template <Scene S>
 void write_csv(std::ostream& os, const HybridTrajectory<S>& traj, double dt, const S& scene) {
   constexpr int nq = S::nq, nx = 2 * S::nq, nu = S::nu;
@@ -32,21 +44,15 @@ void write_csv(std::ostream& os, const HybridTrajectory<S>& traj, double dt, con
   for (int k = 0; k < nq; ++k) os << ",v" << k;
   for (int k = 0; k < nu; ++k) os << ",u" << k;
   os << "\n";
-  for (int i = 0; i < traj.segment_count(); ++i) {
-    const auto& s = traj.segments[i];
-    const int n = std::max(1, static_cast<int>(std::ceil((s.t_end - s.t_begin) / dt)));
-    for (int k = 0; k <= n; ++k) {
-      // The end points exactly (t_begin + (t_end - t_begin) * n / n may round past t_end).
-      const double t = k == n ? s.t_end : s.t_begin + (s.t_end - s.t_begin) * k / n;
-      const State x = traj.state(i, t);
-      const Input u = traj.input_at(i, t);
-      // The mode is quoted: a spatial slip direction is written "(dx,dy)".
-      os << t << "," << i << ",\"" << describe(scene, s.mode) << "\"";
-      for (int j = 0; j < nx; ++j) os << "," << x[j];
-      for (int j = 0; j < nu; ++j) os << "," << u[j];
-      os << "\n";
-    }
-  }
+  for_each_sample(traj, dt, [&](int i, double t) {
+    const State x = traj.state(i, t);
+    const Input u = traj.input_at(i, t);
+    // The mode is quoted: a spatial slip direction is written "(dx,dy)".
+    os << t << "," << i << ",\"" << describe(scene, traj.segments[i].mode) << "\"";
+    for (int j = 0; j < nx; ++j) os << "," << x[j];
+    for (int j = 0; j < nu; ++j) os << "," << u[j];
+    os << "\n";
+  });
 }
 
 /// Segments (mode, interval) and events (time, guards, x-, x+, modes) as a JSON object:
