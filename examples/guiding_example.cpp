@@ -80,9 +80,7 @@ int time_freezing_ocp() {
   j["homotopy_steps"] = r.solution.steps.size();
   j["ipopt_iterations"] = r.solution.ipopt_iterations;
   j["solve_seconds"] = r.solution.seconds;
-  // The re-simulation of the recovered reference (known limit of recover_reference: an impact that
-  // falls inside a finite element is not a frozen run and is not an event of r.reference;
-  // recover_trajectory, r.trajectory, reads it as an impact event; simulation.hpp).
+  // The re-simulation of the recovered reference (r.reference: the samples of r.trajectory).
   try {
     const PolishResult<scenes::PointMass> resim = polish(mass, r.reference);
     j["resim_max_error"] = resim.state_distance;

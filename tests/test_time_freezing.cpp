@@ -838,7 +838,16 @@ TEST(TimeFreezingSimulation, PlankBoxFlatLandingAgreesWithTheEventDrivenSimulato
             << (landing.x_plus - trajectory.events[0].x_plus).cwiseAbs().maxCoeff() << " from the simulator's\n";
 }
 
-/// A hand-made point-mass point for recover_reference (n_s = 1): vertical velocity v, clock t, every
+/// The scene of the recovery tests' hand-made points: the point mass with friction mu = 0.3,
+/// a_n = 10.
+TimeFreezingSystem<PointMass> recovery_system() {
+  scenes::PointMassParameters pm;
+  pm.friction = Friction::Planar;
+  pm.mu = 0.3;
+  return TimeFreezingSystem<PointMass>(PointMass(pm), 10.0);
+}
+
+/// A hand-made point-mass point for the recovery (n_s = 1): vertical velocity v, clock t, every
 /// step function and Theta at `weight`, input (u, 0).
 FesdPoint<7, 3, 2> reference_point(int interval, int element, double tau, double t, double v, double weight = 1.0,
                                    double u = 0.0) {
@@ -867,7 +876,8 @@ TEST(TimeFreezingRecovery, FrozenRunOnAControlIntervalBoundary) {
   const std::vector<Point> points{point(0, -1, 0.0, 0.0, 0.0, 1.0, 1.0), point(0, 0, 0.1, 0.1, -1.0, 1.0, 1.0),
                                   point(1, 0, 0.2, 0.1, 0.0, 0.0, 2.0),  // frozen: the clock stands
                                   point(1, 1, 0.3, 0.2, 0.0, 1.0, 2.0)};
-  const ImportedReference<PointMass> ref = recover_reference<PointMass>(points, 1);
+  const HybridTrajectory<PointMass> traj = recover_trajectory(recovery_system(), points, 1);
+  const ImportedReference<PointMass> ref = recover_reference(traj, points, 1);
   ASSERT_EQ(ref.size(), 5u);
   EXPECT_EQ(ref.event_times, std::vector<double>{0.1});
   EXPECT_EQ(ref.segment, (std::vector<int>{0, 0, 0, 1, 1}));
@@ -889,7 +899,8 @@ TEST(TimeFreezingRecovery, AnImpactElementWhoseClockCreptIsPartOfTheImpact) {
   // 1e-6 (rate 1e-5) while v jumps from -1 to 0; then flow.
   const std::vector<Point> impact{point(-1, 0.0, 0.0, -1.0), point(0, 0.1, 0.1, -1.0), point(1, 0.2, 0.1 + 1e-6, 0.0),
                                   point(2, 0.3, 0.2 + 1e-6, 0.0)};
-  const ImportedReference<PointMass> ref = recover_reference<PointMass>(impact, 1);
+  const ImportedReference<PointMass> ref =
+      recover_reference(recover_trajectory(recovery_system(), impact, 1), impact, 1);
   ASSERT_EQ(ref.event_times.size(), 1u);
   EXPECT_EQ(ref.event_times[0], 0.1);
   ASSERT_EQ(ref.size(), 4u);
@@ -899,13 +910,17 @@ TEST(TimeFreezingRecovery, AnImpactElementWhoseClockCreptIsPartOfTheImpact) {
   // The same clock without the jump: no event.
   const std::vector<Point> slow{point(-1, 0.0, 0.0, -1.0), point(0, 0.1, 0.1, -1.0), point(1, 0.2, 0.1 + 1e-6, -1.0),
                                 point(2, 0.3, 0.2 + 1e-6, -1.0)};
-  EXPECT_TRUE(recover_reference<PointMass>(slow, 1).event_times.empty());
-  // A rate above 1e-4 with the jump: a flowing element (an impact absorbed into a flow is
-  // recover_trajectory's business, AnImpactAbsorbedIntoAFlowingElementIsAnImpactEvent).
+  const auto reference_of = [](const std::vector<Point>& pts) {
+    return recover_reference(recover_trajectory(recovery_system(), pts, 1), pts, 1);
+  };
+  EXPECT_TRUE(reference_of(slow).event_times.empty());
+  // A rate above 1e-4 with the jump: a flowing element, whose step functions here say that no
+  // contact force acts (closing weight 0), so the trajectory reads no absorbed impact in it either
+  // (AnImpactAbsorbedIntoAFlowingElementIsAnImpactEvent has one whose weight does).
   std::vector<Point> fast = impact;
   fast[2].y[4] = 0.1 + 1e-3;
   fast[3].y[4] = 0.2 + 1e-3;
-  EXPECT_TRUE(recover_reference<PointMass>(fast, 1).event_times.empty());
+  EXPECT_TRUE(reference_of(fast).event_times.empty());
 }
 
 // A hand-made point of a point-mass solution for recover_trajectory: (q, v, t, L = 0, g), every step
@@ -929,15 +944,6 @@ FesdPoint<7, 3, 2> recovery_point(int element, int stage, double tau, double t, 
   }
   p.u = Vec<2>(t, 0.0);
   return p;
-}
-
-/// The scene of the recovery tests' hand-made points: the point mass with friction mu = 0.3,
-/// a_n = 10.
-TimeFreezingSystem<PointMass> recovery_system() {
-  scenes::PointMassParameters pm;
-  pm.friction = Friction::Planar;
-  pm.mu = 0.3;
-  return TimeFreezingSystem<PointMass>(PointMass(pm), 10.0);
 }
 
 // A tangential lift-off (as Example 3's at t = 1.5: J_n v = g (t - 1.5)^2 leaves zero with zero
@@ -1008,14 +1014,10 @@ TEST(TimeFreezingRecovery, AnImpactAbsorbedIntoAFlowingElementIsAnImpactEvent) {
   EXPECT_EQ(traj.state(1, 0.11), impact.x_plus);  // held over the clock's advance 0.1 .. 0.12
   EXPECT_LT((traj.state(1, 0.17) - points[4].y.head<4>()).cwiseAbs().maxCoeff(), 1e-14);
   EXPECT_LT((traj.state(1, 0.27) - points[6].y.head<4>()).cwiseAbs().maxCoeff(), 1e-14);
-  // recover_reference has no event there (no frozen run); align_impact_samples adds it: x- the
-  // sample at 0.1, x+ inserted at its own time 0.12, the samples after it in the next segment.
-  ImportedReference<PointMass> ref = recover_reference<PointMass>(points, 2);
-  EXPECT_TRUE(ref.event_times.empty());
-  const std::size_t samples = ref.size();
-  detail::align_impact_samples(ref, traj);
+  // The reference's samples: x- at 0.1, x+ at its own time 0.12 (a sample inside the element), the
+  // samples after it in the next segment.
+  const ImportedReference<PointMass> ref = recover_reference(traj, points, 2);
   ASSERT_EQ(ref.event_times, std::vector<double>{0.1});
-  ASSERT_EQ(ref.size(), samples + 1);
   EXPECT_EQ(ref.t, (std::vector<double>{0.0, 0.1, 0.12, 0.17, 0.27}));
   EXPECT_EQ(ref.segment, (std::vector<int>{0, 0, 1, 1, 1}));
   EXPECT_EQ(ref.x[1], impact.x_minus);
@@ -1026,8 +1028,8 @@ TEST(TimeFreezingRecovery, AnImpactAbsorbedIntoAFlowingElementIsAnImpactEvent) {
 // An element that FESD collapsed to a point (h = 1e-15 here; measured 1.0e-15 and 1.9e-15 at a
 // plank-box short landing's lift-off) has a clock advance of 0 <= frozen_tolerance * h, but it is
 // no impact: recover_trajectory skips it (detail::element_degenerate). It was read as an impact
-// event without guards and without a velocity change. recover_reference keeps it as before (an
-// empty event: x- = x+; its samples are the re-simulation's input breakpoints).
+// event without guards and without a velocity change. Its samples are no event of the reference
+// either (the reference samples the trajectory).
 TEST(TimeFreezingRecovery, AnElementCollapsedToAPointIsNoEvent) {
   const TimeFreezingSystem<PointMass> system = recovery_system();
   std::vector<FesdPoint<7, 3, 2>> points;
@@ -1044,11 +1046,11 @@ TEST(TimeFreezingRecovery, AnElementCollapsedToAPointIsNoEvent) {
   ASSERT_TRUE(detail::element_degenerate(points, 2, 1));
   EXPECT_FALSE(detail::element_degenerate(points, 2, 0));
   EXPECT_TRUE(detail::element_frozen(points, 2, 1, 1e-7));  // the clock stands over it
-  const ImportedReference<PointMass> ref = recover_reference<PointMass>(points, 2);
-  ASSERT_EQ(ref.event_times.size(), 1u);
-  EXPECT_EQ(ref.x[1], ref.x[2]);  // x- = x+
   const HybridTrajectory<PointMass> traj = recover_trajectory(system, points, 2);
   EXPECT_TRUE(traj.events.empty());
+  const ImportedReference<PointMass> ref = recover_reference(traj, points, 2);
+  EXPECT_TRUE(ref.event_times.empty());
+  EXPECT_EQ(ref.t, (std::vector<double>{0.0, 0.10, 0.20}));
   ASSERT_EQ(traj.segments.size(), 1u);
   EXPECT_LT((traj.state(0, 0.2) - points.back().y.head<4>()).cwiseAbs().maxCoeff(), 1e-14);
 }
@@ -1056,8 +1058,8 @@ TEST(TimeFreezingRecovery, AnElementCollapsedToAPointIsNoEvent) {
 // A frozen run that ends before its impact does (the plank-box flagship's landing: the corners
 // still approaching at the run's end, the impact finished by the next, flowing element): x+ is read
 // where the impact ends, at that element's first stage point with J_n v >= 0, not at the run's
-// end (mid-impact: v = (0.8, -0.3)), and it belongs to that point's time (x_plus_time);
-// recover_reference's x+ sample is aligned with it.
+// end (mid-impact: v = (0.8, -0.3)), and it belongs to that point's time (x_plus_time), where
+// recover_reference samples it.
 TEST(TimeFreezingRecovery, AFrozenRunEndingMidImpactReadsXPlusWhereTheImpactEnds) {
   const TimeFreezingSystem<PointMass> system = recovery_system();
   std::vector<FesdPoint<7, 3, 2>> points;
@@ -1088,16 +1090,13 @@ TEST(TimeFreezingRecovery, AFrozenRunEndingMidImpactReadsXPlusWhereTheImpactEnds
   EXPECT_EQ(x_plus_time(traj, 0), 0.12);
   EXPECT_LT((traj.state(1, 0.17) - points[6].y.head<4>()).cwiseAbs().maxCoeff(), 1e-14);
   EXPECT_LT((traj.state(1, 0.27) - points[8].y.head<4>()).cwiseAbs().maxCoeff(), 1e-14);
-  // The samples: after the alignment the first post-event sample is the trajectory's x+, at the
-  // time it belongs to.
-  ImportedReference<PointMass> ref = recover_reference<PointMass>(points, 2);
+  // The samples: the first post-event sample is the trajectory's x+, at the time it belongs to
+  // (not the run's end, points[4], at the event's time).
+  const ImportedReference<PointMass> ref = recover_reference(traj, points, 2);
   ASSERT_EQ(ref.event_times, std::vector<double>{0.1});
   std::size_t plus = 0;
   while (plus < ref.size() && ref.segment_of(plus) == 0) ++plus;
   ASSERT_LT(plus, ref.size());
-  EXPECT_EQ(ref.t[plus], 0.1);
-  EXPECT_EQ(ref.x[plus], points[4].y.head<4>());  // recover_reference alone: the run's end
-  detail::align_impact_samples(ref, traj);
   EXPECT_EQ(ref.x[plus], impact.x_plus);
   EXPECT_EQ(ref.t[plus], 0.12);
   EXPECT_NO_THROW(ref.validate());
@@ -1154,7 +1153,7 @@ TEST(TimeFreezingRecovery, TrajectoryOfALandingASlideAStopAndALiftOff) {
   EXPECT_LT((traj.state(1, 0.15) - points[5].y.head<4>()).cwiseAbs().maxCoeff(), 1e-14);
   EXPECT_LT((traj.state(1, 0.1) - impact.x_plus).cwiseAbs().maxCoeff(), 1e-14);
   EXPECT_EQ(traj.final_state(), points.back().y.head<4>());
-  // The input: recover_reference's samples (u = (t, 0) at every point, linear in between).
+  // The input: the control samples (u = (t, 0) at every point, linear in between).
   EXPECT_NEAR(traj.input(0.125, Vec<4>::Zero(), Mode<1>{})[0], 0.125, 1e-14);
   // print_events: the events, and no integrator statistics for a trajectory nothing integrated
   // (a user's trial: it read "0 steps, 0 rhs evaluations").

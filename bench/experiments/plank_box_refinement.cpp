@@ -24,7 +24,7 @@
 #include "scenes/plank_box_landing.hpp"
 
 #include <saltus/hybrid/reference/resimulation.hpp>
-#include <saltus/timefreezing/header_only.hpp>  // detail::align_impact_samples
+#include <saltus/timefreezing/header_only.hpp>
 
 #include <nlohmann/json.hpp>
 
@@ -212,9 +212,8 @@ Row simulate(const Controls& c, int elements, const std::string& reference_prefi
   // impact does, its x+ sample is the state where the impact ends, at that state's time
   // (recover_trajectory's docstring, x_plus_time): measured 2.8e-3 s after the impact at 30-120
   // elements, 1.2e-4 s at 480.
-  ImportedReference<Scene> ref = recover_reference<Scene>(points, piece.grid.stages);
   const HybridTrajectory<Scene> traj = recover_trajectory<Scene>(Ocp::system(), points, piece.grid.stages);
-  timefreezing::detail::align_impact_samples(ref, traj);
+  const ImportedReference<Scene> ref = recover_reference<Scene>(traj, points, piece.grid.stages);
   for (std::size_t e = 0; e < traj.events.size(); ++e)
     if (traj.events[e].impact()) {
       row.x_plus_advance = std::max(row.x_plus_advance, x_plus_time(traj, e) - traj.events[e].t);

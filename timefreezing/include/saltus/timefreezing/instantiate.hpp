@@ -54,7 +54,7 @@
              const saltus::timefreezing::TrajectoryRecoveryOptions&);                                             \
   prefix template saltus::ImportedReference<S> saltus::timefreezing::recover_reference<                           \
       S, saltus::timefreezing::TimeFreezingSystem<S>::ny, saltus::timefreezing::TimeFreezingSystem<S>::n_switch,  \
-      S::nu>(const SALTUS_DETAIL_FESD_POINTS(S)&, int, double);
+      S::nu>(const saltus::HybridTrajectory<S>&, const SALTUS_DETAIL_FESD_POINTS(S)&, int, double);
 
 #define SALTUS_TIME_FREEZING_OCP_DRIVER_TEMPLATES(prefix, S, Ocp)                                                \
   prefix template saltus::timefreezing::TimeFreezingOcpResult<S> saltus::timefreezing::solve_time_freezing_ocp<  \

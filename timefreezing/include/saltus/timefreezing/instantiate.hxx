@@ -7,6 +7,7 @@
 #include <saltus/timefreezing/discretisation/fesd.hxx>
 #include <saltus/timefreezing/drivers/optimal_control.hxx>
 #include <saltus/timefreezing/drivers/simulate.hxx>
+#include <saltus/timefreezing/recovery/recover_reference.hxx>
 #include <saltus/timefreezing/recovery/recover_trajectory.hxx>
 #include <saltus/timefreezing/refinement/discovery.hxx>
 #include <saltus/timefreezing/refinement/refinement.hxx>

@@ -21,7 +21,9 @@ struct TimeFreezingOcpResult {
   std::vector<double> element_lengths;
   std::vector<FrozenPhase<nx>> frozen_phases;  ///< the impacts
   std::vector<SwitchPoint> switch_points;      ///< touchdowns, lift-offs, slip-stick
-  ImportedReference<S> reference;              ///< recovered in physical time (recover_reference)
+  /// The samples of `trajectory` at the element boundaries with the discrete control, for polish()
+  /// (recover_reference).
+  ImportedReference<S> reference;
   /// Recovered in physical time (recover_trajectory); when not converged(), only a reading of the
   /// unconverged points, not a motion of the scene.
   HybridTrajectory<S> trajectory;
@@ -41,7 +43,8 @@ struct TimeFreezingOcpResult {
 /// the two local optima (18.8 against 35.2). Known limit: at a touchdown inside an element the
 /// gap's switching function is exactly 0, its multipliers vanish and cross-complementarity cannot
 /// stop the active set from changing inside that element; such an impact is not a frozen run of
-/// elements and recover_reference misses it (the re-simulation then differs by O(1)).
+/// elements: the recovery reads it as an impact absorbed into a flowing element, its x+ off by the
+/// motion over the clock's advance (recover_trajectory.hpp).
 template <Scene S, class Ocp>
 TimeFreezingOcpResult<S> solve_time_freezing_ocp(const TimeFreezingSystem<S>& system, const Ocp& ocp, const Vec<S::nq>& q0,
                                                  const Vec<S::nq>& v0, const FesdOptions& fesd,

@@ -24,9 +24,8 @@ struct TrajectoryRecoveryOptions {
   double gap_tolerance = 1e-4;
   double velocity_tolerance = 1e-4;
   double tangential_velocity_tolerance = 1e-4;
-  /// Elements whose clock advances by at most frozen_tolerance * h are frozen (as recover_reference);
-  /// so are those detail::element_frozen adds (a frozen first stage, a crept clock with a velocity
-  /// jump).
+  /// Elements whose clock advances by at most frozen_tolerance * h are frozen, and so are those
+  /// detail::element_frozen adds (a frozen first stage, a crept clock with a velocity jump).
   double frozen_tolerance = 1e-7;
   /// In a flowing element, a contact that the state calls closed (above) is read as open when its
   /// closing weight w = (1 - alpha_gap)(1 - alpha_vn) (alpha_gap, alpha_vn: the step functions of
@@ -48,7 +47,8 @@ struct TrajectoryRecoveryOptions {
 /// Theorem 5), without re-simulating it: the frozen intervals are removed and every run of frozen
 /// elements becomes an impact event; the contact modes are read off the states; a mode change
 /// between two flowing elements becomes an event without impact. Compare polish() (resimulation.hpp),
-/// which re-simulates recover_reference's samples with the event-driven simulator instead.
+/// which re-simulates the samples of this trajectory (recover_reference) with the event-driven
+/// simulator.
 ///
 /// - Modes: per flowing element and contact, from the switching functions at the element's last
 ///   interior stage point (c_r < 1: Radau's end point is the next element's start and lies on the
@@ -95,14 +95,15 @@ struct TrajectoryRecoveryOptions {
 ///   advance), guards Touchdown for the struck contacts (and the mode changes of the others),
 ///   impulse_mode for the struck contacts. x+ is then off by the motion over that advance, and a
 ///   jump gain of it is refused unless x+ is the impact law's post-impact state to 1e-9.
-/// - The input law u(t) is recover_reference's (ImportedReference::input: linear between the
-///   samples, right-continuous at control-interval boundaries), whatever x and the mode.
+/// - The input law u(t) is the discrete solution's piecewise-constant control in physical time
+///   (detail::control_samples: ImportedReference::input of the element ends' inputs,
+///   right-continuous at control-interval boundaries), whatever x and the mode.
 /// The trajectory is a reading of the points whether or not their homotopy converged: the one of
 /// an unconverged solution (complementarity above tolerance) is not a motion of the scene (events
 /// off, states below the surface) and its status still says Completed; check converged() first.
-/// Throws InvalidArgument as recover_reference does (n_s outside 1..3, points whose recorded stage
-/// does not match n_s), for tolerances that are not finite and > 0, and for a
-/// closing_weight_tolerance outside (0, 1).
+/// Throws InvalidArgument for n_s outside 1..3, for points whose recorded stage does not match
+/// n_s, for tolerances that are not finite and > 0, and for a closing_weight_tolerance outside
+/// (0, 1).
 template <Scene S, int ny, int nsw, int nu>
 HybridTrajectory<S> recover_trajectory(const TimeFreezingSystem<S>& system,
                                        const std::vector<FesdPoint<ny, nsw, nu>>& points, int stages,

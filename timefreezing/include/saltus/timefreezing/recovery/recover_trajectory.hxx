@@ -3,6 +3,7 @@
 // and events), walking the elements once.
 #pragma once
 
+#include <saltus/timefreezing/recovery/recover_reference.hxx>
 #include <saltus/timefreezing/recovery/recover_trajectory.hpp>
 
 #include <Eigen/LU>
@@ -362,7 +363,7 @@ HybridTrajectory<S> recover_trajectory(const TimeFreezingSystem<S>& system,
                  options.tangential_velocity_tolerance, ", frozen ", options.frozen_tolerance);
   SALTUS_REQUIRE(positive(options.closing_weight_tolerance) && options.closing_weight_tolerance < 1.0,
                  "recover_trajectory: closing_weight_tolerance must be in (0, 1), got ", options.closing_weight_tolerance);
-  const ImportedReference<S> samples = recover_reference<S>(points, stages, options.frozen_tolerance);
+  const ImportedReference<S> samples = detail::control_samples<S>(points, stages);
   return detail::TrajectoryRecovery<S, ny, nsw, nu>(system, points, stages, options).run(samples);
 }
 
