@@ -266,10 +266,40 @@ def plot_plank_box_analysis(report, figures):
         ax2.tick_params(axis="x", labelsize=7)
         out.append((save(fig, figures, "plank_box_analysis.png"),
                     "plank-box refined reference: the jump gain of each event (conewise at the simultaneous landing and lift-off, with its number of pieces), the tracking design's verdict with its bounds, and the Monte Carlo runs (kept the event sequence, shrank, failed)."))
-    amplification = plot_amplifications(figures, a) if a else None
-    if amplification:
-        out.append(amplification)
+    for figure in (plot_amplifications, plot_deviations):
+        made = figure(figures, a) if a else None
+        if made:
+            out.append(made)
     return out, d
+
+
+def plot_deviations(figures, analysis):
+    """Each Monte Carlo run's deviation over time against its first-order prediction."""
+    dev = analysis.get("monte_carlo", {}).get("deviations")
+    if not dev or not dev.get("t") or not dev.get("observed"):
+        return None
+    t = dev["t"]
+    kept = analysis["monte_carlo"]["amplifications"]["kept_event_sequence"]
+    finite = lambda v: [x if isinstance(x, (int, float)) and x > 0 else float("nan") for x in v]
+    fig, ax = plt.subplots(figsize=(7, 3.6))
+    for predicted, observed, k in zip(dev["predicted"], dev["observed"], kept):
+        ax.semilogy(t, finite(predicted), color="0.55", lw=0.5, ls="--")
+        ax.semilogy(t, finite(observed), color="tab:green" if k else "tab:red", lw=0.6, alpha=0.6)
+    for e in analysis.get("events", []):
+        ax.axvline(e["t"], color="tab:blue", lw=0.6, ls=":")
+    ax.plot([], [], color="tab:green", label="simulated, kept the event sequence")
+    ax.plot([], [], color="tab:red", label="simulated, other events")
+    ax.plot([], [], color="0.55", ls="--", label="first order (same deviation)")
+    ax.plot([], [], color="tab:blue", ls=":", label="reference events")
+    ax.set_xlabel("t [s]")
+    ax.set_ylabel("|x(t) - x_ref(t)| / |eps d|")
+    ax.legend(fontsize=7)
+    ax.grid(alpha=0.3, which="both")
+    name = save(fig, figures, "plank_box_deviations.png")
+    return name, ("plank-box tracking analysis: every Monte Carlo run's deviation from the reference over time "
+                  "(relative to its initial deviation, the plant compared with the reference segment of its own "
+                  "phase), against the first-order prediction of the same initial deviation (dashed); the "
+                  "reference's events dotted.")
 
 
 def plot_amplifications(figures, analysis):

@@ -251,6 +251,9 @@ TEST(Tracking, VerdictsAgreeWithMonteCarloOnThePointMass) {
   mc.runs = 24;
   mc.threads = 2;
   mc.size = 1e-4;
+  // The deviations over time at 20 times, the last one T.
+  const double t0 = ref.trajectory.t_begin(), T = ref.trajectory.t_end();
+  for (int k = 1; k <= 20; ++k) mc.deviation_times.push_back(k == 20 ? T : t0 + (T - t0) * k / 20.0);
   for (const bool stable : {true, false}) {
     const GainSchedule<PointMass>& K = stable ? lqr : none;
     ReferenceSpreadingController<PointMass> controller(ol.reference(), K);
@@ -272,6 +275,21 @@ TEST(Tracking, VerdictsAgreeWithMonteCarloOnThePointMass) {
     }
     EXPECT_LT(m.max_log_discrepancy, 1e-2) << "first-order regime at eps = 1e-4";
     EXPECT_LE(m.observed_rate_max, r.upper_rate + 1e-3);
+    // Over time: at T the same ratios as at the end; at every time the simulated deviation agrees
+    // with the first-order prediction of the same initial deviation (no sample falls within the
+    // O(eps) windows between nominal and perturbed event times here).
+    double worst = 0.0;
+    for (const MonteCarloRun& run : m.run) {
+      ASSERT_EQ(run.observed_over_time.size(), mc.deviation_times.size());
+      ASSERT_EQ(run.predicted_over_time.size(), mc.deviation_times.size());
+      EXPECT_NEAR(run.observed_over_time.back(), run.observed, 1e-9 * run.observed);
+      EXPECT_NEAR(run.predicted_over_time.back(), run.predicted, 1e-9 * run.predicted);
+      for (std::size_t k = 0; k < mc.deviation_times.size(); ++k)
+        worst = std::max(worst, std::abs(std::log(run.observed_over_time[k] / run.predicted_over_time[k])));
+    }
+    EXPECT_LT(worst, 1e-2) << "first-order regime over time at eps = 1e-4";
+    std::printf("  over time: max |log(simulated / first order)| = %.3g at %zu times\n", worst,
+                mc.deviation_times.size());
   }
 }
 
@@ -415,5 +433,10 @@ TEST(Tracking, RefusesWhatItCannotAnalyse) {
   EXPECT_THROW(controller.next_phase(last, ref.trajectory.segments[2].mode), UnplannedEvent);
   MonteCarloOptions<PointMass> mc;
   mc.runs = 0;
+  EXPECT_THROW(monte_carlo(ref.scene, ref.options, controller, cl, mc), InvalidArgument);
+  mc.runs = 1;
+  mc.deviation_times = {0.5, 0.5};  // not increasing
+  EXPECT_THROW(monte_carlo(ref.scene, ref.options, controller, cl, mc), InvalidArgument);
+  mc.deviation_times = {ref.trajectory.t_end() + 1.0};  // beyond T
   EXPECT_THROW(monte_carlo(ref.scene, ref.options, controller, cl, mc), InvalidArgument);
 }

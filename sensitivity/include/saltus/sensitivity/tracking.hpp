@@ -370,6 +370,10 @@ struct MonteCarloOptions {
   int batch = 50;       ///< runs per progress line
   std::ostream* progress = nullptr;  ///< one line per batch; null: silent
   double t_final = -1.0;  ///< default: the reference's end
+  /// Times [s], increasing, in (t0, t_final], at which every run records its deviation and its
+  /// first-order prediction (MonteCarloRun::observed_over_time, predicted_over_time): the
+  /// deviations over time that a report draws against the prediction. Empty: none.
+  std::vector<double> deviation_times;
 };
 
 struct MonteCarloRun {
@@ -379,6 +383,13 @@ struct MonteCarloRun {
   int events = 0;         ///< plant events (micro-events counted one by one)
   double observed = 0.0;  ///< |x(T) - x_j(T)|_Wout / |eps d|_W
   double predicted = 0.0; ///< |z(T)|_Wout / |d|_W of the first-order closed loop
+  /// At MonteCarloOptions::deviation_times t_k: |x(t_k) - x_j(t_k)|_Wout / |eps d|_W, the plant
+  /// compared with the reference segment of its own phase at t_k (extended by reference
+  /// spreading), and |z(t_k)|_Wout / |d|_W. NaN where t_k lies beyond the extension of that
+  /// segment, or where the prediction leaves the conewise pieces with a nominal outcome
+  /// (SimultaneousActivation); observed_over_time is empty for a failed run, both are empty
+  /// without deviation_times.
+  std::vector<double> observed_over_time, predicted_over_time;
 };
 
 struct MonteCarloReport {
@@ -395,6 +406,7 @@ struct MonteCarloReport {
   int grew = 0, shrank = 0;  ///< kept runs with observed > 1 and < 1
   double seconds = 0.0;      ///< wall time of the simulations
   int threads = 1;
+  std::vector<double> deviation_times;  ///< MonteCarloOptions::deviation_times [s]
 };
 
 /// Fills the statistics of `report` (runs, failed, kept_event_sequence, failure_reasons with their

@@ -782,6 +782,52 @@ PeriodicStabilityReport check_periodic_stability(const ClosedLoopLinearisation<S
 // ---------------------------------------------------------------------------------------------
 // Monte Carlo
 
+namespace detail {
+
+/// |z(t_k)|_Wout / |d|_W of the first-order closed loop from z(t0) = d at monte_carlo's
+/// deviation_times: z carried across the segments before segments[k] by their transitions and
+/// the events' closed-loop jumps, then by flows[k] = Phi(t_k, start of segments[k]). NaN from
+/// the first sample after a conewise jump whose cone has no nominal piece.
+template <Scene S>
+std::vector<double> predicted_deviations(const ClosedLoopLinearisation<S>& cl, const std::vector<int>& segments,
+                                         const std::vector<Mat<2 * S::nq, 2 * S::nq>>& flows,
+                                         const Vec<2 * S::nq>& d, const Mat<2 * S::nq, 2 * S::nq>& C,
+                                         double d_norm) {
+  std::vector<double> out(segments.size(), std::numeric_limits<double>::quiet_NaN());
+  Vec<2 * S::nq> z = d;
+  int i = 0;
+  try {
+    for (std::size_t k = 0; k < segments.size(); ++k) {
+      for (; i < segments[k]; ++i) z = cl.apply_jump(i, cl.segment_transition(i) * z);
+      out[k] = (C * (flows[k] * z)).norm() / d_norm;
+    }
+  } catch (const SimultaneousActivation&) {
+  }
+  return out;
+}
+
+/// |x_j(t_k) - x(t_k)|_Wout / scale of one plant run at `times`: the plant on its segment at t_k
+/// (after an event at the event's time) against the reference segment of that plant segment's
+/// phase (phase_segments, the controller's bookkeeping), extended by reference spreading; NaN
+/// where t_k lies beyond that segment's extension.
+template <Scene S>
+std::vector<double> observed_deviations(const HybridTrajectory<S>& plant, const std::vector<int>& phase_segments,
+                                        const ExtendedReference<S>& reference, const std::vector<double>& times,
+                                        const Mat<2 * S::nq, 2 * S::nq>& C, double scale) {
+  std::vector<double> out(times.size(), std::numeric_limits<double>::quiet_NaN());
+  for (std::size_t k = 0; k < times.size(); ++k) {
+    const double t = times[k];
+    const int j = plant.segment_at(t);
+    const int s = phase_segments[static_cast<std::size_t>(j)];
+    if (t < reference.reached_before(s) || t > reference.reached_after(s)) continue;
+    const double tj = std::min(t, plant.segments[static_cast<std::size_t>(j)].t_end);
+    out[k] = (C * (plant.state(j, tj) - reference.state(s, t))).norm() / scale;
+  }
+  return out;
+}
+
+}  // namespace detail
+
 template <Scene S>
 MonteCarloReport monte_carlo(const S& scene, const SimulationOptions& simulation,
                              const ReferenceSpreadingController<S>& controller, const ClosedLoopLinearisation<S>& cl,
@@ -803,12 +849,26 @@ MonteCarloReport monte_carlo(const S& scene, const SimulationOptions& simulation
   SALTUS_REQUIRE(T > t0, "monte_carlo: t_final = ", T, " is not after the reference's start ", t0);
   const int last = ref.segment_at(T);
   const State x0 = ref.state(0, t0);
+  // The deviation times: their reference segments and flow transitions from the segments' starts.
+  const std::vector<double>& times = options.deviation_times;
+  std::vector<int> time_segments;
+  std::vector<Matrix> time_flows;
+  for (std::size_t k = 0; k < times.size(); ++k) {
+    SALTUS_REQUIRE(std::isfinite(times[k]) && times[k] > t0 && times[k] <= T && (k == 0 || times[k] > times[k - 1]),
+                   "monte_carlo: deviation_times must increase within (", t0, ", ", T, "], got ", times[k],
+                   " at position ", k);
+    const int i = ref.segment_at(times[k]);
+    time_segments.push_back(i);
+    time_flows.push_back(times[k] == ol.t_end(i) ? cl.segment_transition(i)
+                                                 : cl.flow_transition(i, times[k], ol.t_begin(i)));
+  }
 
   // Perturbations and their first-order predictions, in this thread (deterministic; the
   // linearisation builds conewise pieces on demand and is not thread-safe).
   MonteCarloReport report;
   report.runs = options.runs;
   report.run.resize(options.runs);
+  report.deviation_times = times;
   std::vector<State> d(options.runs);
   std::mt19937_64 rng(options.seed);
   std::normal_distribution<double> normal;
@@ -821,6 +881,9 @@ MonteCarloReport monte_carlo(const S& scene, const SimulationOptions& simulation
     } catch (const SimultaneousActivation&) {
       report.run[r].predicted = std::numeric_limits<double>::quiet_NaN();
     }
+    if (!times.empty())
+      report.run[r].predicted_over_time =
+          detail::predicted_deviations(cl, time_segments, time_flows, d[r], C, (Lt * d[r]).norm());
   }
 
   unsigned hw = std::thread::hardware_concurrency();
@@ -859,9 +922,11 @@ MonteCarloReport monte_carlo(const S& scene, const SimulationOptions& simulation
       Phase phase;
       bool kept = true;
       const ExtendedReference<S>& extended = controller.reference();
+      std::vector<int> phase_segments(static_cast<std::size_t>(traj.segment_count()), 0);
       for (int k = 1; k < traj.segment_count(); ++k) {
         const Phase before = phase;
         phase = controller.next_phase(phase, traj.segments[k].mode);
+        phase_segments[static_cast<std::size_t>(k)] = phase.segment;
         if (!phase.intermediate && !(traj.segments[k].mode == ref.segments[phase.segment].mode)) kept = false;
         // The controller held the reference beyond an extension (tracking.hpp): not a valid run.
         const double te = traj.events[k - 1].t;
@@ -876,6 +941,9 @@ MonteCarloReport monte_carlo(const S& scene, const SimulationOptions& simulation
       out.kept_event_sequence = kept && !phase.intermediate && phase.segment == last;
       const State e = traj.final_state() - controller.reference().state(phase.segment, T);
       out.observed = (C * e).norm() / (Lt * (options.size * d[r])).norm();
+      if (!times.empty())
+        out.observed_over_time = detail::observed_deviations(traj, phase_segments, extended, times, C,
+                                                             (Lt * (options.size * d[r])).norm());
     } catch (const std::exception& ex) {
       out.failed = true;
       out.reason = ex.what();

@@ -31,7 +31,10 @@ namespace saltus {
 ///                        closed-loop runs), seconds (with the first-order predictions), threads,
 ///                        amplifications: {predicted, observed, kept_event_sequence} per run that
 ///                        did not fail (|z(T)| / |d| of the first order, |x(T) - x_j(T)| / |eps d|
-///                        simulated, in the weights of MonteCarloOptions)}
+///                        simulated, in the weights of MonteCarloOptions); with
+///                        MonteCarloOptions::deviation_times also deviations: {t, predicted,
+///                        observed}: per run that did not fail, the same ratios at each time t
+///                        (MonteCarloRun::predicted_over_time, observed_over_time)}
 ///   agree                monte_carlo_agrees against predicted_rate
 ///   failure, failed_at   the message and the stage (to_string(AnalysisStage)) of a failed analysis
 ///   seconds              the whole analysis
@@ -98,6 +101,17 @@ nlohmann::ordered_json to_json(const ReferenceAnalysis<S>& analysis) {
     j["monte_carlo"]["amplifications"] = {{"predicted", std::move(predicted)},
                                           {"observed", std::move(observed)},
                                           {"kept_event_sequence", std::move(kept)}};
+    if (!m.deviation_times.empty()) {
+      json over_predicted = json::array(), over_observed = json::array();
+      for (const MonteCarloRun& run : m.run) {
+        if (run.failed) continue;
+        over_predicted.push_back(run.predicted_over_time);
+        over_observed.push_back(run.observed_over_time);
+      }
+      j["monte_carlo"]["deviations"] = {{"t", m.deviation_times},
+                                        {"predicted", std::move(over_predicted)},
+                                        {"observed", std::move(over_observed)}};
+    }
     j["agree"] = analysis.agree;
   }
   if (analysis.failed_at) {
