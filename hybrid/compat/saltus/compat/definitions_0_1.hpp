@@ -14,7 +14,7 @@
 // them is compiled unless used, and using them needs saltus::sensitivity linked, as in 0.1.
 //
 // No duplicate symbols: where a scene's header declares its templates extern
-// (SALTUS_DECLARE_SCENE...), the definitions here instantiate nothing for it and the program
+// (SALTUS_DECLARE_SCENE...), the definitions here emit no symbol for it and the program
 // links the scene library's explicit instantiations; elsewhere the implicit instantiations are
 // emitted as mergeable (COMDAT) symbols, as the explicit ones are. Each header is #pragma once,
 // so old and new paths mix in one file.
