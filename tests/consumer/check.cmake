@@ -29,7 +29,7 @@ if(NOT release_flags MATCHES "-O3")
   message(FATAL_ERROR "the consumer project is expected to build with CMake's default -O3")
 endif()
 # The user's scene first (its machinery, compiled once), then each program that links it.
-foreach(target falling_mass consumer analysis readme_example puck optimal_landing)
+foreach(target falling_mass consumer analysis readme_example old_paths puck optimal_landing)
   string(TIMESTAMP start "%s")
   execute_process(COMMAND "${CMAKE_COMMAND}" --build "${WORK_DIR}/build" --target ${target} RESULT_VARIABLE rc)
   string(TIMESTAMP stop "%s")
