@@ -6,7 +6,12 @@
 // linearise and tracking analyse. The solver's progress lines reach Python: a callable gets each
 // line, or else the logging module's logger "saltus" (level INFO).
 #include "common.hpp"
+#include "scenes/plank_box_landing.hpp"
+#include "scenes/plank_box_tracking.hpp"
 #include "scenes/time_freezing_examples.hpp"
+
+#include <saltus/sensitivity/analysis/reference_analysis_io.hpp>
+#include <saltus/timefreezing/refinement/discovery.hpp>
 
 #include <saltus/timefreezing/drivers/optimal_control.hpp>
 #include <saltus/timefreezing/refinement/refinement_io.hpp>
@@ -66,12 +71,17 @@ class PythonLines : public std::streambuf {
   std::optional<py::error_already_set> error_;
 };
 
+/// The progress callable: `progress`, or the logger "saltus" at INFO when None.
+py::object progress_sink(py::object progress) {
+  if (progress.is_none()) progress = py::module_::import("logging").attr("getLogger")("saltus").attr("info");
+  SALTUS_REQUIRE(PyCallable_Check(progress.ptr()), "progress must be a callable taking one line (str) or None");
+  return progress;
+}
+
 py::dict point_mass_to_the_target(py::object progress) {
   using namespace timefreezing;
   using Case = scenes::PointMassToTheTarget;
-  if (progress.is_none()) progress = py::module_::import("logging").attr("getLogger")("saltus").attr("info");
-  SALTUS_REQUIRE(PyCallable_Check(progress.ptr()), "progress must be a callable taking one line (str) or None");
-  PythonLines lines(progress);
+  PythonLines lines(progress_sink(std::move(progress)));
   std::ostream out(&lines);
   py::dict result;
   const scenes::PointMass mass(Case::parameters());
@@ -124,6 +134,69 @@ py::dict point_mass_to_the_target(py::object progress) {
   return result;
 }
 
+/// The plank-box flat landing (scenes/plank_box_landing.hpp) optimised and analysed as
+/// `build/examples/plank_box --json` does it: discovery, refinement with up to `max_edits` schedule
+/// edits, then analyse_reference with the scene library's LQR design and `runs` Monte Carlo runs.
+py::dict plank_box_flat_landing(py::object progress, int max_edits, int runs) {
+  using namespace timefreezing;
+  using Ocp = scenes::PlankBoxFlatLanding;
+  SALTUS_REQUIRE(max_edits >= 0, "max_edits must be >= 0, got ", max_edits);
+  SALTUS_REQUIRE(runs >= 1, "runs must be >= 1, got ", runs);
+  PythonLines lines(progress_sink(std::move(progress)));
+  std::ostream out(&lines);
+  const scenes::PlankBox scene{};
+  std::optional<DiscoveryResult<scenes::PlankBox>> discovery;
+  std::optional<RefinementResult<scenes::PlankBox>> refined;
+  std::optional<nlohmann::ordered_json> analysis;
+  {
+    py::gil_scoped_release release;
+    MpccSolverOptions solver = Ocp::solver();
+    solver.progress = &out;
+    DiscoveryOptions discovery_options;
+    discovery_options.progress = &out;
+    discovery.emplace(
+        discover_schedule(scene, Ocp::system(), Ocp{}, Ocp::q0(), Ocp::v0(), Ocp::grid(), solver, discovery_options));
+    if (discovery->schedule_found) {
+      RefinementOptions options = Ocp::refinement();
+      options.progress = &out;
+      options.max_edits = max_edits;
+      refined.emplace(refine_schedule(scene, Ocp{}, Ocp::refinement_horizon(), discovery->discovered.guess, options));
+    }
+    if (refined && refined->converged) {
+      ReferenceAnalysisOptions<scenes::PlankBox> a = scenes::plank_box_tracking(runs);
+      a.progress = &out;
+      a.monte_carlo.threads = 1;
+      analysis = to_json(analyse_reference(scene, refined->trajectory, SimulationOptions{}, a));
+    }
+    out.flush();
+  }
+  lines.rethrow();
+  py::dict result;
+  result["relaxed_objective"] = discovery->relaxed.solution.objective;
+  result["discovery_seconds"] = discovery->seconds;
+  result["stage"] = refined ? refined->stage : "discovery (" + discovery->message + ")";
+  result["converged"] = refined && refined->converged;
+  if (refined) {
+    const auto j = to_json(scene, *refined);
+    for (const char* key : {"schedule", "mode_validity_violation", "phase_resim_max_error", "refinement_seconds"})
+      result[key] = py::module_::import("json").attr("loads")(j[key].dump());
+    result["objective"] = refined->objective;
+    result["event_times"] = refined->event_times;
+    result["refinement_json"] = j.dump();
+  }
+  if (refined && refined->converged) {
+    auto reference = std::make_shared<PyTrajectory<scenes::PlankBox>>();
+    reference->scene = std::make_shared<const scenes::PlankBox>(scene);
+    reference->options = SimulationOptions{};
+    reference->options.breakpoints = refined->element_times;  // the optimal input is piecewise constant
+    reference->name = "plank-box flat landing (refined)";
+    reference->trajectory = refined->trajectory;
+    result["reference"] = reference;
+  }
+  if (analysis) result["analysis"] = py::module_::import("json").attr("loads")(analysis->dump());
+  return result;
+}
+
 }  // namespace
 
 void bind_optimal_control(py::module_& m) {
@@ -139,6 +212,19 @@ void bind_optimal_control(py::module_& m) {
          "discovery_seconds, refinement_seconds, ipopt_iterations, homotopy_steps, complementarity, refinement_json "
          "(the C++ report), and reference: the refined reference as a PointMassTrajectory (its optimal input law "
          "inside; breakpoints at its elements) for jump_gains, linearise and tracking.");
+  oc.def("plank_box_flat_landing", &plank_box_flat_landing, py::arg("progress") = py::none(),
+         py::arg("max_edits") = 0, py::arg("runs") = 100,
+         "The plank-box flat landing (T = 1.5 s: the box lands flat on the compliant plank with both bottom corners "
+         "at once, slides, lifts off to its target), optimised and analysed as `plank_box --json` does it: discovery "
+         "by the time-freezing homotopy, the mode-schedule refinement with up to `max_edits` (>= 0) schedule edits "
+         "(default 0: only the one-edit check; the lift-off edit that the C++ example tries costs about two minutes "
+         "and does not solve), then the library's analysis (jump gains, LQR tracking design, stability check, "
+         "`runs` (>= 1) closed-loop Monte Carlo runs on one thread). About 2 minutes on one core. `progress`: as "
+         "point_mass_to_the_target. Returns a dict: stage, converged, objective, relaxed_objective, schedule, "
+         "event_times [s], mode_validity_violation, phase_resim_max_error, discovery_seconds, refinement_seconds, "
+         "refinement_json, and when refined: reference (a PlankBoxTrajectory) and analysis (the analysis report as a "
+         "dict: events with their jump gains, design, verdict, bounds, monte_carlo). Raises InvalidArgument for "
+         "max_edits < 0, runs < 1 or a progress that is not callable.");
 }
 
 }  // namespace saltus::python

@@ -63,3 +63,13 @@ def test_progress_goes_to_the_logger_by_default_and_a_failing_sink_raises(caplog
         saltus.optimal_control.point_mass_to_the_target(progress=sink)
     with pytest.raises(saltus.InvalidArgument, match="progress must be a callable"):
         saltus.optimal_control.point_mass_to_the_target(progress=3)
+
+
+def test_the_plank_box_pipeline_refuses_bad_arguments_before_solving():
+    # Each refusal comes before the two-minute solve (plank_box_flat_landing's docstring).
+    with pytest.raises(saltus.InvalidArgument, match="max_edits"):
+        saltus.optimal_control.plank_box_flat_landing(max_edits=-1)
+    with pytest.raises(saltus.InvalidArgument, match="runs"):
+        saltus.optimal_control.plank_box_flat_landing(runs=0)
+    with pytest.raises(saltus.InvalidArgument, match="callable"):
+        saltus.optimal_control.plank_box_flat_landing(progress=3)
