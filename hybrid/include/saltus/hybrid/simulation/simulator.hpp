@@ -36,6 +36,12 @@
 #include <saltus/hybrid/simulation/integrator_dopri.hpp>
 #include <saltus/hybrid/simulation/simulation_options.hpp>
 #include <saltus/hybrid/simulation/transition.hpp>
+// Sliding contacts. An input law that switches with the contact mode can make no mode consistent
+// at a contact at rest on the surface (transition.hpp): the contact then slides on the surface
+// under the equivalent control (ModeSystem::set_sliding); the segment records it
+// (Segment::sliding_contact), statistics.sliding_events counts such events, and the trajectory's
+// input applies the equivalent control there.
+//
 #include <saltus/hybrid/vocabulary/trajectory.hpp>
 
 #include <memory>
@@ -119,3 +125,10 @@ class Simulator {
 };
 
 }  // namespace saltus
+  /// Makes traj.input the input the run applied: on a segment with a sliding contact
+  /// (Segment::sliding_contact), the equivalent control (sliding_input), not the law's value in the
+  /// segment's mode. The returned law refers to the scene (which outlives the simulator's runs).
+  void apply_sliding_to_input(HybridTrajectory<S>& traj) const;
+  /// Sets traj.zeno_time and zeno_time_uncertainty from the touchdown times at a detected
+  /// accumulation of period `period` (1 or 2) and mean interval ratio `ratio` (file comment).
+  void extrapolate_accumulation(int period, double ratio, HybridTrajectory<S>& traj) const;

@@ -56,7 +56,33 @@ HybridTrajectory<S> Simulator<S>::run(const State& x0, double t0, double t_final
     const int i = static_cast<int>(std::upper_bound(event_times.begin(), event_times.end(), t) - event_times.begin());
     return input(i, t, x, mode);
   };
+  apply_sliding_to_input(traj);
   return traj;
+}
+
+template <Scene S>
+void Simulator<S>::apply_sliding_to_input(HybridTrajectory<S>& traj) const {
+  struct Sliding {
+    double t_begin, t_end;
+    Mode<nc> mode, open_mode;
+    int contact;
+    double floor;
+  };
+  std::vector<Sliding> sliding;
+  for (const auto& seg : traj.segments)
+    if (seg.sliding_contact >= 0)
+      sliding.push_back({seg.t_begin, seg.t_end, seg.mode, seg.sliding_open_mode, seg.sliding_contact,
+                         seg.sliding_force_floor});
+  if (sliding.empty()) return;
+  traj.input = [law = traj.input, sliding = std::move(sliding), scene = &scene_](double t, const State& x,
+                                                                                 const Mode<nc>& mode) {
+    for (const Sliding& s : sliding)
+      if (t >= s.t_begin && t <= s.t_end && mode == s.mode) {
+        FlowWorkspace<S> ws;
+        return sliding_input(*scene, law, t, x, mode, s.contact, s.open_mode, s.floor, ws);
+      }
+    return law(t, x, mode);
+  };
 }
 
 template <Scene S>
@@ -89,6 +115,7 @@ HybridTrajectory<S> Simulator<S>::run_impl(const State& x0, std::optional<Mode<n
   } else {
     auto start = transitions_.start(sys, t, x);
     mode = start.mode;
+    if (start.sliding_contact >= 0) ++traj.statistics.sliding_events;
     if (start.selection_solutions > 1) ++traj.statistics.ambiguous_selections;
     if (start.impact) {
       x = start.impact->x_plus;
@@ -104,6 +131,11 @@ HybridTrajectory<S> Simulator<S>::run_impl(const State& x0, std::optional<Mode<n
     Segment<S> seg;
     seg.mode = mode;
     seg.t_begin = t;
+    seg.sliding_contact = sys.sliding_contact();
+    if (seg.sliding_contact >= 0) {
+      seg.sliding_open_mode = sys.sliding_open_mode();
+      seg.sliding_force_floor = sys.sliding_force_floor();
+    }
     const long rhs_before = sys.rhs_evaluations();
     const State x_begin = x;
     SegmentEndOf<S> end;
@@ -136,8 +168,10 @@ HybridTrajectory<S> Simulator<S>::run_impl(const State& x0, std::optional<Mode<n
     for (int k = 0; k < sys.guards().count; ++k)
       if (end.fired[k]) fired.push_back(sys.guards()[k]);
     Event<S> ev = transitions_.resolve(sys, t, x, mode, fired);
-    for (const auto& tr : ev.transitions)
+    for (const auto& tr : ev.transitions) {
       if (tr.selection_solutions > 1) ++traj.statistics.ambiguous_selections;
+      if (tr.sliding_contact >= 0) ++traj.statistics.sliding_events;
+    }
     // Zeno bookkeeping on every touchdown event (file comment).
     bool zeno = false;
     bool touchdown = false, slower_than_rest = false;
@@ -175,6 +209,7 @@ HybridTrajectory<S> Simulator<S>::run_impl(const State& x0, std::optional<Mode<n
     }
   }
   traj.set_final_state(x);
+  apply_sliding_to_input(traj);
   stats.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
   return traj;
 }
