@@ -103,7 +103,13 @@ class HybridTrajectory {
   std::vector<Event<S>> events;
   InputLaw<S> input;  ///< u(t, x, mode)
   SimulationStatus status = SimulationStatus::Completed;
-  double zeno_time = std::numeric_limits<double>::quiet_NaN();  ///< predicted accumulation time
+  /// s: the predicted accumulation time (status Zeno; NaN otherwise), extrapolated from the
+  /// touchdown times (Simulator, simulator.hpp).
+  double zeno_time = std::numeric_limits<double>::quiet_NaN();
+  /// s: how far zeno_time may be from the accumulation time: the change of the extrapolation
+  /// between its last two orders (simulator.hpp); infinite when too few touchdowns were recorded
+  /// to extrapolate (zeno_time is then the geometric estimate, a guess); NaN without a Zeno status.
+  double zeno_time_uncertainty = std::numeric_limits<double>::quiet_NaN();
   SimulationStatistics statistics;
 
   double t_begin() const { return segments.empty() ? 0.0 : segments.front().t_begin; }
