@@ -118,6 +118,56 @@ Vec<4> example3_closed_form(double t) {
   return Vec<4>(q1, g * s * s * s / 3, v1, g * s * s);
 }
 
+// A contact at rest on the surface under an input law that switches with the contact mode so that
+// no mode is consistent (what a reference-spreading controller does when it turns its feedback on
+// as the plant reaches a reference mode, with a contact at zero force): the point mass of Example
+// 1 on the table (m = 1), its thrust u2 = g + 1 when the contact is closed (it would pull:
+// lambda_n = m g - u2 = -1) and u2 = g - 1 + 2t when open (it pushes the mass into the table
+// until t = 1/2). The motion is Filippov's sliding solution: the mass stays on the table at zero
+// contact force (the equivalent control u2 = g) until the open mode's thrust lifts it too, at
+// t = 1/2 (a release); then q2'' = 2t - 1, so q2 = (t - 1/2)^3 / 3 and q2' = (t - 1/2)^2. Before,
+// the selection closed the contact under the open mode's input, the closed mode's input released
+// it, the flow drove it back: "events stall".
+TEST_P(Simulation, ContactAtZeroForceUnderAModeSwitchingLawSlidesThenLiftsOff) {
+  scenes::PointMass mass;
+  const InputLaw<scenes::PointMass> law = [](double t, const Vec<4>&, const Mode<1>& mode) {
+    return Vec<2>(0.0, mode[0].closed() ? g + 1.0 : g - 1.0 + 2.0 * t);
+  };
+  Simulator<scenes::PointMass> sim(mass, tight());
+  const auto traj = sim.run(Vec<4>::Zero(), 0.0, 1.5, law);
+  EXPECT_EQ(traj.status, SimulationStatus::Completed);
+  ASSERT_EQ(traj.events.size(), 1u);
+  EXPECT_EQ(traj.events[0].guards().at(0).kind, GuardKind::Release);
+  EXPECT_NEAR(traj.events[0].t, 0.5, 1e-8);
+  EXPECT_TRUE(traj.segments[0].mode[0].closed());
+  EXPECT_FALSE(traj.segments[1].mode[0].closed());
+  for (double t : {0.1, 0.25, 0.45}) {  // on the table, at rest, at (almost) zero force
+    EXPECT_TRUE(matrices_near(traj.state_at(t), Vec<4>::Zero(), 0.0, 1e-12)) << "t = " << t;
+    const Vec<2> u = traj.input_at(0, t);
+    EXPECT_NEAR(u[1], g, 1e-6) << "the equivalent control at t = " << t;
+  }
+  EXPECT_TRUE(matrices_near(traj.final_state(), Vec<4>(0.0, 1.0 / 3.0, 0.0, 1.0), 0.0, 1e-7));
+}
+
+// The same contact with the other way out: the closed mode's pull fades, u2 = g + 1 - 2t when
+// closed, u2 = g - 1 when open. The sliding ends at t = 1/2 where the closed mode becomes
+// consistent (lambda_n = 2t - 1 >= 0): the mass rests on the table with no event, its contact force
+// the plain law's from then on.
+TEST_P(Simulation, ContactAtZeroForceUnderAModeSwitchingLawSlidesThenRests) {
+  scenes::PointMass mass;
+  const InputLaw<scenes::PointMass> law = [](double t, const Vec<4>&, const Mode<1>& mode) {
+    return Vec<2>(0.0, mode[0].closed() ? g + 1.0 - 2.0 * t : g - 1.0);
+  };
+  Simulator<scenes::PointMass> sim(mass, tight());
+  const auto traj = sim.run(Vec<4>::Zero(), 0.0, 1.0, law);
+  EXPECT_EQ(traj.status, SimulationStatus::Completed);
+  EXPECT_TRUE(traj.events.empty());
+  EXPECT_TRUE(traj.segments.back().mode[0].closed());
+  EXPECT_TRUE(matrices_near(traj.final_state(), Vec<4>::Zero(), 0.0, 1e-12));
+  EXPECT_NEAR(traj.input_at(0, 0.25)[1], g, 1e-6);         // sliding: the equivalent control
+  EXPECT_NEAR(traj.input_at(0, 0.75)[1], g + 1.0 - 1.5, 1e-12);  // resting: the plain law
+}
+
 TEST_P(Simulation, PointMassOfExampleThreeImpactsSlidesAndLiftsOff) {
   scenes::PointMass mass;
   auto input = open_loop<scenes::PointMass>([](double t) { return Vec<2>(7.0, t < 1.0 ? 0.0 : 2 * g * (t - 1.0)); });

@@ -6,7 +6,10 @@
 //  1. it crosses: gamma(t_lo) >= 0 > gamma(t_s) (every guard kind); the event time is the root,
 //     located by TOMS 748 on the extension, on its >= 0 side (the last instant of the mode). A
 //     touchdown that ends within gap_tolerance below zero while rising is not an approach (the
-//     integration error of a contact that leaves the surface) and does not fire;
+//     integration error of a contact that leaves the surface) and does not fire. A touchdown that
+//     starts within gap_tolerance of the surface is searched for its maximum first (Brent's
+//     method): a contact opened with a tiny separating acceleration that rises and returns
+//     within the interval touches at its return, not at t_lo;
 //  2. a touchdown dips below zero and back between the check points (gamma >= 0 at both ends, the
 //     gap's exact rate zeta_n = w_n^T v negative at t_lo and positive at t_s): the gap's minimum
 //     t_m is the root of zeta_n, and if gamma(t_m) < -dip_depth (1e-3 gap_tolerance) the crossing
@@ -160,7 +163,20 @@ bool scan_step_for_events(ModeSystem<S>& sys, StateAt&& state_at, double ta, dou
         // integration error of a contact that is leaving (a gap of +1e-17 after a lift-off, -1e-11
         // one step later at rtol 1e-8), not an approach: it is left to case 3 if it goes down.
         if (touchdown && g_s[k] >= -settings.gap_tolerance && r_s[k] >= 0.0) continue;
-        root[k] = crossing(k, t_lo, g_lo[k], ts, g_s[k]);
+        double t_from = t_lo, g_from = g_lo[k];
+        if (touchdown && g_lo[k] <= settings.gap_tolerance) {
+          // A contact that starts on the surface (opened at this instant, with a tiny separating
+          // acceleration) may rise and come back within the interval: the crossing is the return,
+          // after the gap's maximum, not t_lo where the gap is zero (which would end the segment
+          // where it starts, and the event would open the contact again: a stall).
+          const auto [t_max, minus_g] =
+              boost::math::tools::brent_find_minima([&](double t) { return -guard(k, t); }, t_lo, ts, 30);
+          if (-minus_g > g_lo[k] && t_max < ts) {
+            t_from = t_max;
+            g_from = -minus_g;
+          }
+        }
+        root[k] = crossing(k, t_from, g_from, ts, g_s[k]);
       } else if (touchdown && g_lo[k] >= 0.0 && g_s[k] >= 0.0 && r_lo[k] < 0.0 && r_s[k] > 0.0) {
         const double t_m = extremum(k, t_lo, r_lo[k], ts, r_s[k]);  // case 2
         const double g_m = guard(k, t_m);

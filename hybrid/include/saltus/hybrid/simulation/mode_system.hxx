@@ -1,6 +1,7 @@
 // Definitions of mode_system.hpp.
 #pragma once
 
+#include <cmath>
 #include <limits>
 #include <saltus/hybrid/simulation/mode_system.hpp>
 
@@ -8,8 +9,26 @@ namespace saltus {
 
 template <Scene S>
 void ModeSystem<S>::set_mode(const Mode<nc>& mode) {
+  if (!(mode == mode_)) sliding_contact_ = -1;
   mode_ = mode;
   guards_ = active_guards(scene_, mode);
+}
+
+template <Scene S>
+void ModeSystem<S>::set_sliding(int contact, const Mode<nc>& open_mode, double force_floor) {
+  SALTUS_REQUIRE(contact >= 0 && contact < nc && mode_[contact].closed() && !open_mode[contact].closed(),
+                 "set_sliding: contact ", contact, " must be closed in the mode and open in open_mode");
+  SALTUS_REQUIRE(force_floor >= 0 && std::isfinite(force_floor), "set_sliding: force_floor must be >= 0");
+  sliding_contact_ = contact;
+  sliding_open_mode_ = open_mode;
+  sliding_force_floor_ = force_floor;
+}
+
+template <Scene S>
+auto ModeSystem<S>::input(double t, const State& x) -> Input {
+  if (sliding_contact_ < 0) return input_(t, x, mode_);
+  return sliding_input(scene_, input_, t, x, mode_, sliding_contact_, sliding_open_mode_, sliding_force_floor_,
+                       sliding_flow_);
 }
 
 template <Scene S>

@@ -56,7 +56,33 @@ HybridTrajectory<S> Simulator<S>::run(const State& x0, double t0, double t_final
     const int i = static_cast<int>(std::upper_bound(event_times.begin(), event_times.end(), t) - event_times.begin());
     return input(i, t, x, mode);
   };
+  apply_sliding_to_input(traj);
   return traj;
+}
+
+template <Scene S>
+void Simulator<S>::apply_sliding_to_input(HybridTrajectory<S>& traj) const {
+  struct Sliding {
+    double t_begin, t_end;
+    Mode<nc> mode, open_mode;
+    int contact;
+    double floor;
+  };
+  std::vector<Sliding> sliding;
+  for (const auto& seg : traj.segments)
+    if (seg.sliding_contact >= 0)
+      sliding.push_back({seg.t_begin, seg.t_end, seg.mode, seg.sliding_open_mode, seg.sliding_contact,
+                         seg.sliding_force_floor});
+  if (sliding.empty()) return;
+  traj.input = [law = traj.input, sliding = std::move(sliding), scene = &scene_](double t, const State& x,
+                                                                                 const Mode<nc>& mode) {
+    for (const Sliding& s : sliding)
+      if (t >= s.t_begin && t <= s.t_end && mode == s.mode) {
+        FlowWorkspace<S> ws;
+        return sliding_input(*scene, law, t, x, mode, s.contact, s.open_mode, s.floor, ws);
+      }
+    return law(t, x, mode);
+  };
 }
 
 template <Scene S>
@@ -89,6 +115,7 @@ HybridTrajectory<S> Simulator<S>::run_impl(const State& x0, std::optional<Mode<n
   } else {
     auto start = transitions_.start(sys, t, x);
     mode = start.mode;
+    if (start.sliding_contact >= 0) ++traj.statistics.sliding_events;
     if (start.selection_solutions > 1) ++traj.statistics.ambiguous_selections;
     if (start.impact) {
       x = start.impact->x_plus;
@@ -104,6 +131,11 @@ HybridTrajectory<S> Simulator<S>::run_impl(const State& x0, std::optional<Mode<n
     Segment<S> seg;
     seg.mode = mode;
     seg.t_begin = t;
+    seg.sliding_contact = sys.sliding_contact();
+    if (seg.sliding_contact >= 0) {
+      seg.sliding_open_mode = sys.sliding_open_mode();
+      seg.sliding_force_floor = sys.sliding_force_floor();
+    }
     const long rhs_before = sys.rhs_evaluations();
     const State x_begin = x;
     SegmentEndOf<S> end;
@@ -136,8 +168,10 @@ HybridTrajectory<S> Simulator<S>::run_impl(const State& x0, std::optional<Mode<n
     for (int k = 0; k < sys.guards().count; ++k)
       if (end.fired[k]) fired.push_back(sys.guards()[k]);
     Event<S> ev = transitions_.resolve(sys, t, x, mode, fired);
-    for (const auto& tr : ev.transitions)
+    for (const auto& tr : ev.transitions) {
       if (tr.selection_solutions > 1) ++traj.statistics.ambiguous_selections;
+      if (tr.sliding_contact >= 0) ++traj.statistics.sliding_events;
+    }
     // Zeno bookkeeping on every touchdown event (file comment).
     bool zeno = false;
     bool touchdown = false, slower_than_rest = false;
@@ -175,6 +209,7 @@ HybridTrajectory<S> Simulator<S>::run_impl(const State& x0, std::optional<Mode<n
     }
   }
   traj.set_final_state(x);
+  apply_sliding_to_input(traj);
   stats.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
   return traj;
 }
@@ -188,8 +223,11 @@ bool Simulator<S>::record_touchdown(double t, bool slower_than_rest, HybridTraje
   const bool rest_acted_before = rest_impact_seen_;
   rest_impact_seen_ = rest_impact_seen_ || slower_than_rest;
   if (options_.rest_velocity > 0 && !rest_acted_before) return false;
-  const int n = options_.zeno_bounces;
   const std::size_t m = times.size();
+  // Near the time resolution (the last interval below 1e3 simultaneity windows) the touchdowns
+  // are about to merge into events at one instant: 4 ratios suffice there (file comment).
+  int n = options_.zeno_bounces;
+  if (m >= 2 && times[m - 1] - times[m - 2] < 1e3 * options_.simultaneity) n = std::min(n, 4);
   for (int period = 1; period <= 2; ++period) {
     // n ratios of intervals `period` apart need n + period intervals, n + period + 1 times.
     if (static_cast<int>(m) < n + period + 1) continue;
@@ -205,13 +243,45 @@ bool Simulator<S>::record_touchdown(double t, bool slower_than_rest, HybridTraje
       r_max = std::max(r_max, r);
     }
     if (!positive || !(r_max < 1.0 && r_max - r_min < 0.05)) continue;
-    const double ratio = 0.5 * (r_min + r_max);
-    double last = 0.0;
-    for (int k = 0; k < period; ++k) last += interval(k);
-    traj.zeno_time = t + last * ratio / (1.0 - ratio);
+    extrapolate_accumulation(period, 0.5 * (r_min + r_max), traj);
     return true;
   }
   return false;
+}
+
+template <Scene S>
+void Simulator<S>::extrapolate_accumulation(int period, double ratio, HybridTrajectory<S>& traj) const {
+  const auto& times = touchdown_times_;
+  const int m = static_cast<int>(times.size());
+  // The geometric estimate: the remaining intervals continue the last period with the ratio r.
+  double last = 0.0;
+  for (int k = 0; k < period; ++k) last += times[m - 1 - k] - times[m - 2 - k];
+  traj.zeno_time = times.back() + last * ratio / (1.0 - ratio);
+  traj.zeno_time_uncertainty = std::numeric_limits<double>::infinity();
+  if (m < 4 * period + 1) return;  // too few touchdowns for two orders of Aitken's process
+  // The touchdowns `period` apart, s(0) the last: s(j) = times[m - 1 - period j].
+  auto s = [&](int back) { return times[m - 1 - period * back]; };
+  // Aitken's delta-squared from s(back + 2), s(back + 1), s(back): exact for a geometric tail.
+  auto aitken = [](double s2, double s1, double s0) {
+    const double d1 = s0 - s1, d0 = s1 - s2;
+    return d1 == d0 ? s0 : s0 - d1 * d1 / (d1 - d0);
+  };
+  const double a0 = aitken(s(2), s(1), s(0)), a1 = aitken(s(3), s(2), s(1)), a2 = aitken(s(4), s(3), s(2));
+  const double iterated = aitken(a2, a1, a0);  // the second order
+  if (!std::isfinite(a0) || !std::isfinite(iterated) || a0 < times.back() || iterated < times.back()) return;
+  traj.zeno_time = iterated;
+  // Twice the change of the second order over the last period where a period more was recorded
+  // (it converges at least geometrically: the change bounds its error; measured on balls on springs,
+  // tests/test_accumulation.cpp: error 0.5 and 0.55 of the change), else the change between the
+  // orders (an estimate of the first order's error, larger than the second's).
+  if (m >= 5 * period + 1) {
+    const double a3 = aitken(s(5), s(4), s(3)), previous = aitken(a3, a2, a1);
+    if (std::isfinite(previous)) {
+      traj.zeno_time_uncertainty = 2.0 * std::abs(iterated - previous);
+      return;
+    }
+  }
+  traj.zeno_time_uncertainty = std::abs(iterated - a0);
 }
 
 template <Scene S>

@@ -15,6 +15,23 @@
 // `max_chain` transitions have been taken. Guards that fired together (within the simulator's
 // simultaneity window) are resolved jointly: one impact problem for all touchdowns.
 //
+// The input at an event. An event time is located on the >= 0 side of its guard's root, within
+// the integrator's root_tolerance * max(1, |t|) before it; the transitions are evaluated with the
+// input law at t + twice that (the right limit at the event's resolution), so that an input that
+// jumps at the event (a piecewise-constant optimal input whose jump makes a release fire) is seen
+// as the motion after the event sees it, not as before the jump (where the released contact
+// still carries a positive force: reclosed, released again at the same instant, "events stall").
+// For a continuous input the difference is 1e-14 relative. The event keeps its time t.
+//
+// Mode-dependent input laws. The acceleration-level mode selection is made with the input of the
+// mode it selects (select_consistent): a law u(t, x, mode) that switches with the contact mode (a
+// reference-spreading controller that turns its feedback on once the plant reaches a reference
+// mode) may make the mode chosen under the input of the mode being left inconsistent under its
+// own input, a release or a touchdown due at once, and the chain would cycle over events at one
+// instant. Where no mode is consistent because one contact at rest on the surface pulls when
+// closed and is pushed in when open, the contact slides on the surface at (almost) zero force
+// under the equivalent control (ModeSystem::set_sliding, Filippov's sliding solution).
+//
 // Settled transitions. Contacts whose stick/slip changed at this instant are not changed back at
 // the same instant, and a contact released at this instant is not closed again by its touchdown
 // guard unless it approaches (resolve() says why in its comments).
@@ -54,6 +71,7 @@ class TransitionResolver {
     Mode<nc> mode;
     std::optional<Event<S>> impact;  ///< the initial impact (guards: the touchdowns), if any
     int selection_solutions = 1;     ///< of the initial mode selection (SelectionUniqueness)
+    int sliding_contact = -1;        ///< a contact left sliding (select_consistent), -1 when none
   };
   /// Touching contacts (gap within the impact's gap tolerance) that approach impact at t0; those
   /// at rest are candidates for the acceleration-level mode selection; the others are open.
@@ -86,6 +104,20 @@ class TransitionResolver {
   /// map of tr.impulse_mode if it was an impact, x itself otherwise. For re-simulations that must
   /// follow a reference's event (the numerical twin).
   State replay(const Transition<S>& tr, const State& x);
+
+  /// The mode of `base` with the contacts of `chosen` replaced by the acceleration-level selection
+  /// over `candidates` (`rest`: ModeSelector::select), chosen under the input of the mode it
+  /// returns: from u(t, x, base), re-selected under the input of the selected mode until the mode
+  /// repeats (a law that does not depend on the mode: one selection). A two-cycle A -> B -> A whose
+  /// modes differ only in contact i, closed in A and open in B, is a sliding contact: returns A
+  /// with sys in A and sliding on i (ModeSystem::set_sliding, force floor 4 guard_tolerance times
+  /// the force scale), and `sliding` = i (else -1). `solutions`: of the last selection.
+  /// @throws NumericalFailure when the law makes no mode consistent otherwise (a longer cycle, or
+  /// modes differing in several contacts), naming the modes; ContactProblemFailure from the
+  /// selection.
+  Mode<nc> select_consistent(ModeSystem<S>& sys, double t, const State& x, const Mode<nc>& base,
+                             const std::array<bool, nc>& chosen, const std::array<bool, nc>& candidates,
+                             const std::array<bool, nc>& rest, int& solutions, int& sliding);
 
   /// A velocity below this counts as zero at x: selection.velocity_tolerance * max(1, ||v||_inf).
   double velocity_tolerance(const State& x) const;

@@ -38,8 +38,11 @@ auto TransitionResolver<S>::start(ModeSystem<S>& sys, double t0, const State& x0
       candidates[i] = true;
   }
   Start start;
-  start.mode = selector_.select(x0, sys.input(t0, x0), candidates);
-  start.selection_solutions = selector_.uniqueness().solutions;
+  std::array<bool, nc> all{};
+  all.fill(true);
+  sys.set_mode(Mode<nc>{});
+  start.mode = select_consistent(sys, t0, x0, Mode<nc>{}, all, candidates, {}, start.selection_solutions,
+                                 start.sliding_contact);
   if (!initial_touchdowns.empty()) {
     start.impact = resolve(sys, t0, x0, start.mode, initial_touchdowns);
     start.mode = start.impact->mode_after;
@@ -64,6 +67,9 @@ Event<S> TransitionResolver<S>::resolve(ModeSystem<S>& sys, double t, const Stat
   } clear_deferred{deferred_contacts_};
   Event<S> ev;
   ev.t = t;
+  // The event's physics sees the input just after the event (file comment): t is located on the
+  // >= 0 side of a root, within root_tolerance * max(1, |t|) before it.
+  const double t_in = t + 2 * options_.integrator.root_tolerance * std::max(1.0, std::abs(t));
   ev.x_minus = x_minus;
   ev.mode_before = mode_before;
   State x = x_minus;
@@ -89,10 +95,10 @@ Event<S> TransitionResolver<S>::resolve(ModeSystem<S>& sys, double t, const Stat
   for (int round = 0;; ++round) {
     if (pending.empty()) {
       sys.set_mode(mode);
-      pending = guards_due(sys, t, x);
+      pending = guards_due(sys, t_in, x);
       std::erase_if(pending, [&](const Guard& g) {
         if (is_deferred(g)) return true;
-        if (g.kind == GuardKind::Touchdown) return released[g.contact] && !(sys.guard_rate(t, x, g) < -v_tol);
+        if (g.kind == GuardKind::Touchdown) return released[g.contact] && !(sys.guard_rate(t_in, x, g) < -v_tol);
         return settled_friction[g.contact] && (g.kind == GuardKind::Stop || g.kind == GuardKind::SlipOnset);
       });
       if (pending.empty()) break;
@@ -108,7 +114,7 @@ Event<S> TransitionResolver<S>::resolve(ModeSystem<S>& sys, double t, const Stat
     tr.guards = pending;
     tr.mode_before = mode;
     tr.x_before = x;
-    apply(sys, t, x, mode, pending, tr);
+    apply(sys, t_in, x, mode, pending, tr);
     tr.mode_after = mode;
     tr.x_after = x;
     ev.transitions.push_back(std::move(tr));
@@ -200,10 +206,7 @@ void TransitionResolver<S>::apply(ModeSystem<S>& sys, double t, State& x, Mode<n
   if (select) {
     std::array<bool, nc> candidates{};
     for (int i = 0; i < nc; ++i) candidates[i] = next[i].closed();
-    const Mode<nc> chosen = selector_.select(x, u, candidates, at_rest);
-    tr.selection_solutions = selector_.uniqueness().solutions;
-    for (int i = 0; i < nc; ++i)
-      if (at_rest[i]) next[i] = chosen[i];
+    next = select_consistent(sys, t, x, next, at_rest, candidates, at_rest, tr.selection_solutions, tr.sliding_contact);
   }
   mode = next;
 }
@@ -227,11 +230,69 @@ void TransitionResolver<S>::apply_impact(ModeSystem<S>& sys, double t, State& x,
   tr.impulse = r.impulse;
   x = r.x_plus;
   // Contacts left at zero normal velocity: choose their mode at the acceleration level.
-  std::array<bool, nc> candidates{};
+  std::array<bool, nc> candidates{}, all{};
   for (int i = 0; i < nc; ++i) candidates[i] = r.post_mode[i].closed();
+  all.fill(true);
   sys.set_mode(mode);
-  mode = selector_.select(x, sys.input(t, x), candidates);
-  tr.selection_solutions = selector_.uniqueness().solutions;
+  mode = select_consistent(sys, t, x, mode, all, candidates, {}, tr.selection_solutions, tr.sliding_contact);
+}
+
+template <Scene S>
+auto TransitionResolver<S>::select_consistent(ModeSystem<S>& sys, double t, const State& x, const Mode<nc>& base,
+                                              const std::array<bool, nc>& chosen,
+                                              const std::array<bool, nc>& candidates,
+                                              const std::array<bool, nc>& rest, int& solutions, int& sliding)
+    -> Mode<nc> {
+  sliding = -1;
+  const InputLaw<S>& law = sys.input_law();
+  // The modes visited, each selected under the input of the one before (file comment).
+  constexpr int max_rounds = 4;
+  std::array<Mode<nc>, max_rounds + 1> visited;
+  visited[0] = base;
+  Input u = law(t, x, base);
+  for (int k = 0; k < max_rounds; ++k) {
+    const Mode<nc> selected = selector_.select(x, u, candidates, rest);
+    solutions = selector_.uniqueness().solutions;
+    Mode<nc> next = visited[k];
+    for (int i = 0; i < nc; ++i)
+      if (chosen[i]) next[i] = selected[i];
+    if (next == visited[k]) return next;  // consistent under its own input
+    const Input u_next = law(t, x, next);
+    if (u_next == u) return next;  // the law does not see the difference: consistent
+    for (int j = 0; j < k; ++j) {
+      if (!(visited[j] == next)) continue;
+      // A cycle. Sliding: two modes that differ only in one contact, closed in one of them.
+      int differing = -1, count = 0;
+      for (int i = 0; i < nc; ++i)
+        if (!(next[i] == visited[k][i])) {
+          differing = i;
+          ++count;
+        }
+      if (j + 2 == k + 1 && count == 1 && next[differing].closed() != visited[k][differing].closed()) {
+        const Mode<nc>& closed = next[differing].closed() ? next : visited[k];
+        const Mode<nc>& open = next[differing].closed() ? visited[k] : next;
+        sys.set_mode(closed);
+        evaluate_flow(scene_, closed, x, law(t, x, closed), flow_);
+        double force_scale = (flow_.kin.M * flow_.a_free).cwiseAbs().maxCoeff();
+        for (int i = 0; i < nc; ++i) force_scale = std::max(force_scale, std::abs(flow_.force[i].normal));
+        // The floor: clear of the release guard's zero band (guards_due: guard_tolerance times the
+        // force scale), so that the sliding contact is not released by round-off.
+        sys.set_sliding(differing, open, 4 * options_.guard_tolerance * force_scale);
+        sliding = differing;
+        return closed;
+      }
+      SALTUS_CHECK_NUMERICS(false, "no contact mode is consistent with the input law at t = ", t, ": under the input of ",
+                            describe(scene_, visited[k]), " the selection finds ", describe(scene_, next),
+                            ", which it found before under another input (the law switches with the contact mode in a "
+                            "cycle that is not one contact sliding on the surface)");
+    }
+    visited[k + 1] = next;
+    u = u_next;
+  }
+  SALTUS_CHECK_NUMERICS(false, "no contact mode is consistent with the input law at t = ", t, " after ", max_rounds,
+                        " selections, each under the input of the mode the one before selected (last: ",
+                        describe(scene_, visited[max_rounds]), ")");
+  return base;  // not reached
 }
 
 template <Scene S>

@@ -25,6 +25,12 @@ struct Segment {
   Mode<S::nc> mode;
   double t_begin = 0.0, t_end = 0.0;
   DenseOutput<2 * S::nq> x;
+  /// A contact sliding on the surface through the segment under the equivalent control of a
+  /// mode-switching input law (ModeSystem::set_sliding), -1 when none; then the open mode and the
+  /// force floor of the equivalent control, which HybridTrajectory::input applies on the segment.
+  int sliding_contact = -1;
+  Mode<S::nc> sliding_open_mode{};
+  double sliding_force_floor = 0.0;
 };
 
 /// One transition of the (possibly chained) mode changes at an event instant.
@@ -40,6 +46,9 @@ struct Transition {
   /// SelectionUniqueness): 1 when unique or not checked, > 1 when another mode was possible
   /// (the one taken follows ModeSelectionOptions::ambiguity).
   int selection_solutions = 1;
+  /// The contact the transition left sliding on the surface under the equivalent control of a
+  /// mode-switching input law (TransitionResolver::select_consistent), -1 when none.
+  int sliding_contact = -1;
 };
 
 template <Scene S>
@@ -78,6 +87,9 @@ struct SimulationStatistics {
   /// Mode selections (the initial one included) whose acceleration-level problem had several
   /// solutions (see Transition::selection_solutions).
   int ambiguous_selections = 0;
+  /// Events after which a contact slides on the surface under the equivalent control of an input
+  /// law that switches with the contact mode (Transition::sliding_contact).
+  int sliding_events = 0;
 };
 
 template <Scene S>
@@ -91,7 +103,13 @@ class HybridTrajectory {
   std::vector<Event<S>> events;
   InputLaw<S> input;  ///< u(t, x, mode)
   SimulationStatus status = SimulationStatus::Completed;
-  double zeno_time = std::numeric_limits<double>::quiet_NaN();  ///< predicted accumulation time
+  /// s: the predicted accumulation time (status Zeno; NaN otherwise), extrapolated from the
+  /// touchdown times (Simulator, simulator.hpp).
+  double zeno_time = std::numeric_limits<double>::quiet_NaN();
+  /// s: how far zeno_time may be from the accumulation time: the change of the extrapolation
+  /// between its last two orders (simulator.hpp); infinite when too few touchdowns were recorded
+  /// to extrapolate (zeno_time is then the geometric estimate, a guess); NaN without a Zeno status.
+  double zeno_time_uncertainty = std::numeric_limits<double>::quiet_NaN();
   SimulationStatistics statistics;
 
   double t_begin() const { return segments.empty() ? 0.0 : segments.front().t_begin; }

@@ -66,6 +66,7 @@ void write_csv(std::ostream& os, const HybridTrajectory<S>& traj, double dt, con
 ///                    (N s; tangent in the contact's tangent coordinates, as many entries as it
 ///                    has tangents), empty without an impact
 ///   zeno_time        the predicted accumulation time in s, null when not finite
+///   zeno_time_uncertainty  its uncertainty in s (HybridTrajectory), null when not finite
 ///   steps, rhs_evaluations, wall_seconds   the simulation's statistics
 /// Numbers keep their double values (a dump writes the shortest text that reads back exactly);
 /// keys keep this order (nlohmann::ordered_json).
@@ -110,6 +111,9 @@ nlohmann::ordered_json to_json(const HybridTrajectory<S>& traj, const S& scene) 
   j["events"] = std::move(events);
   j["zeno_time"] =
       std::isfinite(traj.zeno_time) ? nlohmann::ordered_json(traj.zeno_time) : nlohmann::ordered_json(nullptr);
+  j["zeno_time_uncertainty"] = std::isfinite(traj.zeno_time_uncertainty)
+                                   ? nlohmann::ordered_json(traj.zeno_time_uncertainty)
+                                   : nlohmann::ordered_json(nullptr);
   j["steps"] = traj.statistics.steps;
   j["rhs_evaluations"] = traj.statistics.rhs_evaluations;
   j["wall_seconds"] = traj.statistics.wall_seconds;

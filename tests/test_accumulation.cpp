@@ -1,0 +1,206 @@
+// Accumulations of impacts whose interval ratio is not constant, against closed forms: the
+// predicted accumulation time (HybridTrajectory::zeno_time) and its stated uncertainty.
+//
+// The scene: balls on springs. Ball i (unit mass, height x_i >= 0 above the ground) is pulled down
+// by gravity and by a spring of stiffness k = omega^2 anchored at the ground: x'' = -g - omega^2 x
+// in flight. Launched from the ground with speed v, it flies on x(s) = (g / omega^2)(cos(omega s)
+// - 1) + (v / omega) sin(omega s), which returns to the ground after
+//     T(v) = (2 / omega) atan(v omega / g)                                   (tan(omega s / 2) = v omega / g)
+// with speed v (energy is conserved in flight), and bounces with e v. So its flights last
+// T(e^k v) (k = 0, 1, ...): the interval ratio T(e^{k+1} v) / T(e^k v) tends to e as v -> 0 but is
+// not constant (1 - (e^2 - 1)(v omega / g)^2 / 3 + ... relative to e), and the accumulation
+// time of a ball launched at t_0 with speed v is the convergent series
+//     t_inf = t_0 + sum_k T(e^k v),
+// summed here to round-off. The balls are decoupled, so two of them bounce each on its own contact;
+// started so that both accumulate at the same instant, their touchdowns alternate between the two
+// contacts, with no constant ratio between consecutive intervals nor between intervals two apart.
+#include "support.hpp"
+
+#include <saltus/hybrid/instantiate.hxx>
+
+#include <cmath>
+
+namespace saltus::testing {
+
+struct SpringBalls {
+  static constexpr int nq = 2, nu = 0, nc = 2;
+  static constexpr double g = 9.81, omega = 10.0, e = 0.8;
+  std::array<ContactSpec, 2> grounds{ContactSpec{"ball 1", Friction::None, 0.0, e},
+                                     ContactSpec{"ball 2", Friction::None, 0.0, e}};
+  const ContactSpec& contact(int i) const { return grounds[i]; }
+  template <class T>
+  MatT<T, 2, 2> mass_matrix(const VecT<T, 2>&) const {
+    return MatT<T, 2, 2>::Identity();
+  }
+  template <class T>
+  VecT<T, 2> bias(const VecT<T, 2>& q, const VecT<T, 2>&) const {
+    return VecT<T, 2>(T(g) + omega * omega * q[0], T(g) + omega * omega * q[1]);
+  }
+  template <class T>
+  MatT<T, 2, 0> input_matrix(const VecT<T, 2>&) const {
+    return {};
+  }
+  template <class T>
+  T gap(int i, const VecT<T, 2>& q) const {
+    return q[i];
+  }
+  template <class T>
+  VecT<T, 2> tangent_position(int, const VecT<T, 2>&) const {
+    return VecT<T, 2>::Zero();
+  }
+
+  static double flight(double v) { return 2.0 / omega * std::atan(v * omega / g); }
+  /// sum_{k >= first} T(e^k v): the time from the launch with speed e^first v to the accumulation.
+  static double remaining(double v, int first = 0) {
+    double sum = 0.0, speed = v * std::pow(e, first);
+    for (int k = 0; k < 400 && speed > 1e-300; ++k, speed *= e) sum += flight(speed);
+    return sum;
+  }
+  /// Height and velocity s seconds after a launch from the ground with speed v.
+  static Vec<2> in_flight(double v, double s) {
+    const double c = g / (omega * omega);
+    return Vec<2>(c * (std::cos(omega * s) - 1) + v / omega * std::sin(omega * s),
+                  -c * omega * std::sin(omega * s) + v * std::cos(omega * s));
+  }
+};
+
+/// A box (0.3 m x 0.1 m, 1 kg) in the vertical plane, q = (x, y, theta), its bottom corners as
+/// planar Coulomb contacts (mu = 0.5) with restitution 0.3; no inputs.
+struct BouncingBox {
+  static constexpr int nq = 3, nu = 0, nc = 2;
+  static constexpr double w = 0.3, h = 0.1;
+  std::array<ContactSpec, 2> corners{ContactSpec{"left", Friction::Planar, 0.5, 0.3},
+                                     ContactSpec{"right", Friction::Planar, 0.5, 0.3}};
+  const ContactSpec& contact(int i) const { return corners[i]; }
+  template <class T>
+  MatT<T, 3, 3> mass_matrix(const VecT<T, 3>&) const {
+    MatT<T, 3, 3> M = MatT<T, 3, 3>::Identity();
+    M(2, 2) = T((w * w + h * h) / 12);
+    return M;
+  }
+  template <class T>
+  VecT<T, 3> bias(const VecT<T, 3>&, const VecT<T, 3>&) const {
+    return VecT<T, 3>(T(0), T(9.81), T(0));
+  }
+  template <class T>
+  MatT<T, 3, 0> input_matrix(const VecT<T, 3>&) const {
+    return {};
+  }
+  template <class T>
+  VecT<T, 2> corner(int i, const VecT<T, 3>& q) const {
+    using std::cos;
+    using std::sin;
+    const double bx = i == 0 ? -w / 2 : w / 2, by = -h / 2;
+    return VecT<T, 2>(q[0] + cos(q[2]) * bx - sin(q[2]) * by, q[1] + sin(q[2]) * bx + cos(q[2]) * by);
+  }
+  template <class T>
+  T gap(int i, const VecT<T, 3>& q) const {
+    return corner(i, q)[1];
+  }
+  template <class T>
+  VecT<T, 2> tangent_position(int i, const VecT<T, 3>& q) const {
+    return VecT<T, 2>(corner(i, q)[0], T(0));
+  }
+};
+
+}  // namespace saltus::testing
+
+SALTUS_INSTANTIATE_SCENE(saltus::testing::SpringBalls)
+SALTUS_INSTANTIATE_SCENE(saltus::testing::BouncingBox)
+
+namespace saltus::testing {
+namespace {
+
+SimulationOptions tight() {
+  SimulationOptions o;
+  o.integrator.relative_tolerance = 1e-12;
+  o.integrator.absolute_tolerance = 1e-14;
+  return o;
+}
+
+// One ball bouncing (ball 2 resting on its spring's anchor at the ground, never touching down again):
+// launched at t = 0 from the ground with v = 2 m/s (v omega / g = 2: far from the geometric regime).
+TEST(Accumulation, OneBallOnASpringAccumulatesAtTheSumOfItsFlights) {
+  const SpringBalls scene;
+  const double v = 2.0, t_inf = SpringBalls::remaining(v);
+  Simulator<SpringBalls> sim(scene, tight());
+  const auto traj = sim.run(Vec<4>(0.0, 0.0, v, 0.0), 0.0, 10.0);
+  ASSERT_EQ(traj.status, SimulationStatus::Zeno);
+  ASSERT_GE(traj.events.size(), 6u);
+  for (std::size_t k = 0; k < 6; ++k)  // the touchdowns of the closed form
+    EXPECT_NEAR(traj.events[k].t, SpringBalls::remaining(v) - SpringBalls::remaining(v, static_cast<int>(k) + 1), 1e-9)
+        << "touchdown " << k;
+  EXPECT_TRUE(std::isfinite(traj.zeno_time_uncertainty));
+  EXPECT_LE(std::abs(traj.zeno_time - t_inf), traj.zeno_time_uncertainty)
+      << "zeno_time " << traj.zeno_time << " closed form " << t_inf << " uncertainty " << traj.zeno_time_uncertainty;
+  // Detected after 12 ratios within 5 %: the geometric sum of the remaining intervals was off by
+  // 7.6e-3 s there; the extrapolation is right to 2.5e-7 s.
+  EXPECT_LT(traj.zeno_time_uncertainty, 2e-6);
+  EXPECT_LT(std::abs(traj.zeno_time - t_inf), 1e-6);
+}
+
+// Two balls whose touchdowns alternate and accumulate at one instant: ball 1 launched at t = 0 with
+// v1 = 1.5 m/s; ball 2 lands first, at tau = T(v1) / 2 with speed w, chosen so that
+// tau + sum_{k >= 1} T(e^k w) = t_inf of ball 1; it started its flight at tau - T(w) < 0. The
+// accumulation is detected with period 2 (the ratio of intervals two apart); the geometric sum was
+// off by 3.8e-2 s there, the extrapolation by 2.4e-4 s.
+TEST(Accumulation, TwoBallsAlternatingAccumulateAtTheirCommonLimit) {
+  const SpringBalls scene;
+  const double v1 = 1.5, t_inf = SpringBalls::remaining(v1);
+  const double first = SpringBalls::flight(v1);  // ball 1's first touchdown
+  // w with tau(w) = t_inf - remaining(w, 1) = first + 0.5 T(e v1) (bisection: tau decreases in w).
+  const double target = 0.5 * first;
+  double lo = 1e-3, hi = 10.0;
+  for (int k = 0; k < 200; ++k) {
+    const double w = 0.5 * (lo + hi);
+    (t_inf - SpringBalls::remaining(w, 1) > target ? lo : hi) = w;
+  }
+  const double w = 0.5 * (lo + hi), tau = t_inf - SpringBalls::remaining(w, 1);
+  ASSERT_GT(SpringBalls::flight(w), tau) << "ball 2 must be in flight at t = 0";
+  const Vec<2> ball2 = SpringBalls::in_flight(w, SpringBalls::flight(w) - tau);
+  Simulator<SpringBalls> sim(scene, tight());
+  const auto traj = sim.run(Vec<4>(0.0, ball2[0], v1, ball2[1]), 0.0, 10.0);
+  ASSERT_EQ(traj.status, SimulationStatus::Zeno);
+  int alternations = 0;
+  for (std::size_t k = 1; k < traj.events.size(); ++k)
+    alternations += traj.events[k].guards().at(0).contact != traj.events[k - 1].guards().at(0).contact;
+  EXPECT_EQ(alternations + 1, static_cast<int>(traj.events.size())) << "the touchdowns alternate";
+  EXPECT_TRUE(std::isfinite(traj.zeno_time_uncertainty));
+  EXPECT_LE(std::abs(traj.zeno_time - t_inf), traj.zeno_time_uncertainty)
+      << "zeno_time " << traj.zeno_time << " closed form " << t_inf << " uncertainty " << traj.zeno_time_uncertainty;
+  EXPECT_LT(traj.zeno_time_uncertainty, 2e-3);
+  EXPECT_LT(std::abs(traj.zeno_time - t_inf), 1e-3);
+}
+
+// A box dropped tilted by 0.02 rad (lowest corner 5 cm above the ground) bounces on its corners with
+// e_n = 0.3: the intervals between touchdowns shrink by about 0.3 per bounce, so 12 ratios would need
+// intervals down to 5e-7 of the first, below the time resolution of the event location. The run
+// ends with status Zeno before that (4 ratios suffice once the intervals are below 1e3 simultaneity
+// windows), whatever zeno_bounces, instead of "events stall" at one instant; never below the ground.
+TEST(Accumulation, BoxBouncingOnItsCornersWithLowRestitutionEndsInAnAccumulation) {
+  const BouncingBox box;
+  Vec<6> x0 = Vec<6>::Zero();
+  x0[1] = 0.05 + 0.5 * BouncingBox::h + 0.5 * BouncingBox::w * std::sin(0.02);
+  x0[2] = 0.02;
+  std::vector<double> predicted;
+  for (int bounces : {12, 40}) {
+    SimulationOptions o;
+    o.zeno_bounces = bounces;
+    Simulator<BouncingBox> sim(box, o);
+    const auto traj = sim.run(x0, 0.0, 2.0);
+    ASSERT_EQ(traj.status, SimulationStatus::Zeno) << "zeno_bounces " << bounces;
+    ASSERT_GE(traj.events.size(), 6u);
+    const double last = traj.events.back().t;
+    EXPECT_GT(traj.zeno_time, last);
+    EXPECT_LT(traj.zeno_time - last, 1e-5);
+    EXPECT_LT(traj.zeno_time_uncertainty, 1e-9);
+    for (const auto& seg : traj.segments)
+      for (const auto& piece : seg.x.pieces())
+        for (int i = 0; i < 2; ++i) EXPECT_GE(box.gap(i, Vec<3>(piece.value(piece.t1).head<3>())), -1e-9);
+    predicted.push_back(traj.zeno_time);
+  }
+  EXPECT_EQ(predicted[0], predicted[1]);
+}
+
+}  // namespace
+}  // namespace saltus::testing
