@@ -159,7 +159,7 @@ py::dict plank_box_flat_landing(py::object progress, int max_edits, int runs) {
     if (discovery->schedule_found) {
       RefinementOptions options = Ocp::refinement();
       options.progress = &out;
-      options.max_edits = max_edits;
+      options.edits.max_edits = max_edits;
       refined.emplace(refine_schedule(scene, Ocp{}, Ocp::refinement_horizon(), discovery->discovered.guess, options));
     }
     if (refined && refined->converged) {
