@@ -36,7 +36,13 @@ inline MpccSolution solve_refinement_nlp(const Mpcc& nlp, const RefinementIpopt&
 template <Scene S, class Ocp>
 void read_solution(const S& scene, const ScheduleRefinementNlp<S, Ocp>& nlp, const MpccSolution& sol,
                    RefinementResult<S>& out) {
-  const Eigen::VectorXd& x = sol.x;
+  // Ipopt meets the ordering rows t_p <= t_{p+1} to its constraint tolerance, so a phase that
+  // wants to vanish can end a few 1e-12 s before it starts (measured: -2.5e-12 s on the plank-box
+  // after a "vanish" edit, where the trajectory's segment then had t_end < t_begin and every
+  // sampling of it threw): such a phase is read as of zero length.
+  Eigen::VectorXd x = sol.x;
+  for (int p = 0; p < nlp.phase_count(); ++p)
+    x[nlp.time_index(p + 1)] = std::max(x[nlp.time_index(p + 1)], x[nlp.time_index(p)]);
   out.schedule = nlp.schedule();
   out.event_times.clear();
   for (int p = 1; p < nlp.phase_count(); ++p) out.event_times.push_back(x[nlp.time_index(p)]);
