@@ -273,6 +273,15 @@ def plot_plank_box_analysis(report, figures):
     return out, d
 
 
+def finish(fig, ax, figures, name, xlabel, ylabel):
+    """Labels, legend and log grid of a Monte Carlo figure; saves it as `name`."""
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+    ax.legend(fontsize=7)
+    ax.grid(alpha=0.3, which="both")
+    return save(fig, figures, name)
+
+
 def plot_deviations(figures, analysis):
     """Each Monte Carlo run's deviation over time against its first-order prediction."""
     dev = analysis.get("monte_carlo", {}).get("deviations")
@@ -291,11 +300,7 @@ def plot_deviations(figures, analysis):
     ax.plot([], [], color="tab:red", label="simulated, other events")
     ax.plot([], [], color="0.55", ls="--", label="first order (same deviation)")
     ax.plot([], [], color="tab:blue", ls=":", label="reference events")
-    ax.set_xlabel("t [s]")
-    ax.set_ylabel("|x(t) - x_ref(t)| / |eps d|")
-    ax.legend(fontsize=7)
-    ax.grid(alpha=0.3, which="both")
-    name = save(fig, figures, "plank_box_deviations.png")
+    name = finish(fig, ax, figures, "plank_box_deviations.png", "t [s]", "|x(t) - x_ref(t)| / |eps d|")
     return name, ("plank-box tracking analysis: every Monte Carlo run's deviation from the reference over time "
                   "(relative to its initial deviation, the plant compared with the reference segment of its own "
                   "phase), against the first-order prediction of the same initial deviation (dashed); the "
@@ -320,11 +325,8 @@ def plot_amplifications(figures, analysis):
     upper = analysis.get("upper_bound")
     if isinstance(upper, (int, float)):
         ax.axvline(upper, color="tab:blue", lw=0.8, label="stability check's upper bound")
-    ax.set_xlabel("first-order amplification |z(T)| / |d|")
-    ax.set_ylabel("simulated |x(T) - x_ref(T)| / |eps d|")
-    ax.legend(fontsize=7)
-    ax.grid(alpha=0.3, which="both")
-    name = save(fig, figures, "plank_box_monte_carlo.png")
+    name = finish(fig, ax, figures, "plank_box_monte_carlo.png", "first-order amplification |z(T)| / |d|",
+                  "simulated |x(T) - x_ref(T)| / |eps d|")
     return name, ("plank-box tracking analysis: each Monte Carlo run's simulated amplification of its initial "
                   "deviation at T against the first-order prediction of the same deviation (on the dashed line "
                   "they agree), and the stability check's upper bound a(T).")
