@@ -110,6 +110,46 @@ TEST(RefinementNlp, IpoptDerivativeCheckerFindsNoError) {
   EXPECT_TRUE(nlp.complementarity_pairs().empty());
 }
 
+TEST(RefinementNlp, IpoptDerivativeCheckerFindsNoErrorWithFiveStages) {
+  // The tableau of n_s = 5 (order 9) is built, not tabulated (discretisation/radau.hpp): the NLP's
+  // collocation rows and their exact derivatives must not depend on n_s <= 3.
+  RefinementOptions o;
+  o.grid.max_element_duration = 0.5;
+  o.grid.stages = 5;
+  const ScheduleRefinementNlp<PointMass, scenes::PointMassToTheTarget> nlp(frictional_mass(), {}, Case::refinement_horizon(),
+                                                                           hand_guess(), o);
+  Eigen::VectorXd x(nlp.variable_count());
+  nlp.initial_point(x);
+  const DerivativeCheckReport r = check_derivatives(nlp, x, 1e-7, 1e-5);
+  EXPECT_EQ(r.errors, 0) << r.output;
+  o.grid.stages = 6;  // above the dense output's degree
+  expect_invalid([&] { o.validate(); }, {"grid.stages", "degree <= 5", "got 6"});
+}
+
+TEST(RefinementNlp, APhaseEndingBeforeItsStartIsReadAsOfZeroLength) {
+  // Ipopt meets the ordering rows t_p <= t_{p+1} only to its constraint tolerance: a phase that
+  // wants to vanish can end a few 1e-12 s before it starts (measured on the plank-box after a vanish
+  // edit). The reading makes the times monotone, so the refined trajectory's segments stay ordered
+  // and can be sampled at every event.
+  RefinementOptions o;
+  o.grid.max_element_duration = 0.25;
+  o.grid.stages = 2;
+  const PointMass mass = frictional_mass();
+  const ScheduleRefinementNlp<PointMass, scenes::PointMassToTheTarget> nlp(mass, {}, Case::refinement_horizon(), hand_guess(), o);
+  MpccSolution sol;
+  sol.x.resize(nlp.variable_count());
+  nlp.initial_point(sol.x);
+  const double end = sol.x[nlp.time_index(nlp.phase_count())];
+  sol.x[nlp.time_index(nlp.phase_count() - 1)] = end + 2.5e-12;  // the last phase ends 2.5e-12 s before it starts
+  RefinementResult<PointMass> r;
+  detail::read_solution(mass, nlp, sol, r);
+  ASSERT_EQ(r.event_times.size(), 1u);
+  EXPECT_EQ(r.trajectory.t_end(), r.event_times[0]);  // the later time is raised to the earlier
+  EXPECT_NEAR(r.trajectory.t_end(), end, 1e-11);
+  for (const auto& seg : r.trajectory.segments) EXPECT_LE(seg.t_begin, seg.t_end);
+  EXPECT_NO_THROW(r.trajectory.state_at(r.event_times[0]));
+}
+
 void build_guiding_nlp(const PointMass& mass, const ScheduleGuess<PointMass>& guess) {
   const ScheduleRefinementNlp<PointMass, scenes::PointMassToTheTarget> nlp(mass, {}, Case::refinement_horizon(), guess, {});
 }

@@ -35,24 +35,68 @@ using scenes::PlankBox;
 using scenes::PointMass;
 
 TEST(Radau, TableausSatisfyTheSimplifyingConditions) {
-  for (int ns = 1; ns <= 3; ++ns) {
+  for (int ns = 1; ns <= max_radau_stages; ++ns) {
     const RadauIIA t = radau_iia(ns);
     // B(2 ns - 1): the quadrature is exact for polynomials of degree 2 ns - 2.
     for (int k = 1; k <= 2 * ns - 1; ++k) {
       double s = 0.0;
       for (int i = 0; i < ns; ++i) s += t.b[i] * std::pow(t.c[i], k - 1);
-      EXPECT_NEAR(s, 1.0 / k, 1e-14) << "n_s " << ns << " k " << k;
+      EXPECT_NEAR(s, 1.0 / k, 1e-13) << "n_s " << ns << " k " << k;
     }
     // C(ns): each stage integrates polynomials of degree ns - 1 exactly.
     for (int i = 0; i < ns; ++i)
       for (int k = 1; k <= ns; ++k) {
         double s = 0.0;
         for (int j = 0; j < ns; ++j) s += t.a(i, j) * std::pow(t.c[j], k - 1);
-        EXPECT_NEAR(s, std::pow(t.c[i], k) / k, 1e-14) << "n_s " << ns << " stage " << i << " k " << k;
+        EXPECT_NEAR(s, std::pow(t.c[i], k) / k, 1e-13) << "n_s " << ns << " stage " << i << " k " << k;
       }
     EXPECT_DOUBLE_EQ(t.c[ns - 1], 1.0);
+    for (int i = 1; i < ns; ++i) EXPECT_LT(t.c[i - 1], t.c[i]) << "n_s " << ns;
+    EXPECT_GT(t.c[0], 0.0);
   }
-  EXPECT_THROW(radau_iia(4), InvalidArgument);
+  EXPECT_THROW(radau_iia(0), InvalidArgument);
+  EXPECT_THROW(radau_iia(max_radau_stages + 1), InvalidArgument);
+}
+
+TEST(Radau, TheConstructionReproducesHairerWannersTable) {
+  // Hairer & Wanner II, Table IV.5.5, the closed form of n_s = 3 (and n_s = 2: c = (1/3, 1)),
+  // against the construction that radau_iia uses for n_s >= 4.
+  const double r6 = std::sqrt(6.0);
+  Eigen::Matrix3d a;
+  a << (88.0 - 7.0 * r6) / 360.0, (296.0 - 169.0 * r6) / 1800.0, (-2.0 + 3.0 * r6) / 225.0,  //
+      (296.0 + 169.0 * r6) / 1800.0, (88.0 + 7.0 * r6) / 360.0, (-2.0 - 3.0 * r6) / 225.0,    //
+      (16.0 - r6) / 36.0, (16.0 + r6) / 36.0, 1.0 / 9.0;
+  const RadauIIA t = detail::constructed_radau_iia(3);
+  EXPECT_LT((t.a - a).cwiseAbs().maxCoeff(), 1e-15);
+  EXPECT_EQ(radau_iia(3).a, a);
+  EXPECT_NEAR(t.c[0], (4.0 - r6) / 10.0, 1e-15);
+  EXPECT_NEAR(t.c[1], (4.0 + r6) / 10.0, 1e-15);
+  const RadauIIA two = detail::constructed_radau_iia(2);
+  EXPECT_NEAR(two.c[0], 1.0 / 3.0, 1e-15);
+  EXPECT_NEAR(two.a(0, 0), 5.0 / 12.0, 1e-15);
+  EXPECT_NEAR(two.a(0, 1), -1.0 / 12.0, 1e-15);
+  EXPECT_DOUBLE_EQ(detail::constructed_radau_iia(1).a(0, 0), 1.0);
+}
+
+TEST(Radau, ConvergesAtItsOrderOnALinearTestEquation) {
+  // y' = lambda y, y(0) = 1, over [0, 1] with N steps: the global error of Radau IIA is
+  // O(h^(2 n_s - 1)), so doubling N divides it by about 2^(2 n_s - 1). The stage equations are linear:
+  // (I - h lambda A) K = lambda y 1, y_next = y + h b.K.
+  const double lambda = -2.0;
+  auto error = [&](int ns, int steps) {
+    const RadauIIA t = radau_iia(ns);
+    const double h = 1.0 / steps;
+    const Eigen::MatrixXd m = Eigen::MatrixXd::Identity(ns, ns) - h * lambda * t.a;
+    const Eigen::VectorXd k_per_y = m.partialPivLu().solve(Eigen::VectorXd::Constant(ns, lambda));
+    double y = 1.0;
+    for (int n = 0; n < steps; ++n) y += h * t.b.dot(k_per_y) * y;
+    return std::abs(y - std::exp(lambda));
+  };
+  for (int ns = 2; ns <= 5; ++ns) {
+    const int coarse = ns <= 3 ? 8 : 2;
+    const double rate = std::log2(error(ns, coarse) / error(ns, 2 * coarse));
+    EXPECT_NEAR(rate, 2 * ns - 1, 0.35) << "n_s " << ns;
+  }
 }
 
 // Regions of the plank-box (two planar-friction contacts): the ODE field only when both contacts

@@ -1,6 +1,8 @@
 // The hopper over three holes refined from a footstep schedule (docs/refinement.md, "Hopper").
 //
-//   hopper_refinement [stance [h [max_iter [end_stance [cone_margin]]]]]   (defaults 0.45 0.02 1000 0.3 0)
+//   hopper_refinement [stance [h [max_iter [end_stance [cone_margin [n_s [print_level [then_n_s]]]]]]]]
+//   (defaults 0.45 0.02 1000 0.3 0 3 0 0; print_level is Ipopt's; then_n_s > 0: a second refinement
+//   with that many stages, started from the first one's result, the order continuation)
 //
 // Discovery by the time-freezing homotopy gives no usable schedule on this OCP (docs/refinement.md,
 // "Hopper over three holes"), so the schedule here is a user's guess, the footsteps the holes
@@ -14,7 +16,8 @@
 // z = 0.54) and the joint angles go linearly from the lift-off pose to the touchdown pose;
 // velocities by central differences; zero torques. The OCP is scenes/hopper_holes.hpp as it is
 // (T = 2.5 s, |u| <= 60, the 11 path rows at the full holes, the start at rest, the target
-// q(T) = (3, 0.4, 0, 0)). Prints the refinement's progress, its result and its checks; writes the
+// q(T) = (3, 0.4, 0, 0)). Prints the refinement's progress, its result, where each stance's closed
+// contact drifts (largest |gap| and |normal velocity| over 200 samples) and its checks; writes the
 // result's JSON to hopper_refinement.json. About 4 minutes on one thread with the defaults
 // (docs/refinement.md, "Hopper over three holes").
 #include "scenes/all_scenes.hpp"
@@ -22,6 +25,7 @@
 
 #include <saltus/timefreezing/refinement/refinement.hxx>
 #include <saltus/timefreezing/refinement/refinement_io.hpp>
+#include <saltus/timefreezing/refinement/schedule_extraction.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -116,6 +120,9 @@ int main(int argc, char** argv) {
   const int max_iter = argc > 3 ? std::atoi(argv[3]) : 1000;
   const double end_stance = argc > 4 ? std::atof(argv[4]) : 0.3;
   const double cone_margin = argc > 5 ? std::atof(argv[5]) : 0.0;  // RefinementOptions::stick_cone_margin
+  const int stages = argc > 6 ? std::atoi(argv[6]) : 3;              // RefinementGrid::stages
+  const int print_level = argc > 7 ? std::atoi(argv[7]) : 0;         // RefinementIpopt::print_level
+  const int then_stages = argc > 8 ? std::atoi(argv[8]) : 0;
   const Hopper hopper{};
   const ScheduleGuess<Hopper> guess = footstep_guess(hopper, stance, end_stance);
   std::cout << "schedule: " << describe(hopper, guess.schedule) << "\n";
@@ -127,10 +134,18 @@ int main(int argc, char** argv) {
   RefinementOptions options;
   options.progress = &std::cout;
   options.grid.max_element_duration = h;
+  options.grid.stages = stages;
+  options.ipopt.print_level = print_level;
   options.ipopt.max_iter = max_iter;
   options.edits.max_edits = 0;
   options.stick_cone_margin = cone_margin;
-  const RefinementResult<Hopper> r = refine_schedule(hopper, Ocp{}, horizon, guess, options);
+  RefinementResult<Hopper> r = refine_schedule(hopper, Ocp{}, horizon, guess, options);
+  if (then_stages > 0) {
+    std::cout << "first solve (n_s = " << stages << "): objective " << r.objective << ", contact drift " << r.contact_drift
+              << ", per-phase re-simulation " << r.phase_resim_max_error << ", " << r.seconds << " s\n";
+    options.grid.stages = then_stages;
+    r = refine_schedule(hopper, Ocp{}, horizon, extract_schedule(hopper, r.trajectory).guess, options);
+  }
   std::cout << r.stage << " (" << r.message << ")\n  objective " << r.objective << ", mode validity "
             << r.mode_validity_violation << ", path rows " << r.path_violation << ", target " << r.terminal_violation
             << ", contact drift " << r.contact_drift
@@ -138,6 +153,23 @@ int main(int argc, char** argv) {
             << r.open_loop.note << ", " << r.seconds << " s\n  events:";
   for (double t : r.event_times) std::cout << " " << t;
   std::cout << "\n";
+  // Where the closed contact drifts: |gap| and |normal velocity| of the foot over each stance of
+  // the refined trajectory (its dense output, 200 samples per phase).
+  for (std::size_t k = 0; k < r.schedule.phases.size() && k < r.trajectory.segments.size(); ++k) {
+    if (!r.schedule.phases[k][0].closed()) continue;
+    const auto& seg = r.trajectory.segments[k];
+    double gap = 0, zeta = 0, t_gap = seg.t_begin, t_zeta = seg.t_begin;
+    for (int i = 0; i <= 200; ++i) {
+      const double t = seg.t_begin + (seg.t_end - seg.t_begin) * i / 200.0;
+      const VecT<double, 8> x = r.trajectory.state(static_cast<int>(k), t);
+      Kinematics<Hopper, double> kin;
+      evaluate_kinematics<Hopper, double>(hopper, VecT<double, 4>(x.head<4>()), VecT<double, 4>(x.tail<4>()), kin);
+      if (std::abs(kin.contacts[0].gap) > gap) gap = std::abs(kin.contacts[0].gap), t_gap = t;
+      if (std::abs(kin.contacts[0].zeta_n) > zeta) zeta = std::abs(kin.contacts[0].zeta_n), t_zeta = t;
+    }
+    std::cout << "  stance phase " << k << " [" << seg.t_begin << ", " << seg.t_end << "]: max |gap| " << gap << " at "
+              << t_gap << ", max |normal velocity| " << zeta << " at " << t_zeta << "\n";
+  }
   for (const PhaseResimulation& p : r.phase_resimulation)
     std::cout << "  phase " << p.phase << ": " << p.max_error << " (x+ " << p.x_plus_error << ") " << p.note << "\n";
   std::ofstream("hopper_refinement.json") << to_json(hopper, r).dump(1) << "\n";

@@ -11,10 +11,17 @@
 
 namespace saltus::timefreezing {
 
+/// The FESD NLP's tableau: Radau IIA with n_s in 1 .. 3, the stage counts its cross complementarity
+/// and step equilibration are tested with (the refinement takes more, refinement_options.hpp).
+inline RadauIIA fesd_radau_tableau(int n_s) {
+  SALTUS_REQUIRE(n_s >= 1 && n_s <= 3, "FESD: grid.stages must be 1, 2 or 3, got ", n_s);
+  return radau_iia(n_s);
+}
+
 template <Scene S, class Ocp>
 FesdMpcc<S, Ocp>::FesdMpcc(const System& system, const Ocp& ocp, const Vec<nq>& q0, const Vec<nq>& v0,
                            const FesdOptions& options)
-    : system_(system), ocp_(ocp), options_(options), tableau_(radau_iia(options.grid.stages)) {
+    : system_(system), ocp_(ocp), options_(options), tableau_(fesd_radau_tableau(options.grid.stages)) {
   require_finite(q0, "FESD: initial configuration q0");
   require_finite(v0, "FESD: initial velocity v0");
   check_options();

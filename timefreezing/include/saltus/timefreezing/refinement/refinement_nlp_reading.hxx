@@ -7,7 +7,11 @@
 namespace saltus::timefreezing {
 
 inline void RefinementOptions::validate() const {
-  SALTUS_REQUIRE(grid.stages >= 1 && grid.stages <= 3, "refinement: grid.stages must be 1, 2 or 3, got ", grid.stages);
+  // The refined trajectory holds each element's collocation polynomial (degree n_s) as one dense-output piece.
+  constexpr int max_stages = PolynomialPiece<1>::max_degree;
+  SALTUS_REQUIRE(grid.stages >= 1 && grid.stages <= max_stages, "refinement: grid.stages must be in 1 .. ", max_stages,
+                 " (the refined trajectory's dense output holds polynomials of degree <= ", max_stages, "), got ",
+                 grid.stages);
   SALTUS_REQUIRE(std::isfinite(grid.max_element_duration) && grid.max_element_duration > 0.0,
                  "refinement: grid.max_element_duration must be finite and > 0, got ", grid.max_element_duration);
   SALTUS_REQUIRE(grid.min_elements >= 1, "refinement: grid.min_elements must be >= 1, got ", grid.min_elements);

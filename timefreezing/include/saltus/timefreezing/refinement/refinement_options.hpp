@@ -12,7 +12,8 @@ namespace saltus::timefreezing {
 /// The collocation grid of the refinement: per phase, N_p elements of equal length d_p / N_p
 /// (d_p the phase's duration, a variable), each a Radau IIA step (discretisation/radau.hpp).
 struct RefinementGrid {
-  int stages = 3;                      ///< n_s of Radau IIA (1, 2, 3; order 2 n_s - 1)
+  /// n_s of Radau IIA, 1 .. 5 (order 2 n_s - 1; 5: the degree of the dense output's pieces).
+  int stages = 3;
   /// N_p = max(min_elements, ceil(d_p,guess / max_element_duration)) [s], > 0.
   double max_element_duration = 0.02;
   int min_elements = 2;                ///< >= 1
