@@ -28,6 +28,9 @@ void bind_simulation(py::module_& m) {
       .def_readonly("t_end", &PySegment::t_end)
       .def_readonly("times", &PySegment::times, "(n,) s: the integrator's step points, t_begin first, t_end last")
       .def_readonly("states", &PySegment::states, "(n, nx): x = (q, v) at `times`")
+      .def_readonly("sliding_contact", &PySegment::sliding_contact,
+                    "the contact that slides on its surface through the segment under the equivalent control of a "
+                    "mode-switching input law (Filippov sliding), -1 when none")
       .def("__repr__", [](const PySegment& s) {
         return detail::concat("Segment(", s.mode, " on [", s.t_begin, ", ", s.t_end, "] s, ", s.times.size(),
                               " points)");

@@ -38,6 +38,12 @@ def test_bouncing_ball_ends_zeno_at_the_closed_form_time(ball_trajectory):
     assert ball_trajectory.status == "zeno"
     assert abs(ball_trajectory.zeno_time - t_inf) < 1e-6
     assert len(ball_trajectory.events) > 12
+    # the stated uncertainty bounds the distance to the closed form
+    assert 0.0 <= ball_trajectory.zeno_time_uncertainty < 1e-6
+    assert abs(ball_trajectory.zeno_time - t_inf) <= max(ball_trajectory.zeno_time_uncertainty, 1e-12)
+    stats = ball_trajectory.statistics
+    assert stats["sliding_events"] == 0 and stats["ambiguous_selections"] == 0
+    assert all(s.sliding_contact == -1 for s in ball_trajectory.segments)
 
 
 def test_segments_are_arrays_that_meet_the_events(ball_trajectory):

@@ -76,6 +76,9 @@ struct PySegment {
   double t_begin = 0.0, t_end = 0.0;
   Eigen::VectorXd times;  ///< (n,) s: the integrator's step points, t_begin first, t_end last
   RowMatrix states;       ///< (n, nx): x = (q, v) at those times
+  /// The contact sliding on its surface through the segment under the equivalent control of a
+  /// mode-switching input law (Segment::sliding_contact), -1 when none.
+  int sliding_contact = -1;
 };
 
 /// An event as Python sees it.
@@ -99,7 +102,7 @@ template <Scene S>
 PySegment segment_of(const PyTrajectory<S>& t, int i) {
   const HybridTrajectory<S>& traj = t.trajectory;
   const Segment<S>& s = traj.segments[i];
-  PySegment out{describe(*t.scene, s.mode), contact_modes(s.mode), s.t_begin, s.t_end, {}, {}};
+  PySegment out{describe(*t.scene, s.mode), contact_modes(s.mode), s.t_begin, s.t_end, {}, {}, s.sliding_contact};
   const auto& pieces = s.x.pieces();
   if (pieces.empty()) {  // record_dense_output = false: the end points only
     const auto begin = i > 0 ? traj.events[i - 1].x_plus : traj.state(i, s.t_begin);
@@ -240,6 +243,10 @@ void bind_trajectory(py::module_& m, const std::string& scene_name, const char* 
                              "'completed', 'zeno' (accumulating impacts) or 'max-events'")
       .def_property_readonly("zeno_time", [](const T& t) { return t.trajectory.zeno_time; },
                              "s: the predicted accumulation time (NaN unless status is 'zeno')")
+      .def_property_readonly("zeno_time_uncertainty", [](const T& t) { return t.trajectory.zeno_time_uncertainty; },
+                             "s: how far zeno_time may be from the accumulation time (the change of its "
+                             "extrapolation between the last two orders; inf: too few touchdowns, zeno_time is "
+                             "the geometric estimate; NaN unless status is 'zeno')")
       .def_property_readonly("t_begin", [](const T& t) { return t.trajectory.t_begin(); })
       .def_property_readonly("t_end", [](const T& t) { return t.trajectory.t_end(); })
       .def_property_readonly("final_state", [](const T& t) { return Eigen::VectorXd(t.trajectory.final_state()); },
@@ -253,9 +260,13 @@ void bind_trajectory(py::module_& m, const std::string& scene_name, const char* 
             d["rejected_steps"] = s.rejected_steps;
             d["rhs_evaluations"] = s.rhs_evaluations;
             d["wall_seconds"] = s.wall_seconds;
+            d["ambiguous_selections"] = s.ambiguous_selections;
+            d["sliding_events"] = s.sliding_events;
             return d;
           },
-          "integrator steps, rejected steps, right-hand side evaluations and the simulation's wall time [s]")
+          "integrator steps, rejected steps, right-hand side evaluations, the simulation's wall time [s], "
+          "mode selections with several solutions, and events after which a contact slides on its surface "
+          "under the equivalent control of a mode-switching input law")
       .def_property_readonly(
           "segments",
           [](const T& t) {
