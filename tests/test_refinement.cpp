@@ -126,6 +126,38 @@ TEST(RefinementNlp, IpoptDerivativeCheckerFindsNoErrorWithFiveStages) {
   expect_invalid([&] { o.validate(); }, {"grid.stages", "degree <= 5", "got 6"});
 }
 
+TEST(RefinementNlp, ClusteredElementsShortenTowardTheEvents) {
+  // RefinementGrid::end_clustering = 1: the element boundaries of each phase at the Chebyshev-Lobatto
+  // points (1 - cos(pi k / N)) / 2; the derivatives stay exact.
+  RefinementOptions o;
+  o.grid.max_element_duration = 0.125;
+  o.grid.stages = 3;
+  o.grid.end_clustering = 1.0;
+  const ScheduleRefinementNlp<PointMass, scenes::PointMassToTheTarget> nlp(frictional_mass(), {}, Case::refinement_horizon(),
+                                                                           hand_guess(), o);
+  const double pi = std::acos(-1.0);
+  for (int p = 0; p < nlp.phase_count(); ++p) {
+    const int N = nlp.elements_in(p), first = nlp.first_element(p);
+    ASSERT_GE(N, 4);
+    double sum = 0.0;
+    for (int e = first; e < first + N; ++e) {
+      const int k = e - first;
+      EXPECT_NEAR(nlp.element_begin_fraction(e), 0.5 * (1.0 - std::cos(pi * k / N)), 1e-15);
+      EXPECT_GT(nlp.element_length_fraction(e), 0.0);
+      sum += nlp.element_length_fraction(e);
+    }
+    EXPECT_NEAR(sum, 1.0, 1e-15);
+    EXPECT_LT(nlp.element_length_fraction(first), 0.5 / N);  // the ends: about pi^2 / (4 N^2)
+    EXPECT_LT(nlp.element_length_fraction(first + N - 1), 0.5 / N);
+  }
+  Eigen::VectorXd x(nlp.variable_count());
+  nlp.initial_point(x);
+  const DerivativeCheckReport r = check_derivatives(nlp, x, 1e-7, 1e-5);
+  EXPECT_EQ(r.errors, 0) << r.output;
+  o.grid.end_clustering = 1.5;
+  expect_invalid([&] { o.validate(); }, {"grid.end_clustering", "[0, 1]", "1.5"});
+}
+
 TEST(RefinementNlp, APhaseEndingBeforeItsStartIsReadAsOfZeroLength) {
   // Ipopt meets the ordering rows t_p <= t_{p+1} only to its constraint tolerance: a phase that
   // wants to vanish can end a few 1e-12 s before it starts (measured on the plank-box after a vanish

@@ -1,8 +1,9 @@
 // The hopper over three holes refined from a footstep schedule (docs/refinement.md, "Hopper").
 //
-//   hopper_refinement [stance [h [max_iter [end_stance [cone_margin [n_s [print_level [then_n_s]]]]]]]]
-//   (defaults 0.45 0.02 1000 0.3 0 3 0 0; print_level is Ipopt's; then_n_s > 0: a second refinement
-//   with that many stages, started from the first one's result, the order continuation)
+//   hopper_refinement [stance [h [max_iter [end_stance [cone_margin [n_s [print_level [then_n_s [end_clustering]]]]]]]]]
+//   (defaults 0.45 0.02 1000 0.3 0 3 0 0 0; print_level is Ipopt's; then_n_s > 0: a second refinement
+//   with that many stages, started from the first one's result, the order continuation;
+//   end_clustering: RefinementGrid::end_clustering)
 //
 // Discovery by the time-freezing homotopy gives no usable schedule on this OCP (docs/refinement.md,
 // "Hopper over three holes"), so the schedule here is a user's guess, the footsteps the holes
@@ -123,6 +124,7 @@ int main(int argc, char** argv) {
   const int stages = argc > 6 ? std::atoi(argv[6]) : 3;              // RefinementGrid::stages
   const int print_level = argc > 7 ? std::atoi(argv[7]) : 0;         // RefinementIpopt::print_level
   const int then_stages = argc > 8 ? std::atoi(argv[8]) : 0;
+  const double end_clustering = argc > 9 ? std::atof(argv[9]) : 0.0;
   const Hopper hopper{};
   const ScheduleGuess<Hopper> guess = footstep_guess(hopper, stance, end_stance);
   std::cout << "schedule: " << describe(hopper, guess.schedule) << "\n";
@@ -136,6 +138,7 @@ int main(int argc, char** argv) {
   options.grid.max_element_duration = h;
   options.grid.stages = stages;
   options.ipopt.print_level = print_level;
+  options.grid.end_clustering = end_clustering;
   options.ipopt.max_iter = max_iter;
   options.edits.max_edits = 0;
   options.stick_cone_margin = cone_margin;

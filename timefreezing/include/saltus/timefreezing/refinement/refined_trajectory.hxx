@@ -56,7 +56,7 @@ InputLaw<S> refined_input_law(const ScheduleRefinementNlp<S, Ocp>& nlp, const Ei
   for (int e = 0; e < nlp.element_count(); ++e) {
     const int p = nlp.phase_of(e);
     const double t0 = x[nlp.time_index(p)], t1 = x[nlp.time_index(p + 1)];
-    table->t.push_back(t0 + (t1 - t0) * double(e - nlp.first_element(p)) / double(nlp.elements_in(p)));
+    table->t.push_back(nlp.element_start_time(e, t0, t1));
     table->decision.push_back(x.template segment<nu>(nlp.control_index(e)));
   }
   element_times = table->t;
@@ -83,11 +83,11 @@ HybridTrajectory<S> refined_trajectory(const S& scene, const ScheduleRefinementN
     seg.mode = nlp.schedule().phases[static_cast<std::size_t>(p)];
     seg.t_begin = x[nlp.time_index(p)];
     seg.t_end = x[nlp.time_index(p + 1)];
-    const double h = (seg.t_end - seg.t_begin) / nlp.elements_in(p);
-    for (int e = nlp.first_element(p); e < nlp.first_element(p) + nlp.elements_in(p) && h > 0.0; ++e) {
+    for (int e = nlp.first_element(p); e < nlp.first_element(p) + nlp.elements_in(p) && seg.t_end > seg.t_begin; ++e) {
+      const double h = (seg.t_end - seg.t_begin) * nlp.element_length_fraction(e);
       std::vector<Vec<nx>> stages;
       for (int r = 0; r < ns; ++r) stages.push_back(x.template segment<nx>(nlp.stage_index(e, r)));
-      const double t_start = seg.t_begin + h * (e - nlp.first_element(p));
+      const double t_start = nlp.element_start_time(e, seg.t_begin, seg.t_end);
       seg.x.append(detail::collocation_piece<nx>(t_start, h, nlp.tableau(), x.template segment<nx>(nlp.element_start_index(e)), stages));
     }
     traj.segments.push_back(std::move(seg));

@@ -165,6 +165,17 @@ class ScheduleRefinementNlp final : public Mpcc {
   int element_count() const { return static_cast<int>(element_phase_.size()); }
   int stages() const { return tableau_.stages; }
   int elements_in(int p) const { return phase_elements_[static_cast<std::size_t>(p)]; }
+  /// Element e's start and length as fractions of its phase's duration (RefinementGrid::end_clustering),
+  /// held times N_p so that the uniform grid's fractions are j / N_p and 1 / N_p to the last bit.
+  double element_begin_fraction(int e) const { return element_begin_scaled_[std::size_t(e)] / elements_in(phase_of(e)); }
+  double element_length_fraction(int e) const { return element_length_scaled_[std::size_t(e)] / elements_in(phase_of(e)); }
+  /// The fraction of its phase at stage point (element e, point r): (B_e + c_r L_e) / N_p, B_e / N_p
+  /// for the start (r = -1), with B_e, L_e the element's start and length times N_p.
+  double point_theta(int e, int r) const;
+  /// t0 + (t1 - t0) B_e / N_p: element e's start in a phase that runs over [t0, t1] [s].
+  double element_start_time(int e, double t0, double t1) const {
+    return t0 + (t1 - t0) * element_begin_scaled_[std::size_t(e)] / double(elements_in(phase_of(e)));
+  }
   int first_element(int p) const { return phase_first_element_[static_cast<std::size_t>(p)]; }
   int phase_of(int e) const { return element_phase_[static_cast<std::size_t>(e)]; }
   int time_index(int p) const { return p; }  ///< t_p, p = 0..P
@@ -246,7 +257,7 @@ class ScheduleRefinementNlp final : public Mpcc {
 
   // the local blocks (refinement_nlp_blocks.hxx)
   template <class T>
-  VecT<T, stage_outputs> stage_block(int p, double theta, const VecT<T, nw>& w, FlowWorkspace<S, T>& ws) const;
+  VecT<T, stage_outputs> stage_block(int e, double theta, const VecT<T, nw>& w, FlowWorkspace<S, T>& ws) const;
   template <class T>
   VecT<T, event_outputs> event_block(int b, const VecT<T, nwe>& w, FlowWorkspace<S, T>& fws,
                                      JumpWorkspace<S, T>& jws) const;
@@ -267,7 +278,6 @@ class ScheduleRefinementNlp final : public Mpcc {
   int event_global(int b, int a) const;
   VecT<double, nwt> terminal_local(const Eigen::Ref<const Eigen::VectorXd>& x) const;
   int terminal_global(int a) const;
-  double point_theta(int e, int r) const;  // (j + c_r) / N_p, j / N_p for the start
   /// The first row of point (e, r): a start's validity rows; a stage's collocation, validity, path rows.
   int point_row(int e, int r) const { return point_row_[point_slot(e, r)]; }
   int validity_offset_in_rows(int r) const { return r < 0 ? 0 : nx; }
@@ -290,6 +300,7 @@ class ScheduleRefinementNlp final : public Mpcc {
   RadauIIA tableau_;
   int n_ = 0, m_ = 0, element_base_ = 0;
   std::vector<int> phase_elements_, phase_first_element_, element_phase_, validity_count_;
+  std::vector<double> element_begin_scaled_, element_length_scaled_;  // fractions of the phase times N_p
   std::vector<std::vector<int>> phase_path_rows_;      // per phase: the path rows imposed at its stages
   struct PhaseValidity {  // the validity values imposed as rows: inside the phase, at its start, at its end
     std::vector<int> interior, at_start, at_end;

@@ -53,11 +53,12 @@ void ScheduleRefinementNlp<S, Ocp>::write_validity(int p, const FlowWorkspace<S,
 template <Scene S, class Ocp>
 template <class T>
 VecT<T, ScheduleRefinementNlp<S, Ocp>::stage_outputs> ScheduleRefinementNlp<S, Ocp>::stage_block(
-    int p, double theta, const VecT<T, nw>& w, FlowWorkspace<S, T>& ws) const {
+    int e, double theta, const VecT<T, nw>& w, FlowWorkspace<S, T>& ws) const {
+  const int p = phase_of(e);
   const VecT<T, nx> x = w.template head<nx>();
   const T& t_begin = w[nx + nu];
   const T& t_end = w[nx + nu + 1];
-  const T h = (t_end - t_begin) / T(double(elements_in(p)));
+  const T h = (t_end - t_begin) * T(element_length_scaled_[std::size_t(e)]) / T(double(elements_in(p)));
   const T t = t_begin + T(theta) * (t_end - t_begin);
   const VecT<T, nu> u = input_law<T>(t, VecT<T, nu>(w.template segment<nu>(nx)));
   const Mode<nc>& mode = schedule_.phases[static_cast<std::size_t>(p)];

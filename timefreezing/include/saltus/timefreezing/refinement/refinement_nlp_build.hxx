@@ -94,7 +94,14 @@ void ScheduleRefinementNlp<S, Ocp>::build_grid(const ScheduleGuess<S>& guess) {
     const int N = std::max(options_.grid.min_elements, int(std::ceil(d / options_.grid.max_element_duration - 1e-9)));
     phase_first_element_.push_back(static_cast<int>(element_phase_.size()));
     phase_elements_.push_back(N);
-    for (int j = 0; j < N; ++j) element_phase_.push_back(p);
+    // N_p s_k and N_p (s_{k+1} - s_k) of RefinementGrid::end_clustering: exactly k and 1 when c = 0.
+    const double c = options_.grid.end_clustering, pi = std::acos(-1.0);
+    const auto chebyshev = [&](int k) { return 0.5 * double(N) * (1.0 - std::cos(pi * double(k) / double(N))); };
+    for (int j = 0; j < N; ++j) {
+      element_phase_.push_back(p);
+      element_begin_scaled_.push_back((1.0 - c) * double(j) + c * chebyshev(j));
+      element_length_scaled_.push_back((1.0 - c) + c * (chebyshev(j + 1) - chebyshev(j)));
+    }
     validity_count_.push_back(count_validity(schedule_.phases[static_cast<std::size_t>(p)]));
   }
   element_base_ = P + 1 + P * nx;
@@ -105,7 +112,8 @@ void ScheduleRefinementNlp<S, Ocp>::build_grid(const ScheduleGuess<S>& guess) {
     const double t0 = t[static_cast<std::size_t>(p)], t1 = t[static_cast<std::size_t>(p + 1)];
     guess_x_.template segment<nx>(start_index(p)) = p == 0 ? horizon_.x0 : guess.state(p, t0);
     for (int e = first_element(p); e < first_element(p) + elements_in(p); ++e) {
-      const double tm = t0 + (t1 - t0) * (double(e - first_element(p)) + 0.5) / double(elements_in(p));
+      const double tm = t0 + (t1 - t0) * (element_begin_scaled_[std::size_t(e)] + 0.5 * element_length_scaled_[std::size_t(e)]) /
+                                 double(elements_in(p));
       VecT<double, nu> u = guess.input(tm);
       for (int k = 0; k < nu; ++k) {
         if (horizon_.control_lower.size() == nu) u[k] = std::max(u[k], horizon_.control_lower[k]);

@@ -41,8 +41,8 @@ void local_hessian(F&& f, const Eigen::Matrix<double, N, 1>& w, const Eigen::Mat
 
 template <Scene S, class Ocp>
 double ScheduleRefinementNlp<S, Ocp>::point_theta(int e, int r) const {
-  const int p = phase_of(e);
-  return (double(e - first_element(p)) + (r < 0 ? 0.0 : tableau_.c[r])) / double(elements_in(p));
+  const std::size_t k = static_cast<std::size_t>(e);
+  return (element_begin_scaled_[k] + (r < 0 ? 0.0 : tableau_.c[r] * element_length_scaled_[k])) / double(elements_in(phase_of(e)));
 }
 
 template <Scene S, class Ocp>
@@ -122,9 +122,8 @@ void ScheduleRefinementNlp<S, Ocp>::update(const Eigen::Ref<const Eigen::VectorX
   thread_local JumpWorkspace<S, detail::Ad1<nwe>> jump_ws;
   for (int e = 0; e < element_count(); ++e)
     for (int r = -1; r < tableau_.stages; ++r) {
-      const int p = phase_of(e);
       const double theta = point_theta(e, r);
-      detail::local_jacobian<nw, stage_outputs>([&](const auto& w) { return stage_block(p, theta, w, stage_ws); },
+      detail::local_jacobian<nw, stage_outputs>([&](const auto& w) { return stage_block(e, theta, w, stage_ws); },
                                                 point_local(x, e, r), point_value_[point_slot(e, r)],
                                                 point_jacobian_[point_slot(e, r)]);
     }
@@ -311,9 +310,8 @@ void ScheduleRefinementNlp<S, Ocp>::walk_hessian(const Eigen::Ref<const Eigen::V
   for (int e = 0; e < element_count(); ++e)
     for (int l = -1; l < tableau_.stages; ++l) {
       if (values) {
-        const int p = phase_of(e);
         const double theta = point_theta(e, l);
-        detail::local_hessian<nw, stage_outputs>([&](const auto& w) { return stage_block(p, theta, w, stage_ws); },
+        detail::local_hessian<nw, stage_outputs>([&](const auto& w) { return stage_block(e, theta, w, stage_ws); },
                                                  point_local(x, e, l), point_weights(e, l, sigma, lambda), Hs);
       }
       emit_lower(Hs, [&](int a) { return point_global(e, l, a); });

@@ -15,6 +15,8 @@ inline void RefinementOptions::validate() const {
   SALTUS_REQUIRE(std::isfinite(grid.max_element_duration) && grid.max_element_duration > 0.0,
                  "refinement: grid.max_element_duration must be finite and > 0, got ", grid.max_element_duration);
   SALTUS_REQUIRE(grid.min_elements >= 1, "refinement: grid.min_elements must be >= 1, got ", grid.min_elements);
+  SALTUS_REQUIRE(grid.end_clustering >= 0.0 && grid.end_clustering <= 1.0,
+                 "refinement: grid.end_clustering must be in [0, 1], got ", grid.end_clustering);
   SALTUS_REQUIRE(std::isfinite(ipopt.tol) && ipopt.tol > 0.0, "refinement: ipopt.tol must be > 0, got ", ipopt.tol);
   SALTUS_REQUIRE(ipopt.max_iter >= 0, "refinement: ipopt.max_iter must be >= 0, got ", ipopt.max_iter);
   SALTUS_REQUIRE(edits.max_edits >= 0, "refinement: edits.max_edits must be >= 0, got ", edits.max_edits);
@@ -116,8 +118,7 @@ double ScheduleRefinementNlp<S, Ocp>::terminal_violation(const Eigen::Ref<const 
 template <Scene S, class Ocp>
 VecT<double, S::nu> ScheduleRefinementNlp<S, Ocp>::applied_input(const Eigen::Ref<const Eigen::VectorXd>& x, int e) const {
   const int p = phase_of(e);
-  const double t = x[time_index(p)] + (x[time_index(p + 1)] - x[time_index(p)]) * double(e - first_element(p)) /
-                                          double(elements_in(p));
+  const double t = element_start_time(e, x[time_index(p)], x[time_index(p + 1)]);
   return input_law<double>(t, VecT<double, nu>(x.template segment<nu>(control_index(e))));
 }
 
@@ -125,7 +126,7 @@ template <Scene S, class Ocp>
 std::array<ContactForce<double>, S::nc> ScheduleRefinementNlp<S, Ocp>::contact_forces(
     const Eigen::Ref<const Eigen::VectorXd>& x, int e, int r) const {
   FlowWorkspace<S, double> ws;
-  (void)stage_block<double>(phase_of(e), point_theta(e, r), point_local(x, e, r), ws);
+  (void)stage_block<double>(e, point_theta(e, r), point_local(x, e, r), ws);
   return ws.force;
 }
 

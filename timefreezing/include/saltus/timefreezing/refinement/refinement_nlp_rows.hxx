@@ -45,7 +45,7 @@ void ScheduleRefinementNlp<S, Ocp>::find_implied_phase_rows() {
   for (int p = 0; p < P; ++p) {
     const Mode<nc>& mode = schedule_.phases[static_cast<std::size_t>(p)];
     const int e = first_element(p) + elements_in(p) / 2;
-    detail::local_jacobian<nw, stage_outputs>([&](const auto& w) { return stage_block(p, point_theta(e, 0), w, ws); },
+    detail::local_jacobian<nw, stage_outputs>([&](const auto& w) { return stage_block(e, point_theta(e, 0), w, ws); },
                                               point_local(guess_x_, e, 0), value, J);
     Kinematics<S, double> kin;
     const VecT<double, nx> xm = guess_x_.template segment<nx>(stage_index(e, 0));
@@ -186,7 +186,7 @@ void ScheduleRefinementNlp<S, Ocp>::find_implied_guards() {
     // The equality rows at x-: the imposed equality path rows of the ending phase, then the guards.
     Eigen::MatrixXd K(0, nx + nu);
     const int last = first_element(b) + elements_in(b) - 1, r_last = tableau_.stages - 1;
-    detail::local_jacobian<nw, stage_outputs>([&](const auto& w) { return stage_block(b, point_theta(last, r_last), w, ws); },
+    detail::local_jacobian<nw, stage_outputs>([&](const auto& w) { return stage_block(last, point_theta(last, r_last), w, ws); },
                                               point_local(guess_x_, last, r_last), value, J);
     for (int k : imposed_path_rows(b))
       if (lower[k] == upper[k]) detail::append_row(K, J.row(nx + 1 + max_validity + k).head(nx + nu).transpose());

@@ -17,6 +17,11 @@ struct RefinementGrid {
   /// N_p = max(min_elements, ceil(d_p,guess / max_element_duration)) [s], > 0.
   double max_element_duration = 0.02;
   int min_elements = 2;                ///< >= 1
+  /// In [0, 1]: where a phase's element boundaries sit, s_k = (1 - c) k / N_p + c (1 - cos(pi k / N_p)) / 2
+  /// (fractions of the phase, k = 0 .. N_p): 0 uniform; 1 the Chebyshev-Lobatto points, the first and
+  /// last elements about pi^2 / (4 N_p) of a uniform one's length. Phases begin and end at events,
+  /// where the motion is often fastest (a push-off into a lift-off, docs/refinement.md, "Hopper").
+  double end_clustering = 0.0;
 };
 
 /// Ipopt on the refinement NLP (a plain NLP: no complementarity pairs).

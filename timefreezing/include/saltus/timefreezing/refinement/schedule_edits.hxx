@@ -40,7 +40,8 @@ inline std::string edit_kind(const ContactState& c, int entry) {
 template <Scene S, class Ocp>
 double stage_point_time(const ScheduleRefinementNlp<S, Ocp>& nlp, const Eigen::VectorXd& x, int p, int e, int r) {
   const double t0 = x[nlp.time_index(p)], t1 = x[nlp.time_index(p + 1)];
-  return t0 + (t1 - t0) * (double(e - nlp.first_element(p)) + (r < 0 ? 0.0 : nlp.tableau().c[r])) / nlp.elements_in(p);
+  (void)p;
+  return t0 + (t1 - t0) * nlp.point_theta(e, r);
 }
 
 /// The active arc of validity value k in phase p around time t: the first and last stage point of
