@@ -17,6 +17,7 @@
 #include "support.hpp"
 
 #include <saltus/hybrid/instantiate.hxx>
+#include <saltus/hybrid/vocabulary/trajectory_io.hpp>
 
 #include <cmath>
 
@@ -350,6 +351,28 @@ TEST(ZenoCompletion, NearlyFlatBoxIsCarriedThroughTwoSingleCornerAccumulations) 
   for (const auto& seg : traj.segments)
     for (const auto& piece : seg.x.pieces())
       for (int i = 0; i < 2; ++i) EXPECT_GE(box.gap(i, Vec<3>(piece.value(piece.t1).head<3>())), -1e-9);
+}
+
+// Zeno completion of one contact: the ball on its spring (first test) is continued past its
+// accumulation at the closed-form t_inf (within the stated uncertainty) and rests on the ground;
+// the JSON says so.
+TEST(ZenoCompletion, OneBallOnASpringRestsPastItsAccumulation) {
+  const SpringBalls scene;
+  const double v = 2.0, t_inf = SpringBalls::remaining(v);
+  SimulationOptions o = tight();
+  o.zeno_completion = true;
+  Simulator<SpringBalls> sim(scene, o);
+  const auto traj = sim.run(Vec<4>(0.0, 0.0, v, 0.0), 0.0, 10.0);
+  ASSERT_EQ(traj.status, SimulationStatus::Completed);
+  ASSERT_EQ(traj.zeno_completions.size(), 1u);
+  const ZenoCompletion& z = traj.zeno_completions[0];
+  EXPECT_EQ(z.contacts, (std::vector<int>{0}));
+  EXPECT_LE(std::abs(z.t - t_inf), z.uncertainty);
+  EXPECT_LT(traj.final_state().cwiseAbs().maxCoeff(), 1e-12);
+  const auto j = to_json(traj, scene);
+  ASSERT_EQ(j.at("zeno_completions").size(), 1u);
+  EXPECT_EQ(j.at("zeno_completions")[0].at("contacts")[0], "ball 1");
+  EXPECT_EQ(j.at("zeno_completions")[0].at("t").get<double>(), z.t);
 }
 
 }  // namespace
