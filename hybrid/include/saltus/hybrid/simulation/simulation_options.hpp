@@ -27,6 +27,12 @@ struct SimulationOptions {
   /// contacts in turn) that signal a Zeno accumulation; 4 suffice once the intervals are below
   /// 1e3 simultaneity windows (simulator.hpp).
   int zeno_bounces = 12;
+  /// At a detected accumulation: false, the run ends with status Zeno; true, it is continued past
+  /// it in the persistent contact mode of the accumulating contacts, from the projected limit state
+  /// at the predicted accumulation time (Zeno completion, zeno_completion.hpp), and recorded in
+  /// HybridTrajectory::zeno_completions. An accumulation predicted at or after t_final ends the run
+  /// with status Zeno either way.
+  bool zeno_completion = false;
   bool record_dense_output = true;
   /// Times where the input law is not smooth (e.g. a switch at t = 1): the integrator stops and
   /// restarts there, so no step straddles a kink. Sorted or not.

@@ -103,6 +103,8 @@ HybridTrajectory<S> Simulator<S>::run_impl(const State& x0, std::optional<Mode<n
   traj.input = input;
   ModeSystem<S> sys(scene_, input);
   touchdown_times_.clear();
+  touchdown_contacts_.clear();
+  touchdown_speeds_.clear();
   rest_impact_seen_ = false;
   same_instant_events_ = 0;
 
@@ -175,6 +177,8 @@ HybridTrajectory<S> Simulator<S>::run_impl(const State& x0, std::optional<Mode<n
     // Zeno bookkeeping on every touchdown event (file comment).
     bool zeno = false;
     bool touchdown = false, slower_than_rest = false;
+    std::array<bool, nc> touched{};
+    double speed = 0.0;
     Kinematics<S> kin_minus;
     for (const Guard& g : ev.guards()) {
       if (g.kind != GuardKind::Touchdown) continue;
@@ -182,10 +186,12 @@ HybridTrajectory<S> Simulator<S>::run_impl(const State& x0, std::optional<Mode<n
         evaluate_kinematics(scene_, VecT<double, nq>(x.template head<nq>()), VecT<double, nq>(x.template tail<nq>()),
                             kin_minus);
       touchdown = true;
+      touched[g.contact] = true;
+      speed = std::max(speed, -kin_minus.contacts[g.contact].zeta_n);
       if (options_.rest_velocity > 0 && -kin_minus.contacts[g.contact].zeta_n < options_.rest_velocity)
         slower_than_rest = true;
     }
-    if (touchdown) zeno = record_touchdown(t, slower_than_rest, traj);
+    if (touchdown) zeno = record_touchdown(t, touched, speed, slower_than_rest, traj);
     // Events that follow each other at one instant without the motion advancing: a cycle of
     // transitions the chain check did not catch (e.g. a contact that the mode selection opens but
     // the flow drives into the surface). Stop with the cause rather than spin to max_events.
@@ -199,10 +205,11 @@ HybridTrajectory<S> Simulator<S>::run_impl(const State& x0, std::optional<Mode<n
     x = ev.x_plus;
     mode = ev.mode_after;
     traj.events.push_back(std::move(ev));
-    if (zeno) {
+    if (zeno && !(options_.zeno_completion && traj.zeno_time < t_final)) {
       traj.status = SimulationStatus::Zeno;
       break;
     }
+    if (zeno) complete_accumulation(sys, t, x, mode, traj, segment);
     if (static_cast<int>(traj.events.size()) >= options_.max_events) {
       traj.status = SimulationStatus::MaxEvents;
       break;
@@ -215,9 +222,12 @@ HybridTrajectory<S> Simulator<S>::run_impl(const State& x0, std::optional<Mode<n
 }
 
 template <Scene S>
-bool Simulator<S>::record_touchdown(double t, bool slower_than_rest, HybridTrajectory<S>& traj) {
+bool Simulator<S>::record_touchdown(double t, const std::array<bool, nc>& touched, double speed,
+                                    bool slower_than_rest, HybridTrajectory<S>& traj) {
   auto& times = touchdown_times_;
   times.push_back(t);
+  touchdown_contacts_.push_back(touched);
+  touchdown_speeds_.push_back(speed);
   // The rest criterion ends a bouncing accumulation by itself: Zeno only if touchdowns go on
   // after an impact it made inelastic (the impact that brings a ball to rest is not one).
   const bool rest_acted_before = rest_impact_seen_;
@@ -225,9 +235,15 @@ bool Simulator<S>::record_touchdown(double t, bool slower_than_rest, HybridTraje
   if (options_.rest_velocity > 0 && !rest_acted_before) return false;
   const std::size_t m = times.size();
   // Near the time resolution (the last interval below 1e3 simultaneity windows) the touchdowns
-  // are about to merge into events at one instant: 4 ratios suffice there (file comment).
+  // are about to merge into events at one instant, near the gap tolerance (the approach speed
+  // times the last interval below 1e3 gap tolerances) they are located on motions of its size: 4
+  // ratios suffice there (file comment).
   int n = options_.zeno_bounces;
-  if (m >= 2 && times[m - 1] - times[m - 2] < 1e3 * options_.simultaneity) n = std::min(n, 4);
+  if (m >= 2) {
+    const double last = times[m - 1] - times[m - 2];
+    if (last < 1e3 * options_.simultaneity || touchdown_speeds_[m - 1] * last < 1e3 * options_.impact.gap_tolerance)
+      n = std::min(n, 4);
+  }
   for (int period = 1; period <= 2; ++period) {
     // n ratios of intervals `period` apart need n + period intervals, n + period + 1 times.
     if (static_cast<int>(m) < n + period + 1) continue;
@@ -244,9 +260,76 @@ bool Simulator<S>::record_touchdown(double t, bool slower_than_rest, HybridTraje
     }
     if (!positive || !(r_max < 1.0 && r_max - r_min < 0.05)) continue;
     extrapolate_accumulation(period, 0.5 * (r_min + r_max), traj);
+    zeno_window_ = n + period + 1;
     return true;
   }
   return false;
+}
+
+template <Scene S>
+void Simulator<S>::complete_accumulation(ModeSystem<S>& sys, double& t, State& x, Mode<nc>& mode,
+                                         HybridTrajectory<S>& traj, int* segment) {
+  ZenoCompletion record;
+  record.t = std::max(t, traj.zeno_time);
+  record.uncertainty = traj.zeno_time_uncertainty;
+  record.last_touchdown = t;
+  // The accumulating contacts: those of the touchdowns in the detection window.
+  std::array<bool, nc> accumulating{};
+  const std::size_t m = touchdown_times_.size(), window = std::min(m, static_cast<std::size_t>(zeno_window_));
+  for (std::size_t k = m - window; k < m; ++k)
+    for (int i = 0; i < nc; ++i) accumulating[i] = accumulating[i] || touchdown_contacts_[k][i];
+  for (int i = 0; i < nc; ++i)
+    if (accumulating[i]) record.contacts.push_back(i);
+  // The unresolved tail [t, record.t]: the state after the last touchdown, held.
+  Segment<S> tail;
+  tail.mode = mode;
+  tail.t_begin = t;
+  tail.t_end = record.t;
+  if (options_.record_dense_output && record.t > t) {
+    PolynomialPiece<nx> held;
+    held.t0 = held.t_ref = t;
+    held.t1 = record.t;
+    held.h = record.t - t;
+    held.c.col(0) = x;  // degree 0
+    tail.x.append(held);
+  }
+  traj.segments.push_back(std::move(tail));
+  if (segment) *segment = static_cast<int>(traj.segments.size());
+  // The limit state, and the mode a start from it selects (zeno_completion.hpp).
+  const State limit = zeno_limit_state(scene_, x, mode, accumulating, options_.impact.gap_tolerance, projection_);
+  auto start = transitions_.start(sys, record.t, limit);
+  if (start.sliding_contact >= 0) ++traj.statistics.sliding_events;
+  if (start.selection_solutions > 1) ++traj.statistics.ambiguous_selections;
+  Transition<S> completion;
+  completion.mode_before = mode;
+  completion.mode_after = start.impact ? start.impact->mode_before : start.mode;
+  completion.x_before = x;
+  completion.x_after = limit;
+  completion.impact = true;
+  completion.zeno_completion = true;
+  completion.selection_solutions = start.selection_solutions;
+  completion.sliding_contact = start.sliding_contact;
+  Event<S> ev;
+  ev.t = record.t;
+  ev.x_minus = x;
+  ev.mode_before = mode;
+  ev.transitions.push_back(std::move(completion));
+  if (start.impact) ev.transitions.insert(ev.transitions.end(), start.impact->transitions.begin(),
+                                          start.impact->transitions.end());
+  ev.x_plus = start.impact ? start.impact->x_plus : limit;
+  ev.mode_after = start.mode;
+  record.event = static_cast<int>(traj.events.size());
+  traj.zeno_completions.push_back(std::move(record));
+  t = ev.t;
+  x = ev.x_plus;
+  mode = ev.mode_after;
+  traj.events.push_back(std::move(ev));
+  // A new accumulation is detected on the touchdowns after this one only.
+  touchdown_times_.clear();
+  touchdown_contacts_.clear();
+  touchdown_speeds_.clear();
+  rest_impact_seen_ = false;
+  same_instant_events_ = 0;
 }
 
 template <Scene S>

@@ -102,7 +102,8 @@ class TransitionResolver {
 
   /// The state after a known transition of a reference, with the reference's decisions: the jump
   /// map of tr.impulse_mode if it was an impact, x itself otherwise. For re-simulations that must
-  /// follow a reference's event (the numerical twin).
+  /// follow a reference's event (the numerical twin). @throws InvalidArgument for the Zeno
+  /// completion of an accumulation (Transition::zeno_completion), which no jump map replays.
   State replay(const Transition<S>& tr, const State& x);
 
   /// The mode of `base` with the contacts of `chosen` replaced by the acceleration-level selection

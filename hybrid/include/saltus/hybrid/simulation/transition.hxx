@@ -297,6 +297,9 @@ auto TransitionResolver<S>::select_consistent(ModeSystem<S>& sys, double t, cons
 
 template <Scene S>
 auto TransitionResolver<S>::replay(const Transition<S>& tr, const State& x) -> State {
+  SALTUS_REQUIRE(!tr.zeno_completion,
+                 "the transition is the Zeno completion of an accumulation of impacts (a projection onto the "
+                 "accumulating contacts, not the jump map of a guard crossing): it has no replay");
   if (!tr.impact) return x;
   State x_plus;
   apply_jump_map(scene_, tr.impulse_mode, x, jump_, x_plus);

@@ -11,6 +11,7 @@
 #include <saltus/hybrid/vocabulary/impact_mode.hpp>
 #include <saltus/hybrid/vocabulary/input_law.hpp>
 #include <saltus/hybrid/vocabulary/mode.hpp>
+#include <saltus/hybrid/vocabulary/zeno_completion.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -49,6 +50,11 @@ struct Transition {
   /// The contact the transition left sliding on the surface under the equivalent control of a
   /// mode-switching input law (TransitionResolver::select_consistent), -1 when none.
   int sliding_contact = -1;
+  /// The transition is the Zeno completion of an accumulation of impacts (ZenoCompletion): the
+  /// limit state projected onto the accumulating contacts, not the jump map of a guard crossing
+  /// (guards empty, impact true, impulse_mode empty). Analyses that differentiate an event's jump
+  /// refuse it.
+  bool zeno_completion = false;
 };
 
 template <Scene S>
@@ -103,13 +109,17 @@ class HybridTrajectory {
   std::vector<Event<S>> events;
   InputLaw<S> input;  ///< u(t, x, mode)
   SimulationStatus status = SimulationStatus::Completed;
-  /// s: the predicted accumulation time (status Zeno; NaN otherwise), extrapolated from the
-  /// touchdown times (Simulator, simulator.hpp).
+  /// s: the predicted accumulation time (status Zeno, or the last accumulation the run was
+  /// continued past, see zeno_completions; NaN otherwise), extrapolated from the touchdown times
+  /// (Simulator, simulator.hpp).
   double zeno_time = std::numeric_limits<double>::quiet_NaN();
   /// s: how far zeno_time may be from the accumulation time: the change of the extrapolation
   /// between its last two orders (simulator.hpp); infinite when too few touchdowns were recorded
   /// to extrapolate (zeno_time is then the geometric estimate, a guess); NaN without a Zeno status.
   double zeno_time_uncertainty = std::numeric_limits<double>::quiet_NaN();
+  /// The accumulations the run was continued past (SimulationOptions::zeno_completion), in time
+  /// order; empty without one.
+  std::vector<ZenoCompletion> zeno_completions;
   SimulationStatistics statistics;
 
   double t_begin() const { return segments.empty() ? 0.0 : segments.front().t_begin; }

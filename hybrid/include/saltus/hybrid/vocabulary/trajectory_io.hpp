@@ -67,6 +67,9 @@ void write_csv(std::ostream& os, const HybridTrajectory<S>& traj, double dt, con
 ///                    has tangents), empty without an impact
 ///   zeno_time        the predicted accumulation time in s, null when not finite
 ///   zeno_time_uncertainty  its uncertainty in s (HybridTrajectory), null when not finite
+///   zeno_completions [{t, uncertainty, last_touchdown, contacts, event}]: the accumulations the run
+///                    was continued past (ZenoCompletion): times in s (uncertainty null when not
+///                    finite), the accumulating contacts by scene name, the completion's event index
 ///   steps, rhs_evaluations, wall_seconds   the simulation's statistics
 /// Numbers keep their double values (a dump writes the shortest text that reads back exactly);
 /// keys keep this order (nlohmann::ordered_json).
@@ -114,6 +117,18 @@ nlohmann::ordered_json to_json(const HybridTrajectory<S>& traj, const S& scene) 
   j["zeno_time_uncertainty"] = std::isfinite(traj.zeno_time_uncertainty)
                                    ? nlohmann::ordered_json(traj.zeno_time_uncertainty)
                                    : nlohmann::ordered_json(nullptr);
+  auto completions = nlohmann::ordered_json::array();
+  for (const ZenoCompletion& z : traj.zeno_completions) {
+    auto contacts = nlohmann::ordered_json::array();
+    for (int i : z.contacts) contacts.push_back(scene.contact(i).name);
+    completions.push_back({{"t", z.t},
+                           {"uncertainty", std::isfinite(z.uncertainty) ? nlohmann::ordered_json(z.uncertainty)
+                                                                        : nlohmann::ordered_json(nullptr)},
+                           {"last_touchdown", z.last_touchdown},
+                           {"contacts", std::move(contacts)},
+                           {"event", z.event}});
+  }
+  j["zeno_completions"] = std::move(completions);
   j["steps"] = traj.statistics.steps;
   j["rhs_evaluations"] = traj.statistics.rhs_evaluations;
   j["wall_seconds"] = traj.statistics.wall_seconds;
