@@ -408,6 +408,11 @@ def main(argv):
     for name, _ in made:
         if not os.path.getsize(os.path.join(figures, name)) > 0:
             raise SystemExit(f"plot_report: {name} is empty")
+    for scene in missing:
+        if scene.endswith(".json"):
+            continue
+        print(f"plot_report: no figures of {scene}: {report} needs {scene}.csv and {scene}.json "
+              "(saltus::write_trajectory_files writes both)", file=sys.stderr)
     print(f"plot_report: {len(made)} figures in {figures}, page {os.path.join(report, 'index.html')}")
     return 0
 
