@@ -40,6 +40,8 @@ Units are the scenes' (SI: m, rad, s, kg, N, N m); states are x = (q, v).
 import numpy as _np
 
 from . import _saltus
+
+__version__ = _saltus.__version__
 from ._saltus import (  # noqa: F401  (the public names)
     BouncingBall,
     ConewisePiece,

@@ -7,6 +7,7 @@
 
 PYBIND11_MODULE(_saltus, m) {
   m.doc() = "Saltus: hybrid mechanical systems with impacts and friction (C++ bindings; see the package saltus).";
+  m.attr("__version__") = SALTUS_VERSION_STRING;
   using namespace saltus::python;
   bind_errors(m);  // first: the exception translator applies to everything bound after it
   bind_scenes(m);

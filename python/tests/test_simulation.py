@@ -24,6 +24,11 @@ def ball_trajectory():
     return saltus.simulate(saltus.BouncingBall(restitution=0.5), np.array([1.0, 0.0]), 0.0, 5.0, options=tight())
 
 
+def test_the_package_says_its_version():
+    parts = saltus.__version__.split(".")
+    assert len(parts) == 3 and all(p.isdigit() for p in parts)
+
+
 def test_bouncing_ball_hits_the_ground_at_the_free_fall_time(ball_trajectory):
     ev = ball_trajectory.events[0]
     assert ev.t == pytest.approx(math.sqrt(2.0 / G), abs=1e-10)
