@@ -131,7 +131,7 @@ TEST(RefinementNlp, ClusteredElementsShortenTowardTheEvents) {
   // points (1 - cos(pi k / N)) / 2; the derivatives stay exact.
   RefinementOptions o;
   o.grid.max_element_duration = 0.125;
-  o.grid.stages = 3;
+  o.grid.stages = 2;
   o.grid.end_clustering = 1.0;
   const ScheduleRefinementNlp<PointMass, scenes::PointMassToTheTarget> nlp(frictional_mass(), {}, Case::refinement_horizon(),
                                                                            hand_guess(), o);
@@ -147,8 +147,10 @@ TEST(RefinementNlp, ClusteredElementsShortenTowardTheEvents) {
       sum += nlp.element_length_fraction(e);
     }
     EXPECT_NEAR(sum, 1.0, 1e-15);
-    EXPECT_LT(nlp.element_length_fraction(first), 0.5 / N);  // the ends: about pi^2 / (4 N^2)
-    EXPECT_LT(nlp.element_length_fraction(first + N - 1), 0.5 / N);
+    // the end elements: (1 - cos(pi / N)) / 2, about pi^2 / (4 N^2), against a uniform 1 / N
+    EXPECT_NEAR(nlp.element_length_fraction(first), 0.5 * (1.0 - std::cos(pi / N)), 1e-15);
+    EXPECT_NEAR(nlp.element_length_fraction(first + N - 1), 0.5 * (1.0 - std::cos(pi / N)), 1e-15);
+    EXPECT_LT(nlp.element_length_fraction(first), 1.0 / N);
   }
   Eigen::VectorXd x(nlp.variable_count());
   nlp.initial_point(x);

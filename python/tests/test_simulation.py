@@ -42,10 +42,13 @@ def test_bouncing_ball_ends_zeno_at_the_closed_form_time(ball_trajectory):
     t_inf = math.sqrt(2.0 / G) * 1.5 / 0.5
     assert ball_trajectory.status == "zeno"
     assert abs(ball_trajectory.zeno_time - t_inf) < 1e-6
-    assert len(ball_trajectory.events) > 12
-    # the stated uncertainty bounds the distance to the closed form
+    # 12 bounces: once a bounce's approach speed times its interval is below 1e3 gap tolerances,
+    # 4 interval ratios suffice to detect the accumulation (docs/bad_input.md)
+    assert len(ball_trajectory.events) >= 12
+    # the stated uncertainty (the change between the extrapolation's last two orders: 4e-16 here)
+    # bounds the distance to the closed form up to the event times' own accuracy (3e-14 here)
     assert 0.0 <= ball_trajectory.zeno_time_uncertainty < 1e-6
-    assert abs(ball_trajectory.zeno_time - t_inf) <= max(ball_trajectory.zeno_time_uncertainty, 1e-12)
+    assert abs(ball_trajectory.zeno_time - t_inf) <= ball_trajectory.zeno_time_uncertainty + 1e-12
     stats = ball_trajectory.statistics
     assert stats["sliding_events"] == 0 and stats["ambiguous_selections"] == 0
     assert all(s.sliding_contact == -1 for s in ball_trajectory.segments)
