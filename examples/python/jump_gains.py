@@ -45,6 +45,6 @@ for eps in [1e-2, 1e-3, 1e-4]:
     err = np.linalg.norm(z_plus - gain.G_z @ z_minus)
     if previous is not None:
         ratios.append(previous / err)
-    print(f"{eps:.0e}   {err:.3e}       {previous / err if previous is not None else float('nan'):.1f}")
+    print(f"{eps:.0e}   {err:.3e}       " + (f"{previous / err:.1f}" if previous is not None else "-"))
     previous = err
 sys.exit(0 if all(r > 50 for r in ratios) else 1)
