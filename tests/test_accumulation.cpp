@@ -111,43 +111,9 @@ struct Block {
   }
 };
 
-/// A box (0.3 m x 0.1 m, 1 kg) in the vertical plane, q = (x, y, theta), its bottom corners as
-/// planar Coulomb contacts (mu = 0.5) with restitution 0.3; no inputs.
-struct BouncingBox {
-  static constexpr int nq = 3, nu = 0, nc = 2;
-  static constexpr double w = 0.3, h = 0.1;
-  std::array<ContactSpec, 2> corners{ContactSpec{"left", Friction::Planar, 0.5, 0.3},
-                                     ContactSpec{"right", Friction::Planar, 0.5, 0.3}};
-  const ContactSpec& contact(int i) const { return corners[i]; }
-  template <class T>
-  MatT<T, 3, 3> mass_matrix(const VecT<T, 3>&) const {
-    MatT<T, 3, 3> M = MatT<T, 3, 3>::Identity();
-    M(2, 2) = T((w * w + h * h) / 12);
-    return M;
-  }
-  template <class T>
-  VecT<T, 3> bias(const VecT<T, 3>&, const VecT<T, 3>&) const {
-    return VecT<T, 3>(T(0), T(9.81), T(0));
-  }
-  template <class T>
-  MatT<T, 3, 0> input_matrix(const VecT<T, 3>&) const {
-    return {};
-  }
-  template <class T>
-  VecT<T, 2> corner(int i, const VecT<T, 3>& q) const {
-    using std::cos;
-    using std::sin;
-    const double bx = i == 0 ? -w / 2 : w / 2, by = -h / 2;
-    return VecT<T, 2>(q[0] + cos(q[2]) * bx - sin(q[2]) * by, q[1] + sin(q[2]) * bx + cos(q[2]) * by);
-  }
-  template <class T>
-  T gap(int i, const VecT<T, 3>& q) const {
-    return corner(i, q)[1];
-  }
-  template <class T>
-  VecT<T, 2> tangent_position(int i, const VecT<T, 3>& q) const {
-    return VecT<T, 2>(corner(i, q)[0], T(0));
-  }
+/// A box (0.3 m x 0.1 m, 1 kg) in the vertical plane: the Block with mu = 0.5 and restitution 0.3.
+struct BouncingBox : Block {
+  BouncingBox() : Block(0.3, 0.1, 0.5, 0.3) {}
 };
 
 }  // namespace saltus::testing
@@ -232,7 +198,7 @@ TEST(Accumulation, TwoBallsAlternatingAccumulateAtTheirCommonLimit) {
 TEST(Accumulation, BoxBouncingOnItsCornersWithLowRestitutionEndsInAnAccumulation) {
   const BouncingBox box;
   Vec<6> x0 = Vec<6>::Zero();
-  x0[1] = 0.05 + 0.5 * BouncingBox::h + 0.5 * BouncingBox::w * std::sin(0.02);
+  x0[1] = 0.05 + 0.5 * box.h + 0.5 * box.w * std::sin(0.02);
   x0[2] = 0.02;
   std::vector<double> predicted;
   for (int bounces : {12, 40}) {
@@ -266,7 +232,7 @@ TEST(ZenoCompletion, FlatBoxComesToRestOnItsBaseAtTheClosedFormAccumulationTime)
   const double g = 9.81, e = 0.3, H = 0.05, t1 = std::sqrt(2 * H / g), v1 = std::sqrt(2 * g * H);
   const double t_inf = t1 + 2 * e * v1 / (g * (1 - e));
   Vec<6> x0 = Vec<6>::Zero();
-  x0[1] = H + 0.5 * BouncingBox::h;
+  x0[1] = H + 0.5 * box.h;
   for (int bounces : {12, 40}) {
     SimulationOptions o;
     o.zeno_bounces = bounces;
@@ -283,7 +249,7 @@ TEST(ZenoCompletion, FlatBoxComesToRestOnItsBaseAtTheClosedFormAccumulationTime)
     EXPECT_EQ(traj.events.at(z.event).t, z.t);
     EXPECT_EQ(describe(box, traj.segments.back().mode), "left:stick right:stick");
     const Vec<6> rest = traj.final_state();
-    EXPECT_NEAR(rest[1], 0.5 * BouncingBox::h, 1e-12);
+    EXPECT_NEAR(rest[1], 0.5 * box.h, 1e-12);
     EXPECT_NEAR(rest[2], 0.0, 1e-12);
     EXPECT_LT(rest.tail<3>().cwiseAbs().maxCoeff(), 1e-12);
     EXPECT_EQ(traj.t_end(), 0.5);
@@ -335,7 +301,7 @@ TEST(ZenoCompletion, RockingBlockIsCarriedToRestInDoubleSupport) {
 TEST(ZenoCompletion, NearlyFlatBoxIsCarriedThroughTwoSingleCornerAccumulations) {
   const BouncingBox box;
   Vec<6> x0 = Vec<6>::Zero();
-  x0[1] = 0.05 + 0.5 * BouncingBox::h + 0.5 * BouncingBox::w * std::sin(1e-6);
+  x0[1] = 0.05 + 0.5 * box.h + 0.5 * box.w * std::sin(1e-6);
   x0[2] = 1e-6;
   SimulationOptions o;
   o.zeno_completion = true;
@@ -346,7 +312,7 @@ TEST(ZenoCompletion, NearlyFlatBoxIsCarriedThroughTwoSingleCornerAccumulations) 
   EXPECT_EQ(traj.zeno_completions[0].contacts, (std::vector<int>{0}));
   EXPECT_EQ(traj.zeno_completions[1].contacts, (std::vector<int>{1}));
   EXPECT_EQ(describe(box, traj.segments.back().mode), "left:stick right:stick");
-  EXPECT_NEAR(traj.final_state()[1], 0.5 * BouncingBox::h, 1e-12);
+  EXPECT_NEAR(traj.final_state()[1], 0.5 * box.h, 1e-12);
   EXPECT_LT(traj.final_state().tail<3>().cwiseAbs().maxCoeff(), 1e-12);
   for (const auto& seg : traj.segments)
     for (const auto& piece : seg.x.pieces())

@@ -97,16 +97,21 @@ ScheduleGuess<PointMass> hand_guess() {
   return g;
 }
 
+/// Ipopt's derivative checker at the NLP's initial point finds no error.
+void expect_exact_derivatives(const ScheduleRefinementNlp<PointMass, scenes::PointMassToTheTarget>& nlp) {
+  Eigen::VectorXd x(nlp.variable_count());
+  nlp.initial_point(x);
+  const DerivativeCheckReport r = check_derivatives(nlp, x, 1e-7, 1e-5);
+  EXPECT_EQ(r.errors, 0) << r.output;
+}
+
 TEST(RefinementNlp, IpoptDerivativeCheckerFindsNoError) {
   RefinementOptions o;
   o.grid.max_element_duration = 0.25;
   o.grid.stages = 2;
   const ScheduleRefinementNlp<PointMass, scenes::PointMassToTheTarget> nlp(frictional_mass(), {}, Case::refinement_horizon(),
                                                                            hand_guess(), o);
-  Eigen::VectorXd x(nlp.variable_count());
-  nlp.initial_point(x);
-  const DerivativeCheckReport r = check_derivatives(nlp, x, 1e-7, 1e-5);
-  EXPECT_EQ(r.errors, 0) << r.output;
+  expect_exact_derivatives(nlp);
   EXPECT_TRUE(nlp.complementarity_pairs().empty());
 }
 
@@ -118,10 +123,7 @@ TEST(RefinementNlp, IpoptDerivativeCheckerFindsNoErrorWithFiveStages) {
   o.grid.stages = 5;
   const ScheduleRefinementNlp<PointMass, scenes::PointMassToTheTarget> nlp(frictional_mass(), {}, Case::refinement_horizon(),
                                                                            hand_guess(), o);
-  Eigen::VectorXd x(nlp.variable_count());
-  nlp.initial_point(x);
-  const DerivativeCheckReport r = check_derivatives(nlp, x, 1e-7, 1e-5);
-  EXPECT_EQ(r.errors, 0) << r.output;
+  expect_exact_derivatives(nlp);
   o.grid.stages = 6;  // above the dense output's degree
   expect_invalid([&] { o.validate(); }, {"grid.stages", "degree <= 5", "got 6"});
 }
@@ -152,10 +154,7 @@ TEST(RefinementNlp, ClusteredElementsShortenTowardTheEvents) {
     EXPECT_NEAR(nlp.element_length_fraction(first + N - 1), 0.5 * (1.0 - std::cos(pi / N)), 1e-15);
     EXPECT_LT(nlp.element_length_fraction(first), 1.0 / N);
   }
-  Eigen::VectorXd x(nlp.variable_count());
-  nlp.initial_point(x);
-  const DerivativeCheckReport r = check_derivatives(nlp, x, 1e-7, 1e-5);
-  EXPECT_EQ(r.errors, 0) << r.output;
+  expect_exact_derivatives(nlp);
   o.grid.end_clustering = 1.5;
   expect_invalid([&] { o.validate(); }, {"grid.end_clustering", "[0, 1]", "1.5"});
 }
