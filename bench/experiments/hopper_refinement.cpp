@@ -1,9 +1,11 @@
 // The hopper over three holes refined from a footstep schedule (docs/refinement.md, "Hopper").
 //
-//   hopper_refinement [stance [h [max_iter [end_stance [cone_margin [n_s [print_level [then_n_s [end_clustering]]]]]]]]]
-//   (defaults 0.45 0.02 1000 0.3 0 3 0 0 0; print_level is Ipopt's; then_n_s > 0: a second refinement
+//   hopper_refinement [stance [h [max_iter [end_stance [cone_margin [n_s [print_level [then_n_s [end_clustering
+//                     [local_error [warm_start_mu [max_split]]]]]]]]]]]]
+//   (defaults 0.45 0.02 1000 0.3 0 3 0 0 0 0 1e-6 8; print_level is Ipopt's; then_n_s > 0: a second refinement
 //   with that many stages, started from the first one's result, the order continuation;
-//   end_clustering: RefinementGrid::end_clustering)
+//   end_clustering: RefinementGrid::end_clustering; local_error > 0: the mesh refinement's
+//   RefinementMesh::local_error_tolerance; warm_start_mu, max_split: RefinementMesh's)
 //
 // Discovery by the time-freezing homotopy gives no usable schedule on this OCP (docs/refinement.md,
 // "Hopper over three holes"), so the schedule here is a user's guess, the footsteps the holes
@@ -125,6 +127,7 @@ int main(int argc, char** argv) {
   const int print_level = argc > 7 ? std::atoi(argv[7]) : 0;         // RefinementIpopt::print_level
   const int then_stages = argc > 8 ? std::atoi(argv[8]) : 0;
   const double end_clustering = argc > 9 ? std::atof(argv[9]) : 0.0;
+  const double local_error = argc > 10 ? std::atof(argv[10]) : 0.0;
   const Hopper hopper{};
   const ScheduleGuess<Hopper> guess = footstep_guess(hopper, stance, end_stance);
   std::cout << "schedule: " << describe(hopper, guess.schedule) << "\n";
@@ -142,6 +145,9 @@ int main(int argc, char** argv) {
   options.ipopt.max_iter = max_iter;
   options.edits.max_edits = 0;
   options.stick_cone_margin = cone_margin;
+  options.mesh.local_error_tolerance = local_error;
+  if (argc > 11) options.mesh.warm_start_mu = std::atof(argv[11]);
+  if (argc > 12) options.mesh.max_split = std::atoi(argv[12]);
   RefinementResult<Hopper> r = refine_schedule(hopper, Ocp{}, horizon, guess, options);
   if (then_stages > 0) {
     std::cout << "first solve (n_s = " << stages << "): objective " << r.objective << ", contact drift " << r.contact_drift
@@ -151,7 +157,7 @@ int main(int argc, char** argv) {
   }
   std::cout << r.stage << " (" << r.message << ")\n  objective " << r.objective << ", mode validity "
             << r.mode_validity_violation << ", path rows " << r.path_violation << ", target " << r.terminal_violation
-            << ", contact drift " << r.contact_drift
+            << ", contact drift " << r.contact_drift << ", local error " << r.local_error
             << ", per-phase re-simulation " << r.phase_resim_max_error << ", open loop " << r.open_loop.max_error << " "
             << r.open_loop.note << ", " << r.seconds << " s\n  events:";
   for (double t : r.event_times) std::cout << " " << t;

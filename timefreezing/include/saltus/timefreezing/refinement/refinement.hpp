@@ -27,6 +27,19 @@
 // One edit per solve, the vanishing phases first, then the largest multiplier; each edit is
 // reported. The result says whether the final schedule passed this check (no edit proposed: no
 // better schedule by one such edit, locally); it never claims global optimality.
+//
+// MESH REFINEMENT. The grid that finds the schedule need not resolve the motion: the optimum can
+// put its fastest motion into one element (the hopper's push-off, where 30-50 rad/s of joint rate
+// build up in the last 20 ms of a stance), and the optimiser uses the collocation's error there
+// (docs/refinement.md, "Hopper"). After the last edit, when RefinementMesh::local_error_tolerance
+// > 0: every element's local error is measured against the exact flow of its mode
+// (ScheduleRefinementNlp::element_local_errors); those over the tolerance are split into equal
+// parts, as many as the local error's order asks for; the NLP of the same schedule is built on the
+// finer grid (RefinementGrid::element_boundaries) and solved from the previous solution (its
+// dense output and its inputs; Ipopt's barrier parameter starts at RefinementMesh::warm_start_mu),
+// until every element is within the tolerance or max_rounds solves are spent. A round whose solve
+// fails is reported and the previous solution kept. Local-error control of the mesh is the
+// standard of direct collocation (Betts, "Practical Methods for Optimal Control", ch. 4.7).
 #pragma once
 
 #include <saltus/hybrid/simulation/simulator.hpp>
@@ -59,6 +72,17 @@ struct RefinementSolve {
   double objective = 0.0, constraint_violation = 0.0;
   int ipopt_iterations = 0;
   double seconds = 0.0;
+};
+
+/// One round of the mesh refinement (refinement.hpp, "MESH REFINEMENT"): the local errors of the
+/// solution it started from, the elements it split, and the solve on the finer grid.
+struct MeshRound {
+  double largest_local_error = 0.0;  ///< before the round [state units]
+  int worst_phase = -1;              ///< where it was
+  double worst_time = 0.0;           ///< the worst element's start [s]
+  int elements_split = 0;            ///< elements over the tolerance, each split into 2 .. max_split
+  int elements = 0;                  ///< elements of the finer grid
+  bool solved = false;               ///< its solve succeeded (RefinementResult::solves has its record)
 };
 
 /// The event-driven re-simulation of one phase from its start state (x+ of the event before it)
@@ -129,6 +153,11 @@ struct RefinementResult {
   double mode_validity_violation = 0.0; ///< refinement_nlp.hpp: largest violation of the validity rows
   double path_violation = 0.0, terminal_violation = 0.0, constraint_violation = 0.0;
   double contact_drift = 0.0;           ///< ScheduleRefinementNlp::contact_drift [scene units]
+  /// The largest local error of an element at the final solution
+  /// (ScheduleRefinementNlp::element_local_errors) [state units], and the rounds of the mesh
+  /// refinement that led there (none when RefinementMesh::local_error_tolerance is 0).
+  double local_error = 0.0;
+  std::vector<MeshRound> mesh_rounds;
   std::vector<ImpliedRow> implied_rows;
   std::vector<ScheduleEdit> edits;
   bool schedule_check_passed = false;   ///< no edit proposed after the last solve

@@ -54,6 +54,8 @@ void read_solution(const S& scene, const ScheduleRefinementNlp<S, Ocp>& nlp, con
   out.terminal_violation = nlp.terminal_violation(x);
   out.contact_drift = nlp.contact_drift(x);
   out.implied_rows = nlp.implied_rows();
+  const std::vector<double> local = nlp.element_local_errors(x);
+  out.local_error = local.empty() ? 0.0 : *std::max_element(local.begin(), local.end());
 }
 
 inline RefinementSolve solve_record(const std::string& schedule, const MpccSolution& sol) {
@@ -116,6 +118,7 @@ void edit_schedule(const S& scene, const Ocp& ocp, const OcpHorizon<S>& horizon,
     if (options.progress) *options.progress << "refinement: edit " << record.kind << " in phase " << record.phase << " at t = " << record.t << "\n";
     RefinementOptions edited_options = options;
     edited_options.ipopt.max_iter = std::min(options.ipopt.max_iter, options.edits.max_iter);
+    edited_options.grid.element_boundaries.clear();  // the edited schedule has other phases
     auto [edited_nlp, edited_sol] = solve_schedule(scene, ocp, horizon, *guess, edited_options, out);
     const bool better = out.solves.back().succeeded && edited_sol.constraint_violation <= 1e-6 &&
                         edited_sol.objective < sol.objective - 1e-9 * std::max(1.0, std::abs(sol.objective));
@@ -157,6 +160,13 @@ std::string checked_stage(const RefinementResult<S>& r, const RefinementChecks& 
 
 }  // namespace detail
 
+}  // namespace saltus::timefreezing
+
+// The mesh rounds call solve_schedule and read_solution above.
+#include <saltus/timefreezing/refinement/mesh_refinement.hxx>
+
+namespace saltus::timefreezing {
+
 template <Scene S, class Ocp>
 RefinementResult<S> refine_schedule(const S& scene, const Ocp& ocp, const OcpHorizon<S>& horizon,
                                     const ScheduleGuess<S>& guess, const RefinementOptions& options,
@@ -175,6 +185,7 @@ RefinementResult<S> refine_schedule(const S& scene, const Ocp& ocp, const OcpHor
   }
   out.message = "converged";
   detail::edit_schedule(scene, ocp, horizon, options, nlp, sol, out);
+  detail::refine_mesh(scene, ocp, horizon, options, nlp, sol, out);
   out.phase_resimulation = resimulate_phases(scene, out.trajectory, out.schedule, out.element_times, simulation);
   for (const PhaseResimulation& r : out.phase_resimulation)  // NaN (a failed simulation) propagates
     out.phase_resim_max_error = std::isnan(r.max_error) ? r.max_error : std::max(out.phase_resim_max_error, r.max_error);

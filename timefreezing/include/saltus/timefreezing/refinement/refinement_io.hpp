@@ -24,6 +24,8 @@ inline nlohmann::ordered_json finite_or_null(double v) {
 ///   event_times                 [s]
 ///   objective, mode_validity_violation, path_violation, terminal_violation, constraint_violation,
 ///   contact_drift               as in RefinementResult
+///   local_error                 as in RefinementResult
+///   mesh_rounds                 [{largest_local_error, worst_phase, worst_time, elements_split, elements, solved}]
 ///   schedule_edits              [{kind, phase, contact, t, t_begin, t_end, multiplier, schedule_after}]
 ///   schedule_check_passed       no edit proposed after the last solve
 ///   solves                      [{schedule, succeeded, ipopt_status, objective, constraint_violation,
@@ -50,6 +52,13 @@ nlohmann::ordered_json to_json(const S& scene, const RefinementResult<S>& r) {
   j["terminal_violation"] = finite_or_null(r.terminal_violation);
   j["constraint_violation"] = finite_or_null(r.constraint_violation);
   j["contact_drift"] = finite_or_null(r.contact_drift);
+  j["local_error"] = finite_or_null(r.local_error);
+  json rounds = json::array();
+  for (const MeshRound& m : r.mesh_rounds)
+    rounds.push_back({{"largest_local_error", finite_or_null(m.largest_local_error)}, {"worst_phase", m.worst_phase},
+                      {"worst_time", m.worst_time}, {"elements_split", m.elements_split}, {"elements", m.elements},
+                      {"solved", m.solved}});
+  j["mesh_rounds"] = rounds;
   json edits = json::array();
   for (const ScheduleEdit& e : r.edits)
     edits.push_back({{"kind", e.kind}, {"phase", e.phase}, {"contact", e.contact}, {"t", e.t},

@@ -56,6 +56,9 @@ ScheduleRefinementNlp<S, Ocp>::ScheduleRefinementNlp(const S& scene, const Ocp& 
                    " is not finite, before the previous event (", previous, ") or after T = ", horizon.final_time);
     previous = t;
   }
+  SALTUS_REQUIRE(options.grid.element_boundaries.empty() || static_cast<int>(options.grid.element_boundaries.size()) == P,
+                 "refinement: grid.element_boundaries has ", options.grid.element_boundaries.size(),
+                 " lists, the schedule ", P, " phases (one list per phase, or none)");
   check_initial_state();
   build_grid(guess);
   find_implied_phase_rows();
@@ -91,9 +94,21 @@ void ScheduleRefinementNlp<S, Ocp>::build_grid(const ScheduleGuess<S>& guess) {
   for (int b = 0; b + 1 < P; ++b) t[static_cast<std::size_t>(b + 1)] = guess.event_times[static_cast<std::size_t>(b)];
   for (int p = 0; p < P; ++p) {
     const double d = t[static_cast<std::size_t>(p + 1)] - t[static_cast<std::size_t>(p)];
-    const int N = std::max(options_.grid.min_elements, int(std::ceil(d / options_.grid.max_element_duration - 1e-9)));
+    const std::vector<double>* given =
+        options_.grid.element_boundaries.empty() ? nullptr : &options_.grid.element_boundaries[static_cast<std::size_t>(p)];
+    const int N = given ? static_cast<int>(given->size()) - 1
+                        : std::max(options_.grid.min_elements, int(std::ceil(d / options_.grid.max_element_duration - 1e-9)));
     phase_first_element_.push_back(static_cast<int>(element_phase_.size()));
     phase_elements_.push_back(N);
+    if (given) {  // RefinementGrid::element_boundaries, held times N_p as the rule's fractions are
+      for (int j = 0; j < N; ++j) {
+        element_phase_.push_back(p);
+        element_begin_scaled_.push_back(double(N) * (*given)[std::size_t(j)]);
+        element_length_scaled_.push_back(double(N) * ((*given)[std::size_t(j + 1)] - (*given)[std::size_t(j)]));
+      }
+      validity_count_.push_back(count_validity(schedule_.phases[static_cast<std::size_t>(p)]));
+      continue;
+    }
     // N_p s_k and N_p (s_{k+1} - s_k) of RefinementGrid::end_clustering: exactly k and 1 when c = 0.
     const double c = options_.grid.end_clustering, pi = std::acos(-1.0);
     const auto chebyshev = [&](int k) { return 0.5 * double(N) * (1.0 - std::cos(pi * double(k) / double(N))); };

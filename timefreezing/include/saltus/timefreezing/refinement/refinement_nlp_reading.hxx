@@ -17,6 +17,20 @@ inline void RefinementOptions::validate() const {
   SALTUS_REQUIRE(grid.min_elements >= 1, "refinement: grid.min_elements must be >= 1, got ", grid.min_elements);
   SALTUS_REQUIRE(grid.end_clustering >= 0.0 && grid.end_clustering <= 1.0,
                  "refinement: grid.end_clustering must be in [0, 1], got ", grid.end_clustering);
+  for (std::size_t p = 0; p < grid.element_boundaries.size(); ++p) {
+    const std::vector<double>& s = grid.element_boundaries[p];
+    bool increasing = s.size() >= 2 && s.front() == 0.0 && s.back() == 1.0;
+    for (std::size_t k = 1; increasing && k < s.size(); ++k) increasing = std::isfinite(s[k]) && s[k] > s[k - 1];
+    SALTUS_REQUIRE(increasing, "refinement: grid.element_boundaries of phase ", p,
+                   " must increase strictly from 0 to 1 (at least one element), got ", s.size(), " values");
+  }
+  SALTUS_REQUIRE(std::isfinite(mesh.local_error_tolerance) && mesh.local_error_tolerance >= 0.0,
+                 "refinement: mesh.local_error_tolerance must be >= 0, got ", mesh.local_error_tolerance);
+  SALTUS_REQUIRE(mesh.max_rounds >= 0, "refinement: mesh.max_rounds must be >= 0, got ", mesh.max_rounds);
+  SALTUS_REQUIRE(mesh.max_split >= 2, "refinement: mesh.max_split must be >= 2, got ", mesh.max_split);
+  SALTUS_REQUIRE(mesh.safety > 0.0 && mesh.safety <= 1.0, "refinement: mesh.safety must lie in (0, 1], got ", mesh.safety);
+  SALTUS_REQUIRE(std::isfinite(mesh.warm_start_mu) && mesh.warm_start_mu > 0.0,
+                 "refinement: mesh.warm_start_mu must be > 0, got ", mesh.warm_start_mu);
   SALTUS_REQUIRE(std::isfinite(ipopt.tol) && ipopt.tol > 0.0, "refinement: ipopt.tol must be > 0, got ", ipopt.tol);
   SALTUS_REQUIRE(ipopt.max_iter >= 0, "refinement: ipopt.max_iter must be >= 0, got ", ipopt.max_iter);
   SALTUS_REQUIRE(edits.max_edits >= 0, "refinement: edits.max_edits must be >= 0, got ", edits.max_edits);
@@ -139,6 +153,47 @@ std::array<ContactForce<double>, S::nc> ScheduleRefinementNlp<S, Ocp>::impulses(
   JumpWorkspace<S, double> jws;
   (void)event_block<double>(b, event_local(x, b), fws, jws);
   return jws.impulse;
+}
+
+template <Scene S, class Ocp>
+std::vector<double> ScheduleRefinementNlp<S, Ocp>::element_local_errors(const Eigen::Ref<const Eigen::VectorXd>& x) const {
+  std::vector<double> out(static_cast<std::size_t>(element_count()), 0.0);
+  FlowWorkspace<S, double> ws;
+  for (int e = 0; e < element_count(); ++e) {
+    const int p = phase_of(e);
+    const Mode<nc>& mode = schedule_.phases[static_cast<std::size_t>(p)];
+    const double t_p = x[time_index(p)], t_q = x[time_index(p + 1)];
+    const double h = (t_q - t_p) * element_length_scaled_[std::size_t(e)] / double(elements_in(p));
+    if (!(h > 0.0)) continue;
+    const double t_a = element_start_time(e, t_p, t_q);
+    const VecT<double, nu> decision = x.template segment<nu>(control_index(e));
+    const VecT<double, nx> start = x.template segment<nx>(element_start_index(e));
+    const VecT<double, nx> end = x.template segment<nx>(stage_index(e, tableau_.stages - 1));
+    const auto f = [&](double t, const VecT<double, nx>& y) {
+      evaluate_flow<S, double>(scene_, mode, y, input_law<double>(t, decision), ws);
+      return VecT<double, nx>(ws.xdot);
+    };
+    const auto rk4 = [&](int steps) {  // classical Runge-Kutta, `steps` equal steps over the element
+      VecT<double, nx> y = start;
+      const double dt = h / steps;
+      for (int k = 0; k < steps; ++k) {
+        const double t = t_a + dt * k;
+        const VecT<double, nx> k1 = f(t, y), k2 = f(t + dt / 2, y + dt / 2 * k1), k3 = f(t + dt / 2, y + dt / 2 * k2),
+                               k4 = f(t + dt, y + dt * k3);
+        y += dt / 6 * (k1 + 2 * k2 + 2 * k3 + k4);
+      }
+      return y;
+    };
+    VecT<double, nx> coarse = rk4(8), fine = rk4(16);
+    for (int steps = 32; steps <= 8192; steps *= 2) {
+      const double estimate = (fine - coarse).cwiseAbs().maxCoeff() / 15.0;  // of `fine` (order 4)
+      if (estimate <= std::max(1e-2 * (fine - end).cwiseAbs().maxCoeff(), 1e-13)) break;
+      coarse = fine;
+      fine = rk4(steps);
+    }
+    out[std::size_t(e)] = (fine + (fine - coarse) / 15.0 - end).cwiseAbs().maxCoeff();
+  }
+  return out;
 }
 
 }  // namespace saltus::timefreezing

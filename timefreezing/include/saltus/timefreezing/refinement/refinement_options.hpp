@@ -1,5 +1,5 @@
 // Options of the mode-schedule refinement (refinement.hpp), nested by concern: the collocation
-// grid, Ipopt, the schedule edits, and the implied-row test.
+// grid, Ipopt, the schedule edits, the mesh refinement, the checks and the implied-row test.
 #pragma once
 
 #include <saltus/timefreezing/mpcc/mpcc_solver.hpp>
@@ -22,6 +22,33 @@ struct RefinementGrid {
   /// last elements about pi^2 / (4 N_p) of a uniform one's length. Phases begin and end at events,
   /// where the motion is often fastest (a push-off into a lift-off, docs/refinement.md, "Hopper").
   double end_clustering = 0.0;
+  /// Explicit element boundaries, one list per phase of the schedule (empty: the rule above): phase
+  /// p's boundaries as fractions of its duration, 0 = s_0 < s_1 < ... < s_N = 1, N >= 1 elements.
+  /// When given, max_element_duration, min_elements and end_clustering are not used. The mesh
+  /// refinement (RefinementMesh) writes them; a schedule edit returns to the rule.
+  std::vector<std::vector<double>> element_boundaries;
+};
+
+/// Local-error mesh refinement after the schedule's last solve (refinement.hpp, "Mesh
+/// refinement"): every element whose local error exceeds the tolerance is split, the NLP is
+/// solved again from the previous solution, until every element is within the tolerance.
+struct RefinementMesh {
+  /// Largest local error [state units] of an element: the distance between its collocation end
+  /// state and the exact flow of its phase's mode from its start state under its input
+  /// (ScheduleRefinementNlp::element_local_errors). 0: no mesh refinement.
+  double local_error_tolerance = 0.0;
+  int max_rounds = 6;   ///< solves after the first at most, >= 0
+  /// An element is split into k = ceil((error / (safety * tolerance))^(1 / (n_s + 1))) equal
+  /// elements, 2 <= k <= max_split (the stage order n_s + 1 of the local error, the cautious one
+  /// of Radau IIA's two: the end point's is 2 n_s).
+  int max_split = 8;
+  double safety = 0.25;  ///< in (0, 1]
+  /// Ipopt's mu_init for the solves started from a previous solution. Ipopt's own default, 0.1:
+  /// measured on the hopper (h = 0.05 s, tolerance 1e-2, max_split 4), a barrier parameter of 1e-6
+  /// that would keep the warm start's active bounds took 209 iterations on the second round against
+  /// 152, and stalled on the third (dual infeasibility 4e14) where 0.1 took 19 iterations: the
+  /// coarse optimum is far from the fine one (objective 981 -> 164), not a point to stay near.
+  double warm_start_mu = 0.1;
 };
 
 /// Ipopt on the refinement NLP (a plain NLP: no complementarity pairs).
@@ -65,6 +92,7 @@ struct RefinementOptions {
   RefinementIpopt ipopt;
   RefinementEdits edits;
   RefinementChecks checks;
+  RefinementMesh mesh;
   /// d_p >= min_phase_duration [s] for every phase (>= 0; 0: a phase may shrink to a point).
   double min_phase_duration = 0.0;
   /// In [0, 1). A sticking contact's cone rows inside its phase are
