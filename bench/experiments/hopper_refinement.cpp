@@ -1,11 +1,13 @@
 // The hopper over three holes refined from a footstep schedule (docs/refinement.md, "Hopper").
 //
 //   hopper_refinement [stance [h [max_iter [end_stance [cone_margin [n_s [print_level [then_n_s [end_clustering
-//                     [local_error [warm_start_mu [max_split]]]]]]]]]]]]
-//   (defaults 0.45 0.02 1000 0.3 0 3 0 0 0 0 1e-6 8; print_level is Ipopt's; then_n_s > 0: a second refinement
+//                     [local_error [warm_start_mu [max_split [mesh_max_iter]]]]]]]]]]]]]
+//   (defaults 0.45 0.02 1000 0.3 0 3 0 0 0 0 0.1 8 500; print_level is Ipopt's; then_n_s > 0: a second refinement
 //   with that many stages, started from the first one's result, the order continuation;
 //   end_clustering: RefinementGrid::end_clustering; local_error > 0: the mesh refinement's
-//   RefinementMesh::local_error_tolerance; warm_start_mu, max_split: RefinementMesh's)
+//   RefinementMesh::local_error_tolerance; warm_start_mu, max_split, mesh_max_iter: RefinementMesh's
+//   warm_start_mu, max_split, max_iter); any further arguments name=value are Ipopt options
+//   (RefinementIpopt::options: an integer, a number or a string, e.g. mumps_pivot_order=0)
 //
 // Discovery by the time-freezing homotopy gives no usable schedule on this OCP (docs/refinement.md,
 // "Hopper over three holes"), so the schedule here is a user's guess, the footsteps the holes
@@ -35,6 +37,7 @@
 #include <cstdlib>
 #include <fstream>
 #include <iostream>
+#include <string>
 #include <vector>
 
 namespace {
@@ -148,6 +151,22 @@ int main(int argc, char** argv) {
   options.mesh.local_error_tolerance = local_error;
   if (argc > 11) options.mesh.warm_start_mu = std::atof(argv[11]);
   if (argc > 12) options.mesh.max_split = std::atoi(argv[12]);
+  if (argc > 13) options.mesh.max_iter = std::atoi(argv[13]);
+  for (int a = 14; a < argc; ++a) {
+    const std::string arg = argv[a];
+    const std::size_t eq = arg.find('=');
+    if (eq == std::string::npos) continue;
+    const std::string name = arg.substr(0, eq), value = arg.substr(eq + 1);
+    char* end = nullptr;
+    const long i = std::strtol(value.c_str(), &end, 10);
+    if (*end == '\0') {
+      options.ipopt.options.push_back({name, static_cast<int>(i)});
+      continue;
+    }
+    const double d = std::strtod(value.c_str(), &end);
+    if (*end == '\0') options.ipopt.options.push_back({name, d});
+    else options.ipopt.options.push_back({name, value});
+  }
   RefinementResult<Hopper> r = refine_schedule(hopper, Ocp{}, horizon, guess, options);
   if (then_stages > 0) {
     std::cout << "first solve (n_s = " << stages << "): objective " << r.objective << ", contact drift " << r.contact_drift
@@ -176,7 +195,9 @@ int main(int argc, char** argv) {
       if (std::abs(kin.contacts[0].gap) > gap) gap = std::abs(kin.contacts[0].gap), t_gap = t;
       if (std::abs(kin.contacts[0].zeta_n) > zeta) zeta = std::abs(kin.contacts[0].zeta_n), t_zeta = t;
     }
-    std::cout << "  stance phase " << k << " [" << seg.t_begin << ", " << seg.t_end << "]: max |gap| " << gap << " at "
+    const VecT<double, 8> x_mid = r.trajectory.state(static_cast<int>(k), 0.5 * (seg.t_begin + seg.t_end));
+    std::cout << "  stance phase " << k << " [" << seg.t_begin << ", " << seg.t_end << "]: foot at x = "
+              << hopper.foot<double>(VecT<double, 4>(x_mid.head<4>()))[0] << ", max |gap| " << gap << " at "
               << t_gap << ", max |normal velocity| " << zeta << " at " << t_zeta << "\n";
   }
   for (const PhaseResimulation& p : r.phase_resimulation)

@@ -101,6 +101,7 @@ void refine_mesh(const S& scene, const Ocp& ocp, const OcpHorizon<S>& horizon, c
                         << round.elements_split << " elements split, " << round.elements << " elements\n";
     RefinementOptions finer = options;
     finer.grid.element_boundaries = boundaries;
+    finer.ipopt.max_iter = std::min(options.ipopt.max_iter, mesh.max_iter);
     finer.ipopt.options.insert(finer.ipopt.options.begin(), IpoptOption{"mu_init", mesh.warm_start_mu});
     const ScheduleGuess<S> guess = solution_guess(*nlp, sol.x, out);
     auto [finer_nlp, finer_sol] = solve_schedule(scene, ocp, horizon, guess, finer, out);

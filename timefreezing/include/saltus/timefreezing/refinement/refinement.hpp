@@ -72,6 +72,10 @@ struct RefinementSolve {
   double objective = 0.0, constraint_violation = 0.0;
   int ipopt_iterations = 0;
   double seconds = 0.0;
+  /// The rows with the largest |multiplier| at the solve's last point, largest first (at most
+  /// five: "name (multiplier)", ScheduleRefinementNlp::constraint_name): where a solve that does
+  /// not converge loses its regularity.
+  std::vector<std::string> largest_multipliers;
 };
 
 /// One round of the mesh refinement (refinement.hpp, "MESH REFINEMENT"): the local errors of the

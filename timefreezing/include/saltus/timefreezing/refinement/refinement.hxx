@@ -29,7 +29,13 @@ inline MpccSolution solve_refinement_nlp(const Mpcc& nlp, const RefinementIpopt&
   // MpccSolverOptions::IpoptSettings): Ipopt's own 1e-8 relative relaxation of every bound leaves
   // validity rows at -1e-8 .. -1e-7 (the plank-box's slide at h = 0.05: 7.7e-8 with it, 1.2e-13
   // with 0). The user's options come after and may set it again.
-  s.ipopt.options = o.options;
+  //
+  // MUMPS orders by AMD (mumps_pivot_order 0), not by its automatic choice: above some size the
+  // automatic choice gives orderings that differ from run to run, and so did the solves
+  // (measured on the hopper's mesh rounds: two identical runs took 177 and 132 iterations, then
+  // 123 and 253; with AMD three runs agree to every iteration: 170, 259, 98, 18; docs/refinement.md).
+  s.ipopt.options.push_back({"mumps_pivot_order", 0});
+  s.ipopt.options.insert(s.ipopt.options.end(), o.options.begin(), o.options.end());
   return solve_mpcc(nlp, s);
 }
 
@@ -70,11 +76,32 @@ inline RefinementSolve solve_record(const std::string& schedule, const MpccSolut
   return r;
 }
 
+/// "name (multiplier)" of the `count` rows of `nlp` with the largest |multipliers|, largest first.
+inline std::vector<std::string> largest_multipliers(const Mpcc& nlp, const Eigen::VectorXd& multipliers, int count) {
+  std::vector<int> rows(static_cast<std::size_t>(multipliers.size()));
+  for (int j = 0; j < multipliers.size(); ++j) rows[static_cast<std::size_t>(j)] = j;
+  const auto n = std::min<std::ptrdiff_t>(count, std::ssize(rows));
+  std::partial_sort(rows.begin(), rows.begin() + n, rows.end(),
+                    [&](int a, int b) { return std::abs(multipliers[a]) > std::abs(multipliers[b]); });
+  std::vector<std::string> out;
+  for (std::ptrdiff_t k = 0; k < n; ++k) {
+    std::ostringstream line;
+    line << nlp.constraint_name(rows[std::size_t(k)]) << " (" << multipliers[rows[std::size_t(k)]] << ")";
+    out.push_back(line.str());
+  }
+  return out;
+}
+
 inline void progress_line(std::ostream* os, const RefinementSolve& s) {
   if (!os) return;
   *os << "refinement: " << (s.succeeded ? "solved" : "failed") << " (" << s.ipopt_status << ", " << s.ipopt_iterations
       << " iterations, " << s.seconds << " s), objective " << s.objective << ", violation " << s.constraint_violation
       << ": " << s.schedule << "\n";
+  if (!s.succeeded && !s.largest_multipliers.empty()) {
+    *os << "refinement:   largest multipliers:";
+    for (const std::string& m : s.largest_multipliers) *os << " " << m << ";";
+    *os << "\n";
+  }
 }
 
 /// The solve of one schedule: builds the NLP, solves it, records it. Returns the NLP and the solution.
@@ -84,7 +111,8 @@ std::pair<std::unique_ptr<ScheduleRefinementNlp<S, Ocp>>, MpccSolution> solve_sc
     const RefinementOptions& options, RefinementResult<S>& out) {
   auto nlp = std::make_unique<ScheduleRefinementNlp<S, Ocp>>(scene, ocp, horizon, guess, options);
   MpccSolution sol = solve_refinement_nlp(*nlp, options.ipopt);
-  const RefinementSolve record = solve_record(describe(scene, nlp->schedule()), sol);
+  RefinementSolve record = solve_record(describe(scene, nlp->schedule()), sol);
+  record.largest_multipliers = largest_multipliers(*nlp, sol.constraint_multipliers, 5);
   progress_line(options.progress, record);
   out.solves.push_back(record);
   out.ipopt_iterations += sol.ipopt_iterations;

@@ -29,7 +29,7 @@ inline nlohmann::ordered_json finite_or_null(double v) {
 ///   schedule_edits              [{kind, phase, contact, t, t_begin, t_end, multiplier, schedule_after}]
 ///   schedule_check_passed       no edit proposed after the last solve
 ///   solves                      [{schedule, succeeded, ipopt_status, objective, constraint_violation,
-///                               ipopt_iterations, seconds}]
+///                               ipopt_iterations, seconds, largest_multipliers}]
 ///   phase_resim_max_error       max over phases of the per-phase re-simulation's distance
 ///   phase_resimulation          [{phase, max_error, end_error, start_projection, event_time_error,
 ///                               x_plus_error, event_guards_match, next_mode_matches, compared_until,
@@ -71,7 +71,8 @@ nlohmann::ordered_json to_json(const S& scene, const RefinementResult<S>& r) {
     solves.push_back({{"schedule", s.schedule}, {"succeeded", s.succeeded}, {"ipopt_status", s.ipopt_status},
                       {"objective", finite_or_null(s.objective)},
                       {"constraint_violation", finite_or_null(s.constraint_violation)},
-                      {"ipopt_iterations", s.ipopt_iterations}, {"seconds", s.seconds}});
+                      {"ipopt_iterations", s.ipopt_iterations}, {"seconds", s.seconds},
+                      {"largest_multipliers", s.largest_multipliers}});
   j["solves"] = solves;
   j["phase_resim_max_error"] = finite_or_null(r.phase_resim_max_error);
   json phases = json::array();

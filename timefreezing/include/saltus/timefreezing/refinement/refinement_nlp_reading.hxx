@@ -27,6 +27,7 @@ inline void RefinementOptions::validate() const {
   SALTUS_REQUIRE(std::isfinite(mesh.local_error_tolerance) && mesh.local_error_tolerance >= 0.0,
                  "refinement: mesh.local_error_tolerance must be >= 0, got ", mesh.local_error_tolerance);
   SALTUS_REQUIRE(mesh.max_rounds >= 0, "refinement: mesh.max_rounds must be >= 0, got ", mesh.max_rounds);
+  SALTUS_REQUIRE(mesh.max_iter >= 0, "refinement: mesh.max_iter must be >= 0, got ", mesh.max_iter);
   SALTUS_REQUIRE(mesh.max_split >= 2, "refinement: mesh.max_split must be >= 2, got ", mesh.max_split);
   SALTUS_REQUIRE(mesh.safety > 0.0 && mesh.safety <= 1.0, "refinement: mesh.safety must lie in (0, 1], got ", mesh.safety);
   SALTUS_REQUIRE(std::isfinite(mesh.warm_start_mu) && mesh.warm_start_mu > 0.0,

@@ -43,6 +43,9 @@ struct RefinementMesh {
   /// of Radau IIA's two: the end point's is 2 n_s).
   int max_split = 8;
   double safety = 0.25;  ///< in (0, 1]
+  /// Ipopt iterations at most per round (>= 0; capped by RefinementIpopt::max_iter). A round that
+  /// does not solve ends the mesh refinement with the previous grid's solution.
+  int max_iter = 500;
   /// Ipopt's mu_init for the solves started from a previous solution. Ipopt's own default, 0.1:
   /// measured on the hopper (h = 0.05 s, tolerance 1e-2, max_split 4), a barrier parameter of 1e-6
   /// that would keep the warm start's active bounds took 209 iterations on the second round against
@@ -57,6 +60,8 @@ struct RefinementIpopt {
   int max_iter = 500;    ///< Ipopt `max_iter` per solve, >= 0
   int print_level = 0;   ///< Ipopt `print_level` (0..12)
   /// Ipopt's own options by name, applied last (e.g. {"hessian_approximation", "limited-memory"}).
+  /// The refinement sets mumps_pivot_order 0 (AMD) before them: MUMPS' automatic choice of an
+  /// ordering made the solves differ from run to run (refinement.hxx, solve_refinement_nlp).
   std::vector<IpoptOption> options;
 };
 
