@@ -102,7 +102,10 @@ void refine_mesh(const S& scene, const Ocp& ocp, const OcpHorizon<S>& horizon, c
     RefinementOptions finer = options;
     finer.grid.element_boundaries = boundaries;
     finer.ipopt.max_iter = std::min(options.ipopt.max_iter, mesh.max_iter);
-    finer.ipopt.options.insert(finer.ipopt.options.begin(), IpoptOption{"mu_init", mesh.warm_start_mu});
+    // MUMPS ordered by AMD: its automatic choice of an ordering, on these larger NLPs, made the rounds
+    // differ from run to run (RefinementMesh, "reproducible"); the user's options come after.
+    finer.ipopt.options.insert(finer.ipopt.options.begin(),
+                               {IpoptOption{"mu_init", mesh.warm_start_mu}, IpoptOption{"mumps_pivot_order", 0}});
     const ScheduleGuess<S> guess = solution_guess(*nlp, sol.x, out);
     auto [finer_nlp, finer_sol] = solve_schedule(scene, ocp, horizon, guess, finer, out);
     round.solved = out.solves.back().succeeded && finer_sol.constraint_violation <= 1e-6;

@@ -29,13 +29,7 @@ inline MpccSolution solve_refinement_nlp(const Mpcc& nlp, const RefinementIpopt&
   // MpccSolverOptions::IpoptSettings): Ipopt's own 1e-8 relative relaxation of every bound leaves
   // validity rows at -1e-8 .. -1e-7 (the plank-box's slide at h = 0.05: 7.7e-8 with it, 1.2e-13
   // with 0). The user's options come after and may set it again.
-  //
-  // MUMPS orders by AMD (mumps_pivot_order 0), not by its automatic choice: above some size the
-  // automatic choice gives orderings that differ from run to run, and so did the solves
-  // (measured on the hopper's mesh rounds: two identical runs took 177 and 132 iterations, then
-  // 123 and 253; with AMD three runs agree to every iteration: 170, 259, 98, 18; docs/refinement.md).
-  s.ipopt.options.push_back({"mumps_pivot_order", 0});
-  s.ipopt.options.insert(s.ipopt.options.end(), o.options.begin(), o.options.end());
+  s.ipopt.options = o.options;
   return solve_mpcc(nlp, s);
 }
 

@@ -52,6 +52,10 @@ struct RefinementMesh {
   /// 152, and stalled on the third (dual infeasibility 4e14) where 0.1 took 19 iterations: the
   /// coarse optimum is far from the fine one (objective 981 -> 164), not a point to stay near.
   double warm_start_mu = 0.1;
+  // The rounds are reproducible: they order MUMPS by AMD (Ipopt's mumps_pivot_order 0, set before
+  // RefinementIpopt::options). MUMPS' automatic choice made two identical runs of the hopper's
+  // rounds take 177 and 132, then 123 and 253 iterations; with AMD three runs agree to every
+  // iteration (docs/refinement.md, "Mesh refinement by the local error").
 };
 
 /// Ipopt on the refinement NLP (a plain NLP: no complementarity pairs).
@@ -60,8 +64,6 @@ struct RefinementIpopt {
   int max_iter = 500;    ///< Ipopt `max_iter` per solve, >= 0
   int print_level = 0;   ///< Ipopt `print_level` (0..12)
   /// Ipopt's own options by name, applied last (e.g. {"hessian_approximation", "limited-memory"}).
-  /// The refinement sets mumps_pivot_order 0 (AMD) before them: MUMPS' automatic choice of an
-  /// ordering made the solves differ from run to run (refinement.hxx, solve_refinement_nlp).
   std::vector<IpoptOption> options;
 };
 
