@@ -97,6 +97,14 @@ ScheduleGuess<PointMass> hand_guess() {
   return g;
 }
 
+/// Refinement options with elements of at most h [s] and n_s stages.
+RefinementOptions grid_options(double h, int stages) {
+  RefinementOptions o;
+  o.grid.max_element_duration = h;
+  o.grid.stages = stages;
+  return o;
+}
+
 /// Ipopt's derivative checker at the NLP's initial point finds no error.
 void expect_exact_derivatives(const ScheduleRefinementNlp<PointMass, scenes::PointMassToTheTarget>& nlp) {
   Eigen::VectorXd x(nlp.variable_count());
@@ -106,9 +114,7 @@ void expect_exact_derivatives(const ScheduleRefinementNlp<PointMass, scenes::Poi
 }
 
 TEST(RefinementNlp, IpoptDerivativeCheckerFindsNoError) {
-  RefinementOptions o;
-  o.grid.max_element_duration = 0.25;
-  o.grid.stages = 2;
+  RefinementOptions o = grid_options(0.25, 2);
   const ScheduleRefinementNlp<PointMass, scenes::PointMassToTheTarget> nlp(frictional_mass(), {}, Case::refinement_horizon(),
                                                                            hand_guess(), o);
   expect_exact_derivatives(nlp);
@@ -118,9 +124,7 @@ TEST(RefinementNlp, IpoptDerivativeCheckerFindsNoError) {
 TEST(RefinementNlp, IpoptDerivativeCheckerFindsNoErrorWithFiveStages) {
   // The tableau of n_s = 5 (order 9) is built, not tabulated (discretisation/radau.hpp): the NLP's
   // collocation rows and their exact derivatives must not depend on n_s <= 3.
-  RefinementOptions o;
-  o.grid.max_element_duration = 0.5;
-  o.grid.stages = 5;
+  RefinementOptions o = grid_options(0.5, 5);
   const ScheduleRefinementNlp<PointMass, scenes::PointMassToTheTarget> nlp(frictional_mass(), {}, Case::refinement_horizon(),
                                                                            hand_guess(), o);
   expect_exact_derivatives(nlp);
@@ -131,9 +135,7 @@ TEST(RefinementNlp, IpoptDerivativeCheckerFindsNoErrorWithFiveStages) {
 TEST(RefinementNlp, ClusteredElementsShortenTowardTheEvents) {
   // RefinementGrid::end_clustering = 1: the element boundaries of each phase at the Chebyshev-Lobatto
   // points (1 - cos(pi k / N)) / 2; the derivatives stay exact.
-  RefinementOptions o;
-  o.grid.max_element_duration = 0.125;
-  o.grid.stages = 2;
+  RefinementOptions o = grid_options(0.125, 2);
   o.grid.end_clustering = 1.0;
   const ScheduleRefinementNlp<PointMass, scenes::PointMassToTheTarget> nlp(frictional_mass(), {}, Case::refinement_horizon(),
                                                                            hand_guess(), o);
@@ -168,9 +170,7 @@ TEST(RefinementNlp, APhaseEndingBeforeItsStartIsReadAsOfZeroLength) {
   // wants to vanish can end a few 1e-12 s before it starts (measured on the plank-box after a vanish
   // edit). The reading makes the times monotone, so the refined trajectory's segments stay ordered
   // and can be sampled at every event.
-  RefinementOptions o;
-  o.grid.max_element_duration = 0.25;
-  o.grid.stages = 2;
+  RefinementOptions o = grid_options(0.25, 2);
   const PointMass mass = frictional_mass();
   const ScheduleRefinementNlp<PointMass, scenes::PointMassToTheTarget> nlp(mass, {}, Case::refinement_horizon(), hand_guess(), o);
   MpccSolution sol;
@@ -193,9 +193,7 @@ TEST(RefinementNlp, APhaseEndingBeforeItsStartIsReadAsOfZeroLength) {
 /// from the exact flow. Then Ipopt's derivative checker on a grid of explicit, uneven element
 /// boundaries (RefinementGrid::element_boundaries, what the mesh refinement builds).
 TEST(MeshRefinement, ElementLocalErrorsAreTheDistanceFromTheEventDrivenFlow) {
-  RefinementOptions o;
-  o.grid.max_element_duration = 0.25;
-  o.grid.stages = 1;
+  RefinementOptions o = grid_options(0.25, 1);
   const PointMass mass = frictional_mass();
   const ScheduleRefinementNlp<PointMass, scenes::PointMassToTheTarget> nlp(mass, {}, Case::refinement_horizon(), hand_guess(), o);
   Eigen::VectorXd x(nlp.variable_count());
@@ -234,9 +232,7 @@ TEST(MeshRefinement, ElementLocalErrorsAreTheDistanceFromTheEventDrivenFlow) {
 /// the drop and the slide) from the hand guess on 0.25 s elements, refined until every element's
 /// local error is below 1e-4: a few rounds; the per-phase re-simulation follows the local errors.
 TEST(MeshRefinement, SplitsElementsUntilTheLocalErrorsAreWithinTheTolerance) {
-  RefinementOptions o;
-  o.grid.max_element_duration = 0.25;
-  o.grid.stages = 1;
+  RefinementOptions o = grid_options(0.25, 1);
   const PointMass mass = frictional_mass();
   const RefinementResult<PointMass> coarse = refine_schedule(mass, Case{}, Case::refinement_horizon(), hand_guess(), o);
   ASSERT_TRUE(coarse.converged) << coarse.message;

@@ -80,7 +80,8 @@ ScheduleGuess<S> solution_guess(const ScheduleRefinementNlp<S, Ocp>& nlp, const 
 }
 
 /// The rounds of the mesh refinement, from the converged solve (nlp, sol) whose reading is in
-/// `out`; on return nlp, sol and `out` hold the last solve that succeeded.
+/// `out` (its element_local_errors among it); on return nlp, sol and `out` hold the last solve that
+/// succeeded.
 template <Scene S, class Ocp>
 void refine_mesh(const S& scene, const Ocp& ocp, const OcpHorizon<S>& horizon, const RefinementOptions& options,
                  std::unique_ptr<ScheduleRefinementNlp<S, Ocp>>& nlp, MpccSolution& sol, RefinementResult<S>& out) {
@@ -88,7 +89,7 @@ void refine_mesh(const S& scene, const Ocp& ocp, const OcpHorizon<S>& horizon, c
   for (int k = 0; mesh.local_error_tolerance > 0.0; ++k) {
     MeshRound round;
     const std::vector<std::vector<double>> boundaries =
-        split_elements(*nlp, sol.x, nlp->element_local_errors(sol.x), mesh, round);
+        split_elements(*nlp, sol.x, out.element_local_errors, mesh, round);
     if (round.elements_split == 0) return;
     if (k >= mesh.max_rounds) {
       out.message += "; local error " + std::to_string(round.largest_local_error) + " > " +

@@ -161,6 +161,7 @@ struct RefinementResult {
   /// (ScheduleRefinementNlp::element_local_errors) [state units], and the rounds of the mesh
   /// refinement that led there (none when RefinementMesh::local_error_tolerance is 0).
   double local_error = 0.0;
+  std::vector<double> element_local_errors;  ///< per element of the final grid (between element_times)
   std::vector<MeshRound> mesh_rounds;
   std::vector<ImpliedRow> implied_rows;
   std::vector<ScheduleEdit> edits;

@@ -54,7 +54,8 @@ void read_solution(const S& scene, const ScheduleRefinementNlp<S, Ocp>& nlp, con
   out.terminal_violation = nlp.terminal_violation(x);
   out.contact_drift = nlp.contact_drift(x);
   out.implied_rows = nlp.implied_rows();
-  const std::vector<double> local = nlp.element_local_errors(x);
+  out.element_local_errors = nlp.element_local_errors(x);
+  const std::vector<double>& local = out.element_local_errors;
   out.local_error = local.empty() ? 0.0 : *std::max_element(local.begin(), local.end());
 }
 
