@@ -376,6 +376,48 @@ TEST(ScheduleRefinement, AScheduleThatCannotReachItsTargetSaysSo) {
   for (const std::string& m : r.solves.back().largest_multipliers) EXPECT_NE(m.find(" ("), std::string::npos) << m;
 }
 
+/// The names of an NLP's terminal rows ("terminal[k]").
+template <class Nlp>
+std::vector<std::string> terminal_row_names(const Nlp& nlp) {
+  std::vector<std::string> names;
+  for (int j = 0; j < nlp.constraint_count(); ++j)
+    if (nlp.constraint_name(j).rfind("terminal[", 0) == 0) names.push_back(nlp.constraint_name(j));
+  return names;
+}
+
+/// The terminal rows z = 0 and v_z = 0 of a target on the table are the last stance's gap and
+/// normal velocity: implied (in gradient and in value), not imposed twice. A target above the table
+/// (z = 0.5) has the same gradient but cannot be met in a stance: imposed (and the solve fails,
+/// AScheduleThatCannotReachItsTargetSaysSo), while its v_z = 0 is still implied.
+TEST(RefinementNlp, TerminalRowsHeldByTheLastStanceAreImpliedWhereTheirValueHolds) {
+  const ScheduleRefinementNlp<PointMass, scenes::PointMassToTheTarget> on_table(
+      frictional_mass(), {}, Case::refinement_horizon(), hand_guess(), grid_options(0.25, 2));
+  std::vector<int> implied;
+  for (const ImpliedRow& row : on_table.implied_rows())
+    if (row.terminal) implied.push_back(row.index);
+  EXPECT_EQ(implied, (std::vector<int>{1, 3}));
+  EXPECT_EQ(terminal_row_names(on_table), (std::vector<std::string>{"terminal[0]", "terminal[2]"}));
+  expect_exact_derivatives(on_table);
+
+  ScheduleGuess<PointMass> g;
+  g.schedule.phases = {closed_mode(1)};
+  g.state = [](int, double t) { return Vec<4>(t, 0, 1, 0); };
+  g.input = [](double) { return Vec<2>(1, 0); };
+  OcpHorizon<PointMass> h = Case::refinement_horizon();
+  h.x0 << 0, 0, 1, 0;
+  const ScheduleRefinementNlp<PointMass, AboveTheTable> above(frictional_mass(), {}, h, g, grid_options(0.25, 2));
+  implied.clear();
+  for (const ImpliedRow& row : above.implied_rows())
+    if (row.terminal) implied.push_back(row.index);
+  EXPECT_EQ(implied, (std::vector<int>{3}));  // v_z = 0 holds there; z = 0.5 does not
+  EXPECT_EQ(terminal_row_names(above), (std::vector<std::string>{"terminal[0]", "terminal[1]", "terminal[2]"}));
+
+  RefinementOptions bad = grid_options(0.25, 2);
+  bad.implied_terminal_value_tolerance = 0.0;
+  expect_invalid([&] { (void)refine_schedule(frictional_mass(), AboveTheTable{}, h, g, bad); },
+                 {"implied_terminal_value_tolerance"});
+}
+
 /// A sticking stance that ends in a release while the input pushes sideways: the cost wants
 /// u = (2, 15) N throughout (15 N > m g lifts the mass), the stance lasts at least 0.3 s. At the
 /// release the whole contact force vanishes: lambda_n = 0 (the guard) and lambda_t = 0 (the
@@ -462,7 +504,11 @@ TEST(ScheduleRefinement, AStickConeMarginKeepsTheStickInsideTheCone) {
 /// A stance built to want a lift-off: a frictionless mass slides on the table to x = 1 at rest at
 /// T = 1 while the cost asks for an upward thrust u2 ~ 15 N > m g around t = 0.5. On the table
 /// lambda_n = m g - u2 >= 0 holds the thrust at m g with a positive multiplier: the edit inserts a
-/// flight (release, flight, touchdown back), and the edited schedule costs less.
+/// flight (release, flight, touchdown back), and the edited schedule costs less. The edited
+/// schedule has a second local optimum, a flight to the end that lands at T (the last stance of
+/// zero length, the terminal z = 0, v_z = 0 by the impact): on grids of 0.05 s and 0.1 s elements
+/// Ipopt reaches it from the edit's guess (15.40 > 14.76 at 0.05 s, and the edit is rejected); on
+/// 0.02 .. 0.04 s it reaches the sliding landing (12.78 at 0.04 s).
 struct LiftWish {
   static constexpr int terminal_constraint_count = 4;
   template <class T>
@@ -488,7 +534,7 @@ TEST(ScheduleRefinement, AStanceThatWantsToLiftOffIsEdited) {
   h.x0.setZero();
   h.final_time = 1.0;
   RefinementOptions o;
-  o.grid.max_element_duration = 0.05;
+  o.grid.max_element_duration = 0.04;
   const RefinementResult<PointMass> r = refine_schedule(PointMass{}, LiftWish{}, h, g, o);
   ASSERT_EQ(r.stage, "refined") << r.message << "; schedule " << describe(PointMass{}, r.schedule) << "; events at "
                                 << ::testing::PrintToString(r.event_times);

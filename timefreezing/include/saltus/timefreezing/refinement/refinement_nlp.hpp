@@ -63,6 +63,9 @@
 // contacts' gap gradients and the gradients of the equality path rows (no v, u dependence) is
 // implied as gap = 0 (the plank-box's corner kept on the plank by theta - phi = 0 while the other
 // corner is closed): not imposed, it would be weakly active at every stage point.
+// (e) an equality terminal row that the last phase's closed contacts (h_n = 0, zeta_n = 0) and the
+// terminal rows kept before it imply in gradient and in value (the hopper's z(T) = 0.4 with the leg
+// straight is the foot's gap = 0): not imposed (refinement_nlp_terminal.hxx).
 // "In the span": relative least-squares residual <= RefinementOptions::implied_row_tolerance.
 // implied_rows() lists them; the readings (mode_validity_violation, path_violation) include them.
 //
@@ -112,6 +115,7 @@ struct ImpliedRow {
   int index = 0;            ///< the path row's index, or the guard's position in the event
   std::string description;  ///< e.g. "path row 0 in phase 1", "touchdown C_R at event 0"
   double residual = 0.0;    ///< the relative least-squares residual that decided it
+  bool terminal = false;    ///< (e) a terminal row (phase and event -1, index its terminal row)
 };
 
 /// The refinement NLP of one schedule (file comment). Immutable after construction except for its
@@ -258,6 +262,11 @@ class ScheduleRefinementNlp final : public Mpcc {
   void check_initial_state() const;
   void find_implied_phase_rows();
   void find_implied_guards();
+  void find_implied_terminal_rows();
+  template <class T>
+  VecT<T, 2 * S::nc> held_contact_values(const VecT<T, nx>& x) const;  // per contact (h_n, zeta_n)
+  bool project_on_held_manifold(const VecT<double, nwt>& w, const std::vector<int>& held, const std::vector<int>& kept,
+                                VecT<double, nx>& x) const;
   void build_rows();
   void build_structures();
   int count_validity(const Mode<nc>& mode) const;
@@ -322,6 +331,7 @@ class ScheduleRefinementNlp final : public Mpcc {
   std::vector<int> point_row_;
   std::vector<EventRows> events_;
   int duration_row_ = 0, terminal_row_ = 0;
+  std::vector<int> imposed_terminal_rows_;  // the terminal rows imposed, in order (the others implied)
   std::vector<ImpliedRow> implied_;
   Eigen::VectorXd guess_x_;  // the initial point, built from the guess
   std::vector<SparseEntry> jacobian_structure_, hessian_structure_;

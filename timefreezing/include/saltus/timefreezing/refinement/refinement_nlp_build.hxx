@@ -64,6 +64,7 @@ ScheduleRefinementNlp<S, Ocp>::ScheduleRefinementNlp(const S& scene, const Ocp& 
   find_implied_phase_rows();
   restrict_event_ends();
   find_implied_guards();
+  find_implied_terminal_rows();
   build_rows();
   build_structures();
 }

@@ -191,7 +191,8 @@ void ScheduleRefinementNlp<S, Ocp>::constraints(const Eigen::Ref<const Eigen::Ve
     for (std::size_t k = 0; k < ev.separating_contacts.size(); ++k) g[row++] = phi[6 * nc + nx + static_cast<int>(k)];
   }
   for (int p = 0; p < phase_count(); ++p) g[duration_row_ + p] = x[time_index(p + 1)] - x[time_index(p)];
-  for (int k = 0; k < nt; ++k) g[terminal_row_ + k] = terminal_value_[k];
+  for (std::size_t j = 0; j < imposed_terminal_rows_.size(); ++j)
+    g[terminal_row_ + static_cast<int>(j)] = terminal_value_[imposed_terminal_rows_[j]];
 }
 
 /// emit(row, column, value) for every Jacobian entry, in a fixed order (values from the caches:
@@ -242,8 +243,9 @@ void ScheduleRefinementNlp<S, Ocp>::walk_jacobian(Emit&& emit) const {
     emit(duration_row_ + p, time_index(p + 1), 1.0);
     emit(duration_row_ + p, time_index(p), -1.0);
   }
-  for (int k = 0; k < nt; ++k)
-    for (int a = 0; a < nwt; ++a) emit(terminal_row_ + k, terminal_global(a), terminal_jacobian_(k, a));
+  for (std::size_t j = 0; j < imposed_terminal_rows_.size(); ++j)
+    for (int a = 0; a < nwt; ++a)
+      emit(terminal_row_ + static_cast<int>(j), terminal_global(a), terminal_jacobian_(imposed_terminal_rows_[j], a));
 }
 
 template <Scene S, class Ocp>
@@ -325,8 +327,9 @@ void ScheduleRefinementNlp<S, Ocp>::walk_hessian(const Eigen::Ref<const Eigen::V
   }
   MatT<double, nwt, nwt> Ht = MatT<double, nwt, nwt>::Zero();
   if (values) {
-    VecT<double, terminal_outputs> weight;
-    for (int k = 0; k < nt; ++k) weight[k] = lambda[terminal_row_ + k];
+    VecT<double, terminal_outputs> weight = VecT<double, terminal_outputs>::Zero();
+    for (std::size_t j = 0; j < imposed_terminal_rows_.size(); ++j)
+      weight[imposed_terminal_rows_[j]] = lambda[terminal_row_ + static_cast<int>(j)];
     weight[nt] = sigma;
     detail::local_hessian<nwt, terminal_outputs>([&](const auto& w) { return terminal_block(w); }, terminal_local(x),
                                                  weight, Ht);

@@ -48,6 +48,8 @@ inline void RefinementOptions::validate() const {
                  "refinement: stick_cone_margin must lie in [0, 1), got ", stick_cone_margin);
   SALTUS_REQUIRE(implied_row_tolerance > 0.0 && implied_row_tolerance < 1.0,
                  "refinement: implied_row_tolerance must lie in (0, 1), got ", implied_row_tolerance);
+  SALTUS_REQUIRE(std::isfinite(implied_terminal_value_tolerance) && implied_terminal_value_tolerance > 0.0,
+                 "refinement: implied_terminal_value_tolerance must be > 0, got ", implied_terminal_value_tolerance);
   SALTUS_REQUIRE(std::isfinite(checks.mode_validity) && checks.mode_validity >= 0.0,
                  "refinement: checks.mode_validity must be >= 0, got ", checks.mode_validity);
   SALTUS_REQUIRE(std::isfinite(checks.phase_resimulation) && checks.phase_resimulation >= 0.0,

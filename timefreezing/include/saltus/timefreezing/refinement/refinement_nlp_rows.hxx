@@ -247,7 +247,7 @@ void ScheduleRefinementNlp<S, Ocp>::build_rows() {
   duration_row_ = row;
   row += P;
   terminal_row_ = row;
-  row += nt;
+  row += static_cast<int>(imposed_terminal_rows_.size());
   m_ = row;
   point_value_.assign(point_row_.size(), VecT<double, stage_outputs>::Zero());
   point_jacobian_.assign(point_row_.size(), MatT<double, stage_outputs, nw>::Zero());
@@ -314,8 +314,11 @@ void ScheduleRefinementNlp<S, Ocp>::bounds(Eigen::Ref<Eigen::VectorXd> x_lower, 
   g_lower.segment(duration_row_, P).setConstant(options_.min_phase_duration);
   g_upper.segment(duration_row_, P).setConstant(inf);
   if constexpr (nt > 0) {
-    g_lower.template segment<nt>(terminal_row_) = ocp_.terminal_lower();
-    g_upper.template segment<nt>(terminal_row_) = ocp_.terminal_upper();
+    const VecT<double, nt> lo = ocp_.terminal_lower(), hi = ocp_.terminal_upper();
+    for (std::size_t j = 0; j < imposed_terminal_rows_.size(); ++j) {
+      g_lower[terminal_row_ + static_cast<int>(j)] = lo[imposed_terminal_rows_[j]];
+      g_upper[terminal_row_ + static_cast<int>(j)] = hi[imposed_terminal_rows_[j]];
+    }
   }
 }
 
@@ -356,10 +359,12 @@ std::string ScheduleRefinementNlp<S, Ocp>::constraint_name(int j) const {
       return "event " + std::to_string(b) + " (" + describe_event(scene_, schedule_.events[b]) + ")[" +
              std::to_string(j - events_[b].first_row) + "]";
   if (j >= duration_row_ && j < duration_row_ + phase_count()) return "duration of phase " + std::to_string(j - duration_row_);
-  if (j >= terminal_row_ && j < terminal_row_ + nt) return "terminal[" + std::to_string(j - terminal_row_) + "]";
+  if (j >= terminal_row_ && j < terminal_row_ + static_cast<int>(imposed_terminal_rows_.size()))
+    return "terminal[" + std::to_string(imposed_terminal_rows_[static_cast<std::size_t>(j - terminal_row_)]) + "]";
   return Mpcc::constraint_name(j);
 }
 
 }  // namespace saltus::timefreezing
 
+#include <saltus/timefreezing/refinement/refinement_nlp_terminal.hxx>
 #include <saltus/timefreezing/refinement/refinement_nlp_reading.hxx>

@@ -116,6 +116,11 @@ struct RefinementOptions {
   /// the rows already imposed at its event is implied the same way (refinement_nlp.hpp,
   /// "IMPLIED ROWS"). In (0, 1).
   double implied_row_tolerance = 1e-4;
+  /// A terminal equality row whose gradient the last phase's closed contacts (h_n, zeta_n) and the
+  /// kept terminal rows span is implied only if its bound holds, to this tolerance times
+  /// (1 + |bound|), on the manifold they hold (the guess's final state projected on it;
+  /// refinement_nlp_terminal.hxx). > 0.
+  double implied_terminal_value_tolerance = 1e-8;
   /// The state x0 must satisfy the first phase's closed contacts (gap and normal velocity) and
   /// open contacts (gap >= -tolerance) to this tolerance [scene units].
   double initial_state_tolerance = 1e-8;
