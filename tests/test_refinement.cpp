@@ -430,7 +430,7 @@ struct PushAndLift {
   }
 };
 
-TEST(ScheduleRefinement, AReleaseFromStickLeavesNoTangentialForce) {
+TEST(ScheduleRefinement, AReleaseFromStickLeavesNoTangentialForceAndResimulatesInWindows) {
   ScheduleGuess<PointMass> g;
   g.schedule.phases = {closed_mode(0), open_mode()};
   g.schedule.events = {guards_between(frictional_mass(), g.schedule.phases[0], g.schedule.phases[1])};
@@ -449,6 +449,27 @@ TEST(ScheduleRefinement, AReleaseFromStickLeavesNoTangentialForce) {
   EXPECT_LE(r.mode_validity_violation, 1e-9);
   EXPECT_NEAR(r.event_times[0], 0.3, 1e-6);  // the stance as short as allowed
   EXPECT_LE(r.phase_resim_max_error, 1e-8);
+
+  // The same re-simulation in windows of >= 0.1 s (multiple shooting): each window from the
+  // reference's state, the release judged by the last window of the stance, the same verdict.
+  const auto windowed = resimulate_phases(frictional_mass(), r.trajectory, r.schedule, r.element_times,
+                                          precise_simulation(), 0.1);
+  ASSERT_EQ(windowed.size(), 2u);
+  // ten elements per phase (the guess's 0.5 s phases): the 0.3 s stance's 0.03 s elements start
+  // windows at 0, 0.12, 0.24; the 0.7 s flight's 0.07 s elements at 0.3, 0.44, 0.58, 0.72, 0.86
+  EXPECT_EQ(windowed[0].windows, 3);
+  EXPECT_EQ(windowed[1].windows, 5);
+  for (std::size_t p = 0; p < 2; ++p) {
+    EXPECT_LE(windowed[p].max_error, 1e-8);
+    EXPECT_EQ(windowed[p].unplanned_events, 0) << windowed[p].note;
+    EXPECT_LE(windowed[p].x_plus_error, 1e-8);
+    EXPECT_EQ(windowed[p].compared_until, r.phase_resimulation[p].compared_until);
+  }
+  EXPECT_EQ(windowed[0].event_guards_match, r.phase_resimulation[0].event_guards_match);
+  EXPECT_NEAR(windowed[0].event_time_error, r.phase_resimulation[0].event_time_error, 1e-12);
+  expect_invalid([&] { (void)resimulate_phases(frictional_mass(), r.trajectory, r.schedule, r.element_times,
+                                               precise_simulation(), -1.0); },
+                 {"window must be >= 0"});
 }
 
 /// A push the table's friction cannot hold: the cost wants u = (20, 0) N throughout while the

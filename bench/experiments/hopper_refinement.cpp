@@ -7,7 +7,9 @@
 //   end_clustering: RefinementGrid::end_clustering; local_error > 0: the mesh refinement's
 //   RefinementMesh::local_error_tolerance; warm_start_mu, max_split, mesh_max_iter: RefinementMesh's
 //   warm_start_mu, max_split, max_iter); any further arguments name=value are Ipopt options
-//   (RefinementIpopt::options: an integer, a number or a string, e.g. mumps_pivot_order=0)
+//   (RefinementIpopt::options: an integer, a number or a string, e.g. mumps_pivot_order=0), except
+//   resimulation_window=<s> (RefinementChecks::resimulation_window) and mesh_max_rounds=<n>
+//   (RefinementMesh::max_rounds)
 //
 // Discovery by the time-freezing homotopy gives no usable schedule on this OCP (docs/refinement.md,
 // "Hopper over three holes"), so the schedule here is a user's guess, the footsteps the holes
@@ -157,6 +159,14 @@ int main(int argc, char** argv) {
     const std::size_t eq = arg.find('=');
     if (eq == std::string::npos) continue;
     const std::string name = arg.substr(0, eq), value = arg.substr(eq + 1);
+    if (name == "resimulation_window") {  // RefinementChecks::resimulation_window [s], not an Ipopt option
+      options.checks.resimulation_window = std::atof(value.c_str());
+      continue;
+    }
+    if (name == "mesh_max_rounds") {  // RefinementMesh::max_rounds
+      options.mesh.max_rounds = std::atoi(value.c_str());
+      continue;
+    }
     char* end = nullptr;
     const long i = std::strtol(value.c_str(), &end, 10);
     if (*end == '\0') {
@@ -195,13 +205,40 @@ int main(int argc, char** argv) {
       if (std::abs(kin.contacts[0].gap) > gap) gap = std::abs(kin.contacts[0].gap), t_gap = t;
       if (std::abs(kin.contacts[0].zeta_n) > zeta) zeta = std::abs(kin.contacts[0].zeta_n), t_zeta = t;
     }
+    // The friction use |lambda_t| / (mu lambda_n) of the stance's mode along it (largest, and where
+    // lambda_n is smallest), and the forces over the last 5 ms before the release.
+    FlowWorkspace<Hopper, double> ws;
+    const auto forces_at = [&](double t) {
+      const VecT<double, 8> x = r.trajectory.state(static_cast<int>(k), t);
+      evaluate_flow<Hopper, double>(hopper, r.schedule.phases[k], x, r.trajectory.input(t, x, r.schedule.phases[k]), ws);
+      return ws.force[0];
+    };
+    double use = 0, t_use = seg.t_begin;
+    const double scanned = seg.t_end - seg.t_begin - 5e-5;  // lambda_n = 0 at the release itself
+    for (int i = 0; i <= 20000; ++i) {
+      const double t = seg.t_begin + scanned * i / 20000.0;
+      const ContactForce<double> f = forces_at(t);
+      const double u = std::abs(f.tangent[0]) / (hopper.contact(0).mu * std::max(f.normal, 1e-300));
+      if (u > use) use = u, t_use = t;
+    }
+    std::cout << "  stance phase " << k << ": largest friction use " << use << " at " << t_use << "; before its end:";
+    for (double before : {5e-3, 2e-3, 1e-3, 3e-4, 1e-4}) {
+      const ContactForce<double> f = forces_at(seg.t_end - before);
+      std::cout << " [-" << before * 1e3 << " ms: lambda_n " << f.normal << ", lambda_t " << f.tangent[0] << "]";
+    }
+    std::cout << "\n";
     const VecT<double, 8> x_mid = r.trajectory.state(static_cast<int>(k), 0.5 * (seg.t_begin + seg.t_end));
     std::cout << "  stance phase " << k << " [" << seg.t_begin << ", " << seg.t_end << "]: foot at x = "
               << hopper.foot<double>(VecT<double, 4>(x_mid.head<4>()))[0] << ", max |gap| " << gap << " at "
               << t_gap << ", max |normal velocity| " << zeta << " at " << t_zeta << "\n";
   }
   for (const PhaseResimulation& p : r.phase_resimulation)
-    std::cout << "  phase " << p.phase << ": " << p.max_error << " (x+ " << p.x_plus_error << ") " << p.note << "\n";
+    std::cout << "  phase " << p.phase << " (" << p.windows << " windows): " << p.max_error << " (x+ " << p.x_plus_error
+              << ") " << p.note << "\n";
+  if (options.checks.resimulation_window > 0.0) {  // the same from each phase's start alone (single shooting)
+    for (const PhaseResimulation& p : resimulate_phases(hopper, r.trajectory, r.schedule, r.element_times))
+      std::cout << "  phase " << p.phase << " in one shot: " << p.max_error << " (x+ " << p.x_plus_error << ") " << p.note << "\n";
+  }
   std::ofstream("hopper_refinement.json") << to_json(hopper, r).dump(1) << "\n";
   return r.stage == "refined" ? 0 : 1;
 }

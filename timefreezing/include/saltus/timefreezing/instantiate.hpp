@@ -82,7 +82,8 @@
   prefix template std::vector<saltus::timefreezing::PhaseResimulation>                                      \
   saltus::timefreezing::resimulate_phases<S>(const S&, const saltus::HybridTrajectory<S>&,                  \
                                              const saltus::timefreezing::ModeSchedule<S::nc>&,              \
-                                             const std::vector<double>&, const saltus::SimulationOptions&); \
+                                             const std::vector<double>&, const saltus::SimulationOptions&,  \
+                                             double);                                                        \
   prefix template saltus::timefreezing::OpenLoopResimulation saltus::timefreezing::resimulate_open_loop<S>(  \
       const S&, const saltus::HybridTrajectory<S>&, const std::vector<double>&, const saltus::SimulationOptions&);
 

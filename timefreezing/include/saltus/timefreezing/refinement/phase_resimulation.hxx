@@ -1,5 +1,6 @@
 // The event-driven re-simulation of a refined reference (refinement.hpp, PhaseResimulation): (a)
-// phase by phase from each phase's start state, (b) over the whole horizon open loop.
+// phase by phase from each phase's start state (or window by window inside each phase, from the
+// reference's state at each window's start), (b) over the whole horizon open loop.
 #pragma once
 
 #include <saltus/hybrid/dynamics/constraints.hpp>
@@ -59,28 +60,47 @@ VecT<double, 2 * S::nq> state_before_events(const HybridTrajectory<S>& run, doub
   return run.state(k, std::clamp(t, s.t_begin, s.t_end));
 }
 
-/// (a) of the checks on one phase: the distance at every node of [t0, t1], through events the
-/// simulator finds inside the phase (a contact whose force and gap are both zero on the reference
-/// can be labelled open or closed: the motion is the same, and the distance says whether it is),
-/// which are counted and named.
+/// (a) of the checks on one stretch of a phase ending at `until`: the distance at every node of
+/// it, through events the simulator finds inside the phase (a contact whose force and gap are both
+/// zero on the reference can be labelled open or closed: the motion is the same, and the distance
+/// says whether it is), which are counted and their descriptions collected in `unplanned`.
 template <Scene S>
 void compare_phase(const S& scene, const HybridTrajectory<S>& traj, int p, const HybridTrajectory<S>& run,
-                   const std::vector<double>& nodes, double t1, double tolerance, PhaseResimulation& r) {
+                   const std::vector<double>& nodes, double until, double t1, double tolerance, PhaseResimulation& r,
+                   std::vector<std::string>& unplanned) {
   for (double t : nodes) {
     const double e = (state_before_events(run, t, tolerance) - traj.state(p, t)).cwiseAbs().maxCoeff();
     r.max_error = std::max(r.max_error, e);
     if (t == t1) r.end_error = e;
     r.compared_until = t;
   }
-  std::ostringstream named;
+  const double stop = until < t1 ? until : t1 - tolerance;  // the phase's end event is not unplanned
   for (const auto& ev : run.events) {
-    if (ev.t >= t1 - tolerance) break;
-    if (r.unplanned_events++ < 3)
-      named << (r.unplanned_events > 1 ? ", " : "") << describe_event(scene, ScheduleEvent{ev.guards()}) << " at t = " << ev.t;
+    if (ev.t >= stop) break;
+    ++r.unplanned_events;
+    std::ostringstream named;
+    named << describe_event(scene, ScheduleEvent{ev.guards()}) << " at t = " << ev.t;
+    unplanned.push_back(named.str());
   }
-  if (r.unplanned_events > 0)
-    r.note += std::string(r.note.empty() ? "" : "; ") + std::to_string(r.unplanned_events) +
-              " unplanned event(s) inside the phase (" + named.str() + (r.unplanned_events > 3 ? ", ..." : "") + ")";
+}
+
+/// The note on the unplanned events of a phase (the first three named).
+inline std::string unplanned_note(const std::vector<std::string>& unplanned) {
+  std::ostringstream note;
+  note << unplanned.size() << " unplanned event(s) inside the phase (";
+  for (std::size_t k = 0; k < unplanned.size() && k < 3; ++k) note << (k > 0 ? ", " : "") << unplanned[k];
+  note << (unplanned.size() > 3 ? ", ...)" : ")");
+  return note.str();
+}
+
+/// The starts of the re-simulation windows of a phase: its first node, then the first node at
+/// least `window` after the previous start (window <= 0: the phase's start alone).
+inline std::vector<double> window_starts(const std::vector<double>& nodes, double window) {
+  std::vector<double> starts{nodes.front()};
+  if (window <= 0.0) return starts;
+  for (std::size_t k = 1; k + 1 < nodes.size(); ++k)
+    if (nodes[k] - starts.back() >= window * (1.0 - 1e-9)) starts.push_back(nodes[k]);  // rounding of the nodes
+  return starts;
 }
 
 /// The boundary at the end of phase p: the events the simulator finds within `tolerance` of t1,
@@ -122,67 +142,93 @@ void judge_boundary(const HybridTrajectory<S>& run, const ModeSchedule<S::nc>& s
   if (why.tellp() > 0) r.note += std::string(r.note.empty() ? "" : "; ") + why.str();
 }
 
+/// The state x brought onto the contacts closed in `mode` (and in `released`, the contacts closed
+/// before a release at this start); returns ||change||_inf.
+template <Scene S>
+double project_on_contacts(const S& scene, Mode<S::nc> manifold, const Mode<S::nc>* released, VecT<double, 2 * S::nq>& x) {
+  if (released)
+    for (int i = 0; i < S::nc; ++i)
+      if (!manifold[i].closed() && (*released)[i].closed()) manifold[i] = ContactState::slip(Eigen::Vector2d::Zero());
+  const VecT<double, 2 * S::nq> unprojected = x;
+  ConstraintProjection<S> projection;
+  projection.project(scene, manifold, x);
+  return (x - unprojected).cwiseAbs().maxCoeff();
+}
+
+/// Phase p re-simulated window by window (resimulate_phases): each window from the reference's
+/// state at its start (the first from x+ of the event before it), projected onto the phase's
+/// closed contacts; the last window runs past the phase's end and judges the boundary.
+template <Scene S>
+PhaseResimulation resimulate_phase(const S& scene, const HybridTrajectory<S>& traj, const ModeSchedule<S::nc>& schedule,
+                                   const std::vector<double>& element_times, const SimulationOptions& simulation,
+                                   double window, int p) {
+  PhaseResimulation r;
+  r.phase = p;
+  const int P = static_cast<int>(traj.segments.size());
+  const Segment<S>& seg = traj.segments[static_cast<std::size_t>(p)];
+  const double t0 = seg.t_begin, t1 = seg.t_end;
+  std::vector<double> nodes;
+  for (double t : element_times)
+    if (t >= t0 && t <= t1) nodes.push_back(t);
+  if (t1 <= t0 || nodes.empty()) {
+    r.note = "the phase has zero duration";
+    return r;
+  }
+  // The optimal input on both sides of the phase's end: a release (lambda_n = 0 at x-) or a slip
+  // onset happens there because the next phase's input drives the force out of its cone.
+  const InputLaw<S> law = [&traj, t0](double t, const VecT<double, 2 * S::nq>& x, const Mode<S::nc>& m) {
+    return traj.input(std::max(t, t0), x, m);
+  };
+  SimulationOptions options = simulation;
+  options.breakpoints = nodes;
+  Simulator<S> sim(scene, options);
+  const bool last = p + 1 == P;
+  const double tolerance = 1e-6 * std::max(1.0, std::abs(t1));
+  const std::vector<double> starts = window_starts(nodes, window);
+  r.windows = static_cast<int>(starts.size());
+  std::vector<std::string> unplanned;
+  for (std::size_t w = 0; w < starts.size(); ++w) {
+    const bool final_window = w + 1 == starts.size();
+    const double from = starts[w], until = final_window ? t1 : starts[w + 1];
+    VecT<double, 2 * S::nq> x_start = w == 0 && p > 0 ? traj.events[static_cast<std::size_t>(p - 1)].x_plus : traj.state(p, from);
+    if (p > 0 || w > 0)  // onto the contacts closed in this phase or released at its start (their drift)
+      r.start_projection = std::max(r.start_projection,
+                                    project_on_contacts(scene, seg.mode, w == 0 ? &traj.segments[static_cast<std::size_t>(p - 1)].mode : nullptr, x_start));
+    const double margin = !final_window || last ? 0.0 : std::max(0.05 * (t1 - t0), 1e-3);
+    HybridTrajectory<S> run;
+    try {
+      run = run_from(sim, x_start, seg.mode, from, until + margin, law, r.note);
+    } catch (const Error& e) {
+      r.max_error = r.end_error = r.event_time_error = r.x_plus_error = std::numeric_limits<double>::quiet_NaN();
+      r.event_guards_match = r.next_mode_matches = false;
+      r.note += std::string(r.note.empty() ? "" : "; ") + "the simulation failed: " + e.what();
+      return r;
+    }
+    std::vector<double> compared;
+    for (double t : nodes)
+      if (t > from && t <= until) compared.push_back(t);
+    compare_phase(scene, traj, p, run, compared, until, t1, tolerance, r, unplanned);
+    if (!final_window) continue;
+    if (last) r.event_time_error = std::numeric_limits<double>::quiet_NaN();
+    else
+      judge_boundary(run, schedule, traj.segments[static_cast<std::size_t>(p + 1)].mode,
+                     traj.events[static_cast<std::size_t>(p)].x_plus, p, t1, tolerance, r);
+  }
+  if (!unplanned.empty()) r.note = unplanned_note(unplanned) + (r.note.empty() ? "" : "; " + r.note);
+  return r;
+}
+
 }  // namespace detail
 
 template <Scene S>
 std::vector<PhaseResimulation> resimulate_phases(const S& scene, const HybridTrajectory<S>& traj,
                                                  const ModeSchedule<S::nc>& schedule,
                                                  const std::vector<double>& element_times,
-                                                 const SimulationOptions& simulation) {
+                                                 const SimulationOptions& simulation, double window) {
+  SALTUS_REQUIRE(std::isfinite(window) && window >= 0.0, "resimulate_phases: window must be >= 0 [s], got ", window);
   std::vector<PhaseResimulation> out;
   const int P = static_cast<int>(traj.segments.size());
-  for (int p = 0; p < P; ++p) {
-    PhaseResimulation r;
-    r.phase = p;
-    const Segment<S>& seg = traj.segments[static_cast<std::size_t>(p)];
-    const double t0 = seg.t_begin, t1 = seg.t_end;
-    std::vector<double> nodes;
-    for (double t : element_times)
-      if (t >= t0 && t <= t1) nodes.push_back(t);
-    // The optimal input on both sides of the phase's end: a release (lambda_n = 0 at x-) or a slip
-    // onset happens there because the next phase's input drives the force out of its cone.
-    const InputLaw<S> law = [&traj, t0](double t, const VecT<double, 2 * S::nq>& x, const Mode<S::nc>& m) {
-      return traj.input(std::max(t, t0), x, m);
-    };
-    SimulationOptions options = simulation;
-    options.breakpoints = nodes;
-    Simulator<S> sim(scene, options);
-    const bool last = p + 1 == P;
-    const double margin = last ? 0.0 : std::max(0.05 * (t1 - t0), 1e-3);
-    VecT<double, 2 * S::nq> x_start = p == 0 ? traj.state(0, t0) : traj.events[static_cast<std::size_t>(p - 1)].x_plus;
-    if (p > 0) {  // onto the contacts closed in this phase or released at its start (their drift)
-      Mode<S::nc> manifold = seg.mode;
-      const Mode<S::nc>& before = traj.segments[static_cast<std::size_t>(p - 1)].mode;
-      for (int i = 0; i < S::nc; ++i)
-        if (!manifold[i].closed() && before[i].closed()) manifold[i] = ContactState::slip(Eigen::Vector2d::Zero());
-      const VecT<double, 2 * S::nq> unprojected = x_start;
-      ConstraintProjection<S> projection;
-      projection.project(scene, manifold, x_start);
-      r.start_projection = (x_start - unprojected).cwiseAbs().maxCoeff();
-    }
-    if (t1 <= t0) {
-      r.note = "the phase has zero duration";
-      out.push_back(r);
-      continue;
-    }
-    HybridTrajectory<S> run;
-    try {
-      run = detail::run_from(sim, x_start, seg.mode, t0, t1 + margin, law, r.note);
-    } catch (const Error& e) {
-      r.max_error = r.end_error = r.event_time_error = r.x_plus_error = std::numeric_limits<double>::quiet_NaN();
-      r.event_guards_match = r.next_mode_matches = false;
-      r.note += std::string(r.note.empty() ? "" : "; ") + "the simulation failed: " + e.what();
-      out.push_back(r);
-      continue;
-    }
-    const double tolerance = 1e-6 * std::max(1.0, std::abs(t1));
-    detail::compare_phase(scene, traj, p, run, nodes, t1, tolerance, r);
-    if (last) r.event_time_error = std::numeric_limits<double>::quiet_NaN();
-    else
-      detail::judge_boundary(run, schedule, traj.segments[static_cast<std::size_t>(p + 1)].mode,
-                             traj.events[static_cast<std::size_t>(p)].x_plus, p, t1, tolerance, r);
-    out.push_back(r);
-  }
+  for (int p = 0; p < P; ++p) out.push_back(detail::resimulate_phase(scene, traj, schedule, element_times, simulation, window, p));
   return out;
 }
 

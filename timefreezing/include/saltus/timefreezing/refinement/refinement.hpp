@@ -102,6 +102,7 @@ struct PhaseResimulation {
   double end_error = 0.0;      ///< the same at the phase's end (x-)
   double compared_until = 0.0; ///< the last node compared [s] (the phase's end unless the simulation failed)
   int unplanned_events = 0;    ///< events the simulator found inside the phase (named in `note`)
+  int windows = 1;             ///< simulations the phase was split into (RefinementChecks::resimulation_window)
   /// ||x_start projected - x_start||_inf: the start state brought onto the contacts it closes (its
   /// own closed contacts, and those released at its start) before it is simulated; the size of the
   /// collocation's drift (contact_drift), which the simulator's initial-mode check would refuse.
@@ -186,11 +187,16 @@ inline SimulationOptions precise_simulation() {
 /// `schedule`, with its element boundaries) re-simulated by the event-driven simulator from its
 /// start state (projected onto the contacts it closes) in its mode under its own input, compared
 /// at the element boundaries, the first event after its start against the schedule's.
+/// window > 0 [s]: each phase in windows of at least that length (element boundaries), each
+/// started from the reference's state at its start (projected onto the phase's closed contacts):
+/// multiple shooting, for phases whose open-loop motion is unstable (RefinementChecks::
+/// resimulation_window). Throws InvalidArgument for a negative or non-finite window.
 template <Scene S>
 std::vector<PhaseResimulation> resimulate_phases(const S& scene, const HybridTrajectory<S>& traj,
                                                  const ModeSchedule<S::nc>& schedule,
                                                  const std::vector<double>& element_times,
-                                                 const SimulationOptions& simulation = precise_simulation());
+                                                 const SimulationOptions& simulation = precise_simulation(),
+                                                 double window = 0.0);
 
 /// (b) of the checks: simulates `traj`'s input from its initial state over its horizon with
 /// `simulation` (breakpoints replaced by `element_times`) and compares at `element_times`.

@@ -209,7 +209,8 @@ RefinementResult<S> refine_schedule(const S& scene, const Ocp& ocp, const OcpHor
   out.message = "converged";
   detail::edit_schedule(scene, ocp, horizon, options, nlp, sol, out);
   detail::refine_mesh(scene, ocp, horizon, options, nlp, sol, out);
-  out.phase_resimulation = resimulate_phases(scene, out.trajectory, out.schedule, out.element_times, simulation);
+  out.phase_resimulation = resimulate_phases(scene, out.trajectory, out.schedule, out.element_times, simulation,
+                                             options.checks.resimulation_window);
   for (const PhaseResimulation& r : out.phase_resimulation)  // NaN (a failed simulation) propagates
     out.phase_resim_max_error = std::isnan(r.max_error) ? r.max_error : std::max(out.phase_resim_max_error, r.max_error);
   out.open_loop = resimulate_open_loop(scene, out.trajectory, out.element_times, simulation);

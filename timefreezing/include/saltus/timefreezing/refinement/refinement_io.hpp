@@ -33,7 +33,7 @@ inline nlohmann::ordered_json finite_or_null(double v) {
 ///   phase_resim_max_error       max over phases of the per-phase re-simulation's distance
 ///   phase_resimulation          [{phase, max_error, end_error, start_projection, event_time_error,
 ///                               x_plus_error, event_guards_match, next_mode_matches, compared_until,
-///                               unplanned_events, note}] (event_time_error null where no event)
+///                               unplanned_events, windows, note}] (event_time_error null where no event)
 ///   open_loop                   {max_error, compared_until, events, note}
 ///   implied_rows                [description]
 ///   ipopt_iterations, refinement_seconds
@@ -82,7 +82,7 @@ nlohmann::ordered_json to_json(const S& scene, const RefinementResult<S>& r) {
                       {"event_time_error", finite_or_null(p.event_time_error)},
                       {"x_plus_error", finite_or_null(p.x_plus_error)}, {"event_guards_match", p.event_guards_match},
                       {"next_mode_matches", p.next_mode_matches}, {"compared_until", p.compared_until},
-                      {"unplanned_events", p.unplanned_events}, {"note", p.note}});
+                      {"unplanned_events", p.unplanned_events}, {"windows", p.windows}, {"note", p.note}});
   j["phase_resimulation"] = phases;
   j["open_loop"] = {{"max_error", finite_or_null(r.open_loop.max_error)}, {"compared_until", r.open_loop.compared_until},
                     {"events", r.open_loop.events}, {"note", r.open_loop.note}};

@@ -54,6 +54,8 @@ inline void RefinementOptions::validate() const {
                  "refinement: checks.mode_validity must be >= 0, got ", checks.mode_validity);
   SALTUS_REQUIRE(std::isfinite(checks.phase_resimulation) && checks.phase_resimulation >= 0.0,
                  "refinement: checks.phase_resimulation must be >= 0, got ", checks.phase_resimulation);
+  SALTUS_REQUIRE(std::isfinite(checks.resimulation_window) && checks.resimulation_window >= 0.0,
+                 "refinement: checks.resimulation_window must be >= 0 [s], got ", checks.resimulation_window);
   SALTUS_REQUIRE(std::isfinite(initial_state_tolerance) && initial_state_tolerance >= 0.0,
                  "refinement: initial_state_tolerance must be >= 0, got ", initial_state_tolerance);
 }
