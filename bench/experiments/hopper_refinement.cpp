@@ -30,9 +30,13 @@
 #include "scenes/all_scenes.hpp"
 #include "scenes/hopper_holes.hpp"
 
+#include <saltus/sensitivity/analysis/reference_analysis.hpp>
+#include <saltus/sensitivity/analysis/reference_analysis_io.hpp>
 #include <saltus/timefreezing/refinement/refinement.hxx>
 #include <saltus/timefreezing/refinement/refinement_io.hpp>
 #include <saltus/timefreezing/refinement/schedule_extraction.hpp>
+
+#include <Eigen/SVD>
 
 #include <algorithm>
 #include <cmath>
@@ -118,6 +122,35 @@ saltus::timefreezing::ScheduleGuess<Hopper> footstep_guess(const Hopper& hopper,
   return g;
 }
 
+/// An LQR tracking design for a hopper reference (Q = 10 on q, 1 on v, R = 1e-3 I; the torques
+/// reach 60 N m) and its check: deviations of the initial state that keep the first stance (the
+/// foot on the ground, at rest: the gap's and the foot velocity's rows removed), measured on the
+/// whole state.
+saltus::ReferenceAnalysisOptions<Hopper> hopper_analysis(const Hopper& hopper, const saltus::HybridTrajectory<Hopper>& ref,
+                                                         int runs) {
+  using namespace saltus;
+  ReferenceAnalysisOptions<Hopper> o;
+  o.design.name = "LQR, Q = (10 q, 1 v), R = 1e-3 I";
+  o.design.weights.Q.diagonal() << 10, 10, 10, 10, 1, 1, 1, 1;
+  o.design.weights.Q_final = o.design.weights.Q;
+  o.design.weights.R *= 1e-3;
+  const VecT<double, 8> x0 = ref.state(0, ref.t_begin());
+  Kinematics<Hopper, double> kin;
+  evaluate_kinematics<Hopper, double>(hopper, VecT<double, 4>(x0.head<4>()), VecT<double, 4>(x0.tail<4>()), kin);
+  Eigen::Matrix<double, 3, 8> C = Eigen::Matrix<double, 3, 8>::Zero();  // gap, normal and tangential velocity
+  C.block<1, 4>(0, 0) = kin.contacts[0].wn.transpose();
+  C.block<1, 4>(1, 4) = kin.contacts[0].wn.transpose();
+  C.block<1, 4>(2, 4) = kin.contacts[0].Wt.col(0).transpose();
+  const Eigen::JacobiSVD<Eigen::Matrix<double, 3, 8>> svd(C, Eigen::ComputeFullV);
+  const Eigen::Matrix<double, 8, 5> E = svd.matrixV().rightCols<5>();
+  o.stability.initial_subspace = E;
+  o.monte_carlo.runs = runs;
+  o.monte_carlo.threads = 1;
+  o.monte_carlo.project = [E](const Vec<8>& d) { return Vec<8>(E * (E.transpose() * d)); };
+  o.progress = &std::cout;
+  return o;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -154,6 +187,7 @@ int main(int argc, char** argv) {
   if (argc > 11) options.mesh.warm_start_mu = std::atof(argv[11]);
   if (argc > 12) options.mesh.max_split = std::atoi(argv[12]);
   if (argc > 13) options.mesh.max_iter = std::atoi(argv[13]);
+  int analysis_runs = 0;
   for (int a = 14; a < argc; ++a) {
     const std::string arg = argv[a];
     const std::size_t eq = arg.find('=');
@@ -161,6 +195,10 @@ int main(int argc, char** argv) {
     const std::string name = arg.substr(0, eq), value = arg.substr(eq + 1);
     if (name == "resimulation_window") {  // RefinementChecks::resimulation_window [s], not an Ipopt option
       options.checks.resimulation_window = std::atof(value.c_str());
+      continue;
+    }
+    if (name == "analysis_runs") {  // analyse_reference with that many Monte Carlo runs (hopper_analysis below)
+      analysis_runs = std::atoi(value.c_str());
       continue;
     }
     if (name == "mesh_max_rounds") {  // RefinementMesh::max_rounds
@@ -240,5 +278,16 @@ int main(int argc, char** argv) {
       std::cout << "  phase " << p.phase << " in one shot: " << p.max_error << " (x+ " << p.x_plus_error << ") " << p.note << "\n";
   }
   std::ofstream("hopper_refinement.json") << to_json(hopper, r).dump(1) << "\n";
+  if (analysis_runs > 0 && r.converged) {
+    const ReferenceAnalysis<Hopper> a = analyse_reference(hopper, r.trajectory, SimulationOptions{}, hopper_analysis(hopper, r.trajectory, analysis_runs));
+    std::cout << "analysis: " << (a.completed() ? "completed" : "failed at " + std::string(to_string(*a.failed_at)) + ": " + a.failure);
+    if (a.stability) std::cout << "; upper rate " << a.stability->upper_rate;
+    if (a.monte_carlo)
+      std::cout << "; Monte Carlo " << a.monte_carlo->runs << " runs, " << a.monte_carlo->failed << " failed, "
+                << a.monte_carlo->kept_event_sequence << " kept the events, observed rate max " << a.monte_carlo->observed_rate_max
+                << ", agree " << a.agree;
+    std::cout << "\n";
+    std::ofstream("hopper_analysis.json") << to_json(a).dump(1) << "\n";
+  }
   return r.stage == "refined" ? 0 : 1;
 }

@@ -206,7 +206,7 @@ PhaseResimulation resimulate_phase(const S& scene, const HybridTrajectory<S>& tr
     }
     std::vector<double> compared;
     for (double t : nodes)
-      if (t > from && t <= until) compared.push_back(t);
+      if (t >= from && t <= until) compared.push_back(t);  // the start too: the projection's distance
     compare_phase(scene, traj, p, run, compared, until, t1, tolerance, r, unplanned);
     if (!final_window) continue;
     if (last) r.event_time_error = std::numeric_limits<double>::quiet_NaN();
