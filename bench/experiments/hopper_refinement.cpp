@@ -8,8 +8,10 @@
 //   RefinementMesh::local_error_tolerance; warm_start_mu, max_split, mesh_max_iter: RefinementMesh's
 //   warm_start_mu, max_split, max_iter); any further arguments name=value are Ipopt options
 //   (RefinementIpopt::options: an integer, a number or a string, e.g. mumps_pivot_order=0), except
-//   resimulation_window=<s> (RefinementChecks::resimulation_window) and mesh_max_rounds=<n>
-//   (RefinementMesh::max_rounds)
+//   resimulation_window=<s> (RefinementChecks::resimulation_window), mesh_max_rounds=<n>
+//   (RefinementMesh::max_rounds), analysis_runs=<n> (the refined reference analysed by
+//   analyse_reference with n Monte Carlo runs, report in hopper_analysis.json) and analysis_R=<r>
+//   (its LQR's input weight, default 1e-3)
 //
 // Discovery by the time-freezing homotopy gives no usable schedule on this OCP (docs/refinement.md,
 // "Hopper over three holes"), so the schedule here is a user's guess, the footsteps the holes
@@ -122,18 +124,18 @@ saltus::timefreezing::ScheduleGuess<Hopper> footstep_guess(const Hopper& hopper,
   return g;
 }
 
-/// An LQR tracking design for a hopper reference (Q = 10 on q, 1 on v, R = 1e-3 I; the torques
-/// reach 60 N m) and its check: deviations of the initial state that keep the first stance (the
+/// An LQR tracking design for a hopper reference (Q = 10 on q, 1 on v, R = `R` I, by default
+/// 1e-3: the torques reach 60 N m) and its check: deviations of the initial state that keep the first stance (the
 /// foot on the ground, at rest: the gap's and the foot velocity's rows removed), measured on the
 /// whole state.
 saltus::ReferenceAnalysisOptions<Hopper> hopper_analysis(const Hopper& hopper, const saltus::HybridTrajectory<Hopper>& ref,
-                                                         int runs) {
+                                                         int runs, double R) {
   using namespace saltus;
   ReferenceAnalysisOptions<Hopper> o;
-  o.design.name = "LQR, Q = (10 q, 1 v), R = 1e-3 I";
+  o.design.name = "LQR, Q = (10 q, 1 v), R = " + std::to_string(R) + " I";
   o.design.weights.Q.diagonal() << 10, 10, 10, 10, 1, 1, 1, 1;
   o.design.weights.Q_final = o.design.weights.Q;
-  o.design.weights.R *= 1e-3;
+  o.design.weights.R *= R;
   const VecT<double, 8> x0 = ref.state(0, ref.t_begin());
   Kinematics<Hopper, double> kin;
   evaluate_kinematics<Hopper, double>(hopper, VecT<double, 4>(x0.head<4>()), VecT<double, 4>(x0.tail<4>()), kin);
@@ -188,6 +190,7 @@ int main(int argc, char** argv) {
   if (argc > 12) options.mesh.max_split = std::atoi(argv[12]);
   if (argc > 13) options.mesh.max_iter = std::atoi(argv[13]);
   int analysis_runs = 0;
+  double analysis_R = 1e-3;
   for (int a = 14; a < argc; ++a) {
     const std::string arg = argv[a];
     const std::size_t eq = arg.find('=');
@@ -199,6 +202,10 @@ int main(int argc, char** argv) {
     }
     if (name == "analysis_runs") {  // analyse_reference with that many Monte Carlo runs (hopper_analysis below)
       analysis_runs = std::atoi(value.c_str());
+      continue;
+    }
+    if (name == "analysis_R") {  // the LQR's input weight R = analysis_R I (hopper_analysis below)
+      analysis_R = std::atof(value.c_str());
       continue;
     }
     if (name == "mesh_max_rounds") {  // RefinementMesh::max_rounds
@@ -279,7 +286,7 @@ int main(int argc, char** argv) {
   }
   std::ofstream("hopper_refinement.json") << to_json(hopper, r).dump(1) << "\n";
   if (analysis_runs > 0 && r.converged) {
-    const ReferenceAnalysis<Hopper> a = analyse_reference(hopper, r.trajectory, SimulationOptions{}, hopper_analysis(hopper, r.trajectory, analysis_runs));
+    const ReferenceAnalysis<Hopper> a = analyse_reference(hopper, r.trajectory, SimulationOptions{}, hopper_analysis(hopper, r.trajectory, analysis_runs, analysis_R));
     std::cout << "analysis: " << (a.completed() ? "completed" : "failed at " + std::string(to_string(*a.failed_at)) + ": " + a.failure);
     if (a.stability) std::cout << "; upper rate " << a.stability->upper_rate;
     if (a.monte_carlo)
