@@ -90,14 +90,16 @@ struct MeshRound {
 };
 
 /// The event-driven re-simulation of one phase from its start state (x+ of the event before it)
-/// under the optimal input, in the phase's mode.
+/// under the optimal input, in the phase's mode; in windows (RefinementChecks::resimulation_window),
+/// each later window from the reference's state at its start.
 struct PhaseResimulation {
   int phase = 0;
   /// max ||x_sim - x_refined||_inf over the phase's element boundaries (the collocation's nodes,
   /// where Radau IIA is of order 2 n_s - 1), the phase's end included. The comparison goes on
   /// through events the simulator finds inside the phase (unplanned_events): where a contact's
   /// force and gap are both zero on the reference, the simulator may label it open or closed with
-  /// the same motion, and this distance says whether the motion is the same.
+  /// the same motion, and this distance says whether the motion is the same. In windows: over
+  /// every window's nodes, its start node included (the projection's distance there).
   double max_error = 0.0;
   double end_error = 0.0;      ///< the same at the phase's end (x-)
   double compared_until = 0.0; ///< the last node compared [s] (the phase's end unless the simulation failed)
@@ -106,6 +108,7 @@ struct PhaseResimulation {
   /// ||x_start projected - x_start||_inf: the start state brought onto the contacts it closes (its
   /// own closed contacts, and those released at its start) before it is simulated; the size of the
   /// collocation's drift (contact_drift), which the simulator's initial-mode check would refuse.
+  /// In windows: the largest over the windows' starts.
   double start_projection = 0.0;
   /// The events the simulator finds within 1e-6 (relative) of the phase's end (it runs past the
   /// end by a margin, under the optimal input, the next phase's beyond the end): the first one's
@@ -187,10 +190,11 @@ inline SimulationOptions precise_simulation() {
 /// `schedule`, with its element boundaries) re-simulated by the event-driven simulator from its
 /// start state (projected onto the contacts it closes) in its mode under its own input, compared
 /// at the element boundaries, the first event after its start against the schedule's.
-/// window > 0 [s]: each phase in windows of at least that length (element boundaries), each
-/// started from the reference's state at its start (projected onto the phase's closed contacts):
-/// multiple shooting, for phases whose open-loop motion is unstable (RefinementChecks::
-/// resimulation_window). Throws InvalidArgument for a negative or non-finite window.
+/// window > 0 [s]: each phase in windows starting at element boundaries at least that far apart
+/// (the last may be shorter), the first as above, each later one from the reference's state at
+/// its start projected onto the phase's closed contacts: multiple shooting, for phases whose
+/// open-loop motion is unstable (RefinementChecks::resimulation_window). Throws InvalidArgument
+/// for a negative or non-finite window.
 template <Scene S>
 std::vector<PhaseResimulation> resimulate_phases(const S& scene, const HybridTrajectory<S>& traj,
                                                  const ModeSchedule<S::nc>& schedule,

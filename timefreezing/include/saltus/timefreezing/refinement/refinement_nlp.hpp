@@ -67,7 +67,8 @@
 // terminal rows kept before it imply in gradient and in value (the hopper's z(T) = 0.4 with the leg
 // straight is the foot's gap = 0): not imposed (refinement_nlp_terminal.hxx).
 // "In the span": relative least-squares residual <= RefinementOptions::implied_row_tolerance.
-// implied_rows() lists them; the readings (mode_validity_violation, path_violation) include them.
+// implied_rows() lists them; the readings (mode_validity_violation, path_violation,
+// terminal_violation) include them.
 //
 // EVENT ENDS. At a phase's last stage point the guard of an event replaces the validity row it
 // makes active (touchdown: gap = 0 for gap >= 0; release: lambda_n = 0 for lambda_n >= 0 and the
@@ -110,9 +111,9 @@ namespace saltus::timefreezing {
 
 /// A row that the refinement does not impose because the others imply it (file comment).
 struct ImpliedRow {
-  int phase = -1;           ///< (a) the phase of an implied path row; -1 for a guard
-  int event = -1;           ///< (b) the event of an implied guard; -1 for a path row
-  int index = 0;            ///< the path row's index, or the guard's position in the event
+  int phase = -1;           ///< (a) the phase of an implied path row; -1 for a guard or a terminal row
+  int event = -1;           ///< (b) the event of an implied guard; -1 for a path or terminal row
+  int index = 0;            ///< the path row's index, the guard's position in the event, or the terminal row's index
   std::string description;  ///< e.g. "path row 0 in phase 1", "touchdown C_R at event 0"
   double residual = 0.0;    ///< the relative least-squares residual that decided it
   bool terminal = false;    ///< (e) a terminal row (phase and event -1, index its terminal row)
@@ -201,9 +202,10 @@ class ScheduleRefinementNlp final : public Mpcc {
   /// at every collocation point (the implied ones included), the imposed ones at every element's
   /// start under its input, and the impact rows (file comment).
   double mode_validity_violation(const Eigen::Ref<const Eigen::VectorXd>& x) const;
-  /// The largest violation of the path rows (all of them, the implied ones included) and of the
-  /// terminal rows at x.
+  /// The largest violation of the path rows at x (all of them, the implied ones included).
   double path_violation(const Eigen::Ref<const Eigen::VectorXd>& x) const;
+  /// The largest violation of the terminal rows at x (all of them, the implied ones included:
+  /// the collocation's drift from the manifold that implies them).
   double terminal_violation(const Eigen::Ref<const Eigen::VectorXd>& x) const;
   /// The largest |h_n| and |zeta_n| of the closed contacts over every point of x: how far the
   /// collocation drifts from the contact manifold that the flow holds at the acceleration level

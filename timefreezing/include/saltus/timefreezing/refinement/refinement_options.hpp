@@ -90,15 +90,19 @@ struct RefinementChecks {
   /// bound_relax_factor to 0 (RefinementIpopt::options can set it again), so the validity rows
   /// hold to the constraint tolerance rather than to Ipopt's 1e-8 relaxation of the bounds.
   double mode_validity = 1e-9;
-  /// phase_resim_max_error <= this [state units] (the "exact": 1e-6 on the default grid).
+  /// phase_resim_max_error <= this [state units] ("exact": 1e-6 on the default grid).
   double phase_resimulation = 1e-6;
-  /// [s] 0: each phase re-simulated from its start to its end (single shooting). > 0: in windows of
-  /// at least this length, each from the reference's state at its start (multiple shooting). A
-  /// phase whose open-loop motion is unstable amplifies the reference's local errors by
-  /// exp(rate * duration) over a single shot (the hopper's stances: about 40 / s, so 1e10 over its
-  /// 0.59 s first stance; docs/refinement.md): no double-precision reference passes 1e-6 there,
-  /// and the windows measure the reference instead of the instability. The window is reported
-  /// with the result (PhaseResimulation::windows).
+  /// [s] 0: each phase re-simulated from its start to its end (single shooting). > 0: in windows
+  /// that start at element boundaries at least this far apart (the last runs to the phase's end
+  /// and may be shorter; a shorter phase is one window), the first from the phase's start as with
+  /// 0, each later one from the reference's state at its start projected onto the phase's closed
+  /// contacts (multiple shooting). A phase whose open-loop motion is unstable amplifies the
+  /// reference's local errors by exp(rate * duration) over a single shot (the hopper's stances:
+  /// about 40 / s, so about 2e10 over its 0.59 s first stance; docs/refinement.md): no
+  /// double-precision reference passes 1e-6 there, and the windows measure the reference instead
+  /// of the instability. Passing in windows is the weaker statement (the reference's error over
+  /// each window, not the open-loop motion's). PhaseResimulation::windows reports the number of
+  /// windows per phase. Negative or not finite: refine_schedule throws InvalidArgument.
   double resimulation_window = 0.0;
 };
 
@@ -124,10 +128,12 @@ struct RefinementOptions {
   /// the rows already imposed at its event is implied the same way (refinement_nlp.hpp,
   /// "IMPLIED ROWS"). In (0, 1).
   double implied_row_tolerance = 1e-4;
-  /// A terminal equality row whose gradient the last phase's closed contacts (h_n, zeta_n) and the
-  /// kept terminal rows span is implied only if its bound holds, to this tolerance times
-  /// (1 + |bound|), on the manifold they hold (the guess's final state projected on it;
-  /// refinement_nlp_terminal.hxx). > 0.
+  /// Dimensionless, > 0 (else refine_schedule throws InvalidArgument). A terminal equality row
+  /// that does not depend on T and whose x-gradient lies in the span of the last phase's closed
+  /// contacts' rows (h_n, zeta_n) and of the terminal rows kept before it (in index order) is
+  /// implied only if its bound holds, to this tolerance times (1 + |bound|) in the row's units, on
+  /// the manifold they hold: the guess's final state projected on it (least-norm Gauss-Newton; when
+  /// it does not reach 1e-12 in 30 steps nothing is implied). refinement_nlp_terminal.hxx.
   double implied_terminal_value_tolerance = 1e-8;
   /// The state x0 must satisfy the first phase's closed contacts (gap and normal velocity) and
   /// open contacts (gap >= -tolerance) to this tolerance [scene units].
