@@ -431,6 +431,13 @@ TEST(Tracking, RefusesWhatItCannotAnalyse) {
   ReferenceSpreadingController<PointMass> controller(ol.reference(), K);
   typename ReferenceSpreadingController<PointMass>::Phase last{2, false};
   EXPECT_THROW(controller.next_phase(last, ref.trajectory.segments[2].mode), UnplannedEvent);
+  try {  // the message names the plant's mode after the event and the segment's
+    (void)controller.next_phase(last, ref.trajectory.segments[2].mode);
+  } catch (const UnplannedEvent& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("the plant's mode after it: contact 0 "), std::string::npos) << what;
+    EXPECT_NE(what.find("; the segment's: contact 0 "), std::string::npos) << what;
+  }
   MonteCarloOptions<PointMass> mc;
   mc.runs = 0;
   EXPECT_THROW(monte_carlo(ref.scene, ref.options, controller, cl, mc), InvalidArgument);

@@ -339,13 +339,30 @@ auto ReferenceSpreadingController<S>::input(int i, double t, const State& x) con
   return u;
 }
 
+namespace detail {
+
+/// "contact 0 stick, contact 1 open" (a slip with the sign of its first tangent direction).
+template <int NC>
+std::string describe_contact_modes(const Mode<NC>& mode) {
+  std::string out;
+  for (int i = 0; i < NC; ++i) {
+    out += (i > 0 ? ", contact " : "contact ") + std::to_string(i) + " " + to_string(mode[i].mode);
+    if (mode[i].mode == ContactMode::Slip) out += mode[i].slip_direction[0] >= 0.0 ? "+" : "-";
+  }
+  return out;
+}
+
+}  // namespace detail
+
 template <Scene S>
 auto ReferenceSpreadingController<S>::next_phase(const Phase& before, const Mode<nc>& mode) const -> Phase {
   const int j = before.segment;
   if (j + 1 >= reference_.segment_count())
     throw UnplannedEvent(detail::concat("reference spreading: the plant has an event after reference segment ", j,
                                         ", the reference's last (it has ", reference_.segment_count() - 1,
-                                        " events): no segment to compare with"));
+                                        " events): no segment to compare with (the plant's mode after it: ",
+                                        detail::describe_contact_modes(mode), "; the segment's: ",
+                                        detail::describe_contact_modes(reference_.reference().segments[j].mode), ")"));
   if (before.intermediate || simultaneous_[j]) {
     if (mode == reference_.reference().segments[j + 1].mode) return Phase{j + 1, false};
     return Phase{j, true};
