@@ -357,13 +357,24 @@ struct AboveTheTable : scenes::PointMassToTheTarget {
   Vec<4> terminal_upper() const { return terminal_lower(); }
 };
 
-TEST(ScheduleRefinement, AScheduleThatCannotReachItsTargetSaysSo) {
+/// A single sliding stance on the table (x = t at 1 m/s), from (0, 0, 1, 0).
+ScheduleGuess<PointMass> sliding_stance_guess() {
   ScheduleGuess<PointMass> g;
   g.schedule.phases = {closed_mode(1)};
   g.state = [](int, double t) { return Vec<4>(t, 0, 1, 0); };
   g.input = [](double) { return Vec<2>(1, 0); };
+  return g;
+}
+
+OcpHorizon<PointMass> sliding_start_horizon() {
   OcpHorizon<PointMass> h = Case::refinement_horizon();
   h.x0 << 0, 0, 1, 0;
+  return h;
+}
+
+TEST(ScheduleRefinement, AScheduleThatCannotReachItsTargetSaysSo) {
+  const ScheduleGuess<PointMass> g = sliding_stance_guess();
+  const OcpHorizon<PointMass> h = sliding_start_horizon();
   RefinementOptions o;
   o.grid.max_element_duration = 0.25;
   o.ipopt.max_iter = 200;
@@ -399,12 +410,8 @@ TEST(RefinementNlp, TerminalRowsHeldByTheLastStanceAreImpliedWhereTheirValueHold
   EXPECT_EQ(terminal_row_names(on_table), (std::vector<std::string>{"terminal[0]", "terminal[2]"}));
   expect_exact_derivatives(on_table);
 
-  ScheduleGuess<PointMass> g;
-  g.schedule.phases = {closed_mode(1)};
-  g.state = [](int, double t) { return Vec<4>(t, 0, 1, 0); };
-  g.input = [](double) { return Vec<2>(1, 0); };
-  OcpHorizon<PointMass> h = Case::refinement_horizon();
-  h.x0 << 0, 0, 1, 0;
+  const ScheduleGuess<PointMass> g = sliding_stance_guess();
+  const OcpHorizon<PointMass> h = sliding_start_horizon();
   const ScheduleRefinementNlp<PointMass, AboveTheTable> above(frictional_mass(), {}, h, g, grid_options(0.25, 2));
   implied.clear();
   for (const ImpliedRow& row : above.implied_rows())

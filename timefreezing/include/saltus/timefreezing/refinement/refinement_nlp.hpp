@@ -267,6 +267,13 @@ class ScheduleRefinementNlp final : public Mpcc {
   void find_implied_terminal_rows();
   template <class T>
   VecT<T, 2 * S::nc> held_contact_values(const VecT<T, nx>& x) const;  // per contact (h_n, zeta_n)
+  struct TerminalLinearisation {  // the terminal block and the held contact values at w, with their Jacobians
+    VecT<double, terminal_outputs> value;
+    MatT<double, terminal_outputs, nwt> jacobian;
+    VecT<double, 2 * S::nc> held_value;
+    MatT<double, 2 * S::nc, nx> held_jacobian;
+  };
+  TerminalLinearisation linearise_terminal(const VecT<double, nwt>& w) const;
   bool project_on_held_manifold(const VecT<double, nwt>& w, const std::vector<int>& held, const std::vector<int>& kept,
                                 VecT<double, nx>& x) const;
   void build_rows();

@@ -42,6 +42,16 @@ VecT<T, 2 * S::nc> ScheduleRefinementNlp<S, Ocp>::held_contact_values(const VecT
 }
 
 template <Scene S, class Ocp>
+auto ScheduleRefinementNlp<S, Ocp>::linearise_terminal(const VecT<double, nwt>& w) const -> TerminalLinearisation {
+  TerminalLinearisation out;
+  detail::local_jacobian<nwt, terminal_outputs>([&](const auto& a) { return terminal_block(a); }, w, out.value,
+                                                out.jacobian);
+  detail::local_jacobian<nx, 2 * nc>([&](const auto& a) { return held_contact_values(a); },
+                                     VecT<double, nx>(w.template head<nx>()), out.held_value, out.held_jacobian);
+  return out;
+}
+
+template <Scene S, class Ocp>
 void ScheduleRefinementNlp<S, Ocp>::find_implied_terminal_rows() {
   imposed_terminal_rows_.clear();
   for (int k = 0; k < nt; ++k) imposed_terminal_rows_.push_back(k);
@@ -52,13 +62,9 @@ void ScheduleRefinementNlp<S, Ocp>::find_implied_terminal_rows() {
       if (last[i].closed()) held.insert(held.end(), {2 * i, 2 * i + 1});
     if (held.empty()) return;
     const VecT<double, nwt> w = terminal_local(guess_x_);
-    VecT<double, terminal_outputs> value;
-    MatT<double, terminal_outputs, nwt> J;
-    detail::local_jacobian<nwt, terminal_outputs>([&](const auto& a) { return terminal_block(a); }, w, value, J);
-    VecT<double, 2 * nc> held_value;
-    MatT<double, 2 * nc, nx> H;
-    detail::local_jacobian<nx, 2 * nc>([&](const auto& a) { return held_contact_values(a); },
-                                       VecT<double, nx>(w.template head<nx>()), held_value, H);
+    const TerminalLinearisation at_guess = linearise_terminal(w);
+    const auto& J = at_guess.jacobian;
+    const auto& H = at_guess.held_jacobian;
     const VecT<double, nt> lo = ocp_.terminal_lower(), hi = ocp_.terminal_upper();
     Eigen::MatrixXd K(0, nx);
     for (int r : held) detail::append_row(K, H.row(r).transpose());
@@ -103,21 +109,15 @@ bool ScheduleRefinementNlp<S, Ocp>::project_on_held_manifold(const VecT<double, 
   Eigen::VectorXd c(m);
   Eigen::MatrixXd A(m, nx);
   for (int step = 0; step < 30; ++step) {
-    VecT<double, terminal_outputs> value;
-    MatT<double, terminal_outputs, nwt> J;
-    detail::local_jacobian<nwt, terminal_outputs>([&](const auto& a) { return terminal_block(a); }, at, value, J);
-    VecT<double, 2 * nc> held_value;
-    MatT<double, 2 * nc, nx> H;
-    detail::local_jacobian<nx, 2 * nc>([&](const auto& a) { return held_contact_values(a); },
-                                       VecT<double, nx>(at.template head<nx>()), held_value, H);
+    const TerminalLinearisation lin = linearise_terminal(at);
     int row = 0;
     for (int r : held) {
-      c[row] = held_value[r];
-      A.row(row++) = H.row(r);
+      c[row] = lin.held_value[r];
+      A.row(row++) = lin.held_jacobian.row(r);
     }
     for (int k : kept) {
-      c[row] = value[k] - lo[k];
-      A.row(row++) = J.row(k).head(nx);
+      c[row] = lin.value[k] - lo[k];
+      A.row(row++) = lin.jacobian.row(k).head(nx);
     }
     if (!c.allFinite()) return false;
     if (c.lpNorm<Eigen::Infinity>() <= 1e-12 * (1.0 + at.template head<nx>().template lpNorm<Eigen::Infinity>())) {
