@@ -15,6 +15,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <initializer_list>
 #include <limits>
 #include <random>
 #include <sstream>
@@ -22,6 +23,17 @@
 #include <vector>
 
 namespace saltus::testing {
+
+/// Expects InvalidArgument whose message contains every one of `parts`.
+template <class F>
+void expect_invalid(F&& f, std::initializer_list<std::string> parts) {
+  try {
+    f();
+    ADD_FAILURE() << "no InvalidArgument thrown";
+  } catch (const InvalidArgument& e) {
+    for (const std::string& p : parts) EXPECT_NE(std::string(e.what()).find(p), std::string::npos) << e.what();
+  }
+}
 
 /// The eps values of a remainder-slope check (the validation protocol's eps^2 test): all of them
 /// in the release stage. Under the sanitizers (tests/CMakeLists.txt defines

@@ -6,6 +6,7 @@
 // (scenes/plank_box_landing.hpp): its start, target and rows, the derivative checker on its
 // two-contact FESD MPCC with the scaled gap, and the optimal reference itself (its grid, solved,
 // recovered, re-simulated and analysed).
+#include "scenes/hopper_footsteps.hpp"
 #include "scenes/hopper_holes.hpp"
 #include "scenes/plank_box_landing.hpp"
 #include "scenes/plank_box_tracking.hpp"
@@ -15,8 +16,10 @@
 #include <saltus/timefreezing/discretisation/fesd.hpp>
 #include <saltus/timefreezing/mpcc/mpcc_solver.hpp>
 #include <saltus/timefreezing/drivers/optimal_control.hpp>
+#include <saltus/timefreezing/refinement/mode_schedule.hpp>
 
 #include "mpcc_support.hpp"
+#include "support.hpp"
 
 #include <gtest/gtest.h>
 
@@ -33,6 +36,7 @@ namespace saltus::scenes {
 namespace {
 
 using Ocp = HopperOverThreeHoles;
+using saltus::testing::expect_invalid;
 
 Vec<8> state(const Vec<4>& q) {
   Vec<8> x = Vec<8>::Zero();
@@ -117,6 +121,92 @@ TEST(HopperOverThreeHoles, FeasibilityReportNamesTheWorstRow) {
 // The one-hole test bed (bench/experiments/hopper_ocp --one-hole): its own target, horizon, grid and hole
 // continuation, the flagship's rows; its feasibility report measures the target error against its
 // own target, and its FESD MPCC reads that target in the terminal rows.
+/// The footsteps the holes leave: stances on x = 0, 1, 2, 3 (0.3, 0.45, 0.45, 0.3 s), flights of
+/// 1/3 s between them.
+HopperFootsteps holes_footsteps() {
+  return {{0.0, 1.0, 2.0, 3.0}, {0.3, 0.3 + 1.0 / 3, 0.75 + 1.0 / 3, 0.75 + 2.0 / 3, 1.2 + 2.0 / 3, 1.2 + 1.0}};
+}
+
+// The footstep guess is kinematically consistent with its schedule: in each stance the foot stands
+// on its foothold (gap 0, foot x = foothold) with the foot at rest; the poses are continuous at the
+// events; it starts at q0 and ends at the target; reading its footsteps back gives them again.
+TEST(HopperFootsteps, TheGuessStandsOnItsFootholdsAndReadsBack) {
+  const Hopper hopper{};
+  const HopperFootsteps steps = holes_footsteps();
+  const auto g = footstep_guess(hopper, steps, Ocp::q0(), Ocp::q_target(), Ocp::horizon);
+  EXPECT_EQ(timefreezing::describe(hopper, g.schedule),
+            "foot:stick [release foot] foot:open [touchdown foot] foot:stick [release foot] foot:open [touchdown foot] "
+            "foot:stick [release foot] foot:open [touchdown foot] foot:stick");
+  EXPECT_LE((g.state(0, 0.0).head<4>() - Ocp::q0()).cwiseAbs().maxCoeff(), 1e-12);
+  EXPECT_LE((g.state(6, Ocp::horizon).head<4>() - Ocp::q_target()).cwiseAbs().maxCoeff(), 1e-12);
+  for (int k = 0; k < 7; k += 2) {
+    const double t0 = k == 0 ? 0.0 : steps.event_times[std::size_t(k - 1)];
+    const double t1 = k == 6 ? Ocp::horizon : steps.event_times[std::size_t(k)];
+    for (double t : {t0, 0.5 * (t0 + t1), t1}) {
+      const Vec<8> x = g.state(k, t);
+      const Vec<2> foot = hopper.foot<double>(Vec<4>(x.head<4>()));
+      EXPECT_NEAR(foot[0], steps.footholds[std::size_t(k / 2)], 1e-9) << "stance " << k / 2 << " at t = " << t;
+      EXPECT_NEAR(foot[1], 0.0, 1e-9) << "stance " << k / 2 << " at t = " << t;
+    }
+  }
+  for (std::size_t e = 0; e < steps.event_times.size(); ++e) {
+    const double t = steps.event_times[e];
+    const int k = static_cast<int>(e);
+    EXPECT_LE((g.state(k, t).head<4>() - g.state(k + 1, t).head<4>()).cwiseAbs().maxCoeff(), 1e-9) << "event " << e;
+  }
+  const HopperFootsteps back = footsteps_of(hopper, g, Ocp::q0(), Ocp::q_target(), Ocp::horizon);
+  ASSERT_EQ(back.footholds.size(), 4u);
+  for (std::size_t i = 0; i < 4; ++i) EXPECT_NEAR(back.footholds[i], steps.footholds[i], 1e-9);
+  ASSERT_EQ(back.event_times.size(), steps.event_times.size());
+  for (std::size_t i = 0; i < steps.event_times.size(); ++i) EXPECT_EQ(back.event_times[i], steps.event_times[i]);
+}
+
+// footsteps_of merges consecutive closed phases into one stance (a slip then a stick), and bad
+// footsteps, shapes and schedules are named.
+TEST(HopperFootsteps, ClosedPhasesMergeAndBadInputIsNamed) {
+  const Hopper hopper{};
+  auto g = footstep_guess(hopper, holes_footsteps(), Ocp::q0(), Ocp::q_target(), Ocp::horizon);
+  timefreezing::ScheduleGuess<Hopper> slip_then_stick = g;
+  Mode<1> slip;
+  slip[0] = ContactState::slip_planar(+1);
+  slip_then_stick.schedule.phases.insert(slip_then_stick.schedule.phases.begin() + 2, slip);
+  slip_then_stick.event_times.insert(slip_then_stick.event_times.begin() + 1, 0.5);
+  const auto base = g.state;
+  slip_then_stick.state = [base](int k, double t) { return base(k <= 1 ? k : k - 1, t); };
+  const HopperFootsteps merged = footsteps_of(hopper, slip_then_stick, Ocp::q0(), Ocp::q_target(), Ocp::horizon);
+  EXPECT_EQ(merged.footholds.size(), 4u);
+  EXPECT_EQ(merged.event_times.size(), 6u);
+
+  HopperFootsteps steps = holes_footsteps();
+  steps.event_times.pop_back();
+  expect_invalid([&] { (void)footstep_guess(hopper, steps, Ocp::q0(), Ocp::q_target(), Ocp::horizon); }, {"6 event times"});
+  steps = holes_footsteps();
+  std::swap(steps.event_times[1], steps.event_times[2]);
+  expect_invalid([&] { (void)footstep_guess(hopper, steps, Ocp::q0(), Ocp::q_target(), Ocp::horizon); },
+                 {"increase strictly"});
+  HopperGaitShape long_leg;
+  long_leg.stance_leg = 0.45;
+  expect_invalid([&] { (void)footstep_guess(hopper, holes_footsteps(), Ocp::q0(), Ocp::q_target(), Ocp::horizon, long_leg); },
+                 {"stance_leg"});
+  // A schedule that ends in a flight lands for the last landing_stance seconds.
+  timefreezing::ScheduleGuess<Hopper> flying = g;
+  flying.schedule.phases.pop_back();
+  flying.schedule.events.pop_back();
+  flying.event_times.pop_back();
+  const HopperFootsteps landed = footsteps_of(hopper, flying, Ocp::q0(), Ocp::q_target(), Ocp::horizon, 0.2);
+  ASSERT_EQ(landed.event_times.size(), 6u);
+  EXPECT_DOUBLE_EQ(landed.event_times.back(), Ocp::horizon - 0.2);
+  EXPECT_EQ(landed.footholds.back(), 3.0);
+  expect_invalid([&] { (void)footsteps_of(hopper, flying, Ocp::q0(), Ocp::q_target(), Ocp::horizon, 1.0); },
+                 {"not longer than landing_stance"});
+  timefreezing::ScheduleGuess<Hopper> lifted = g;
+  lifted.schedule.phases.erase(lifted.schedule.phases.begin());
+  lifted.schedule.events.erase(lifted.schedule.events.begin());
+  lifted.event_times.erase(lifted.event_times.begin());
+  expect_invalid([&] { (void)footsteps_of(hopper, lifted, Ocp::q0(), Ocp::q_target(), Ocp::horizon); },
+                 {"must start with the foot on the ground"});
+}
+
 TEST(HopperOverOneHole, TargetGridAndRowsAreTheShortTask) {
   using Short = HopperOverOneHole;
   EXPECT_EQ(Short::q_target(), Vec<4>(1.0, 0.4, 0.0, 0.0));

@@ -5,6 +5,7 @@
 // that cannot reach its target.
 #include "scenes/plank_box_landing.hpp"
 #include "scenes/time_freezing_examples.hpp"
+#include "support.hpp"
 
 #include <saltus/hybrid/reference/resimulation.hpp>
 #include <saltus/hybrid/vocabulary/trajectory_io.hpp>
@@ -16,6 +17,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <sstream>
 #include <string>
 
@@ -25,16 +27,7 @@ namespace {
 using scenes::PointMass;
 using Case = scenes::PointMassToTheTarget;
 
-/// Expects InvalidArgument whose message contains every one of `parts`.
-template <class F>
-void expect_invalid(F&& f, std::initializer_list<std::string> parts) {
-  try {
-    f();
-    ADD_FAILURE() << "no InvalidArgument thrown";
-  } catch (const InvalidArgument& e) {
-    for (const std::string& p : parts) EXPECT_NE(std::string(e.what()).find(p), std::string::npos) << e.what();
-  }
-}
+using saltus::testing::expect_invalid;
 
 Mode<1> open_mode() { return Mode<1>{}; }
 Mode<1> closed_mode(int slip_sign = 0) {
@@ -217,6 +210,12 @@ TEST(MeshRefinement, ElementLocalErrorsAreTheDistanceFromTheEventDrivenFlow) {
     largest = std::max(largest, distance);
   }
   EXPECT_GE(compared, nlp.element_count() - 2);
+  // an element whose flow fails (its input not finite) has an infinite local error; the others keep theirs
+  Eigen::VectorXd broken = x;
+  broken[nlp.control_index(1)] = std::numeric_limits<double>::quiet_NaN();
+  const std::vector<double> with_failure = nlp.element_local_errors(broken);
+  EXPECT_EQ(with_failure[1], std::numeric_limits<double>::infinity());
+  EXPECT_EQ(with_failure[0], local[0]);
   // explicit element boundaries (the mesh refinement's grids): the derivatives stay exact
   RefinementOptions given = o;
   given.grid.stages = 2;
@@ -297,6 +296,20 @@ TEST(ScheduleDiscovery, GuidingExampleSettlesAfterTwoStepsAndRefinesToTheOptimum
   bad.max_steps = 0;
   EXPECT_THROW(discover_schedule(mass, Case::system(), Case{}, Case::q0(), Case::v0(), Case::grid(), Case::solver(), bad),
                InvalidArgument);
+
+  // Preceded by a continuation (here two stages of the same OCP, as a hole continuation would grow
+  // its data): one relaxed solve per stage, then the same steps find the same schedule.
+  const std::vector<Case> stages(2);
+  const DiscoveryResult<PointMass> c = discover_schedule_by_continuation(mass, Case::system(), stages, Case{}, Case::q0(),
+                                                                         Case::v0(), Case::grid(), Case::solver());
+  ASSERT_TRUE(c.settled) << c.message;
+  EXPECT_EQ(c.continuation_steps.size(), 2u);
+  EXPECT_GT(c.continuation_seconds, 0.0);
+  EXPECT_LE(c.continuation_seconds, c.seconds);
+  for (const DiscoveryStep& s : c.steps) EXPECT_EQ(s.schedule, "table:open [touchdown table] table:slip+");
+  expect_invalid([&] { (void)discover_schedule_by_continuation(mass, Case::system(), std::vector<Case>{}, Case{}, Case::q0(),
+                                                               Case::v0(), Case::grid(), Case::solver()); },
+                 {"continuation is empty"});
 }
 
 /// The guiding example's OCP refined from its time-freezing solution (the musts: converged, mode
@@ -437,16 +450,37 @@ struct PushAndLift {
   }
 };
 
-TEST(ScheduleRefinement, AReleaseFromStickLeavesNoTangentialForceAndResimulatesInWindows) {
+/// PushAndLift's schedule (a stance released into a flight at 0.5 s) and a guess of it.
+ScheduleGuess<PointMass> push_and_lift_guess() {
   ScheduleGuess<PointMass> g;
   g.schedule.phases = {closed_mode(0), open_mode()};
   g.schedule.events = {guards_between(frictional_mass(), g.schedule.phases[0], g.schedule.phases[1])};
   g.event_times = {0.5};
   g.state = [](int p, double t) { return p == 0 ? Vec<4>(0, 0, 0, 0) : Vec<4>(0, 0.5 * (t - 0.5) * (t - 0.5), 0, t - 0.5); };
   g.input = [](double) { return Vec<2>(0, 10); };
+  return g;
+}
+
+/// One sticking stance: the mass sliding along the table at 1 m/s.
+ScheduleGuess<PointMass> sliding_on_the_table() {
+  ScheduleGuess<PointMass> g;
+  g.schedule.phases = {closed_mode(0)};
+  g.state = [](int, double t) { return Vec<4>(t, 0, 1, 0); };
+  g.input = [](double) { return Vec<2>(0, 0); };
+  return g;
+}
+
+/// From rest at the origin, T = 1 s.
+OcpHorizon<PointMass> from_rest_for_one_second() {
   OcpHorizon<PointMass> h;
   h.x0.setZero();
   h.final_time = 1.0;
+  return h;
+}
+
+TEST(ScheduleRefinement, AReleaseFromStickLeavesNoTangentialForceAndResimulatesInWindows) {
+  const ScheduleGuess<PointMass> g = push_and_lift_guess();
+  const OcpHorizon<PointMass> h = from_rest_for_one_second();
   RefinementOptions o;
   o.grid.max_element_duration = 0.05;
   o.min_phase_duration = 0.3;
@@ -509,9 +543,7 @@ TEST(ScheduleRefinement, AStickConeMarginKeepsTheStickInsideTheCone) {
   g.schedule.phases = {closed_mode(0)};
   g.state = [](int, double) { return Vec<4>(0, 0, 0, 0); };
   g.input = [](double) { return Vec<2>(0, 0); };
-  OcpHorizon<PointMass> h;
-  h.x0.setZero();
-  h.final_time = 1.0;
+  const OcpHorizon<PointMass> h = from_rest_for_one_second();
   RefinementOptions o;
   o.grid.max_element_duration = 0.1;
   o.edits.max_edits = 0;
@@ -527,6 +559,20 @@ TEST(ScheduleRefinement, AStickConeMarginKeepsTheStickInsideTheCone) {
   EXPECT_LE(inside.phase_resim_max_error, 1e-8);
   o.stick_cone_margin = 1.0;
   EXPECT_THROW(refine_schedule(frictional_mass(), PushHard{}, h, g, o), InvalidArgument);
+}
+
+/// The smallest lambda_n of phase `phase` of `r` over its element boundaries inside the phase
+/// (where its rows hold), from the flow's forces.
+double smallest_normal_force(const PointMass& scene, const RefinementResult<PointMass>& r, int phase) {
+  FlowWorkspace<PointMass> ws;
+  const auto& segment = r.trajectory.segments[static_cast<std::size_t>(phase)];
+  double smallest = std::numeric_limits<double>::infinity();
+  for (double t : r.element_times) {
+    if (t < segment.t_begin || t >= segment.t_end) continue;
+    evaluate_flow(scene, segment.mode, r.trajectory.state(phase, t), r.trajectory.input_at(phase, t), ws);
+    smallest = std::min(smallest, ws.force[0].normal);
+  }
+  return smallest;
 }
 
 /// A stance built to want a lift-off: a frictionless mass slides on the table to x = 1 at rest at
@@ -554,13 +600,8 @@ struct LiftWish {
 };
 
 TEST(ScheduleRefinement, AStanceThatWantsToLiftOffIsEdited) {
-  ScheduleGuess<PointMass> g;
-  g.schedule.phases = {closed_mode(0)};
-  g.state = [](int, double t) { return Vec<4>(t, 0, 1, 0); };
-  g.input = [](double) { return Vec<2>(0, 0); };
-  OcpHorizon<PointMass> h;
-  h.x0.setZero();
-  h.final_time = 1.0;
+  const ScheduleGuess<PointMass> g = sliding_on_the_table();
+  const OcpHorizon<PointMass> h = from_rest_for_one_second();
   RefinementOptions o;
   o.grid.max_element_duration = 0.04;
   const RefinementResult<PointMass> r = refine_schedule(PointMass{}, LiftWish{}, h, g, o);
@@ -577,6 +618,56 @@ TEST(ScheduleRefinement, AStanceThatWantsToLiftOffIsEdited) {
   EXPECT_TRUE(flies) << describe(PointMass{}, r.schedule);
   EXPECT_LE(r.mode_validity_violation, 1e-9);
   EXPECT_LE(r.phase_resim_max_error, 1e-8);
+
+  // Removing the flight again (a vanish edit) merges the stances on both sides into one phase
+  // whose guess is the refined motion on each side of the removed flight.
+  ASSERT_EQ(r.schedule.phase_count(), 3) << describe(PointMass{}, r.schedule);
+  ScheduleEdit vanish;
+  vanish.kind = "vanish";
+  vanish.phase = 1;
+  const auto merged = edited_guess(PointMass{}, r.trajectory, r.schedule, vanish);
+  ASSERT_TRUE(merged.has_value());
+  EXPECT_EQ(merged->schedule.phase_count(), 1);
+  for (int p : {0, 2}) {
+    const auto& seg = r.trajectory.segments[static_cast<std::size_t>(p)];
+    for (double t : {seg.t_begin + 1e-9, 0.5 * (seg.t_begin + seg.t_end), seg.t_end})
+      EXPECT_LE((merged->state(0, t) - r.trajectory.state(p, t)).cwiseAbs().maxCoeff(), 1e-12) << "phase " << p << ", t " << t;
+  }
+}
+
+// LiftWish on the table for the whole horizon (no edit): the thrust it wants takes the table's
+// normal force to 0 around t = 0.5. With normal_force_margin = 3 N the stance keeps lambda_n >= 3 N
+// (the thrust stops at m g - 3 N) and pays for it. A stance that ends in a release (PushAndLift's)
+// keeps lambda_n >= 0 only: its optimum is unchanged. A negative margin is refused by name.
+TEST(ScheduleRefinement, ANormalForceMarginKeepsAStanceLoadedUnlessItEndsInARelease) {
+  const ScheduleGuess<PointMass> g = sliding_on_the_table();
+  const OcpHorizon<PointMass> h = from_rest_for_one_second();
+  RefinementOptions o;
+  o.grid.max_element_duration = 0.05;
+  o.edits.max_edits = 0;
+  const RefinementResult<PointMass> unloaded = refine_schedule(PointMass{}, LiftWish{}, h, g, o);
+  ASSERT_TRUE(unloaded.converged) << unloaded.message;
+  EXPECT_NEAR(smallest_normal_force(PointMass{}, unloaded, 0), 0.0, 1e-6);
+  o.normal_force_margin = 3.0;
+  const RefinementResult<PointMass> loaded = refine_schedule(PointMass{}, LiftWish{}, h, g, o);
+  ASSERT_TRUE(loaded.converged) << loaded.message;
+  EXPECT_LE(loaded.mode_validity_violation, 1e-9);
+  EXPECT_NEAR(smallest_normal_force(PointMass{}, loaded, 0), 3.0, 1e-6);
+  EXPECT_GT(loaded.objective, unloaded.objective + 1.0);
+  EXPECT_LE(loaded.phase_resim_max_error, 1e-8);
+
+  const ScheduleGuess<PointMass> lift = push_and_lift_guess();
+  RefinementOptions r;
+  r.grid.max_element_duration = 0.05;
+  r.min_phase_duration = 0.3;
+  r.edits.max_edits = 0;
+  const RefinementResult<PointMass> plain = refine_schedule(frictional_mass(), PushAndLift{}, h, lift, r);
+  r.normal_force_margin = 3.0;
+  const RefinementResult<PointMass> released = refine_schedule(frictional_mass(), PushAndLift{}, h, lift, r);
+  ASSERT_TRUE(plain.converged && released.converged) << plain.message << "; " << released.message;
+  EXPECT_NEAR(released.objective, plain.objective, 1e-8 * (1.0 + std::abs(plain.objective)));
+  r.normal_force_margin = -1.0;
+  expect_invalid([&] { (void)refine_schedule(frictional_mass(), PushAndLift{}, h, lift, r); }, {"normal_force_margin"});
 }
 
 }  // namespace

@@ -1,44 +1,47 @@
 // The hopper over three holes refined from a footstep schedule (docs/refinement.md, "Hopper").
 //
 //   hopper_refinement [stance [h [max_iter [end_stance [cone_margin [n_s [print_level [then_n_s [end_clustering
-//                     [local_error [warm_start_mu [max_split [mesh_max_iter]]]]]]]]]]]]]
-//   (defaults 0.45 0.02 1000 0.3 0 3 0 0 0 0 0.1 8 500; print_level is Ipopt's; then_n_s > 0: a second refinement
-//   with that many stages, started from the first one's result, the order continuation;
-//   end_clustering: RefinementGrid::end_clustering; local_error > 0: the mesh refinement's
-//   RefinementMesh::local_error_tolerance; warm_start_mu, max_split, mesh_max_iter: RefinementMesh's
-//   warm_start_mu, max_split, max_iter); any further arguments name=value are Ipopt options
-//   (RefinementIpopt::options: an integer, a number or a string, e.g. mumps_pivot_order=0), except
-//   resimulation_window=<s> (RefinementChecks::resimulation_window), mesh_max_rounds=<n>
-//   (RefinementMesh::max_rounds), analysis_runs=<n> (the refined reference analysed by
-//   analyse_reference with n Monte Carlo runs, report in hopper_analysis.json) and analysis_R=<r>
-//   (its LQR's input weight, default 1e-3)
+//                     [local_error [warm_start_mu [max_split [mesh_max_iter]]]]]]]]]]]]] [name=value ...]
+//   (defaults 0.45 0.02 1000 0.3 0 3 0 0 0 0 0.1 8 500)
 //
-// Discovery by the time-freezing homotopy gives no usable schedule on this OCP (docs/refinement.md,
-// "Hopper over three holes"), so the schedule here is a user's guess, the footsteps the holes
-// leave: four stances (the foot sticking) at x = 0, 1, 2, 3, the first and the last `end_stance`
-// seconds long, the two middle ones `stance`, and three flights of equal length in between. The
-// motion guessed, kinematically consistent with the schedule: in a stance the foot stays on its
-// foothold while the hip moves at constant speed from 0.15 m behind it to 0.15 m ahead (from and to
-// the start and target poses in the first and last stance), the hip-to-foot distance 0.39 m (the
-// knee bent forward, angles by inverse kinematics; 0.4 m, the leg straight, at t = 0 and T); in a
-// flight the hip moves at constant speed to the next touchdown pose on a ballistic arc (capped at
-// z = 0.54) and the joint angles go linearly from the lift-off pose to the touchdown pose;
-// velocities by central differences; zero torques. The OCP is scenes/hopper_holes.hpp as it is
-// (T = 2.5 s, |u| <= 60, the 11 path rows at the full holes, the start at rest, the target
-// q(T) = (3, 0.4, 0, 0)). Prints the refinement's progress, its result, where each stance's closed
-// contact drifts (largest |gap| and |normal velocity| over 200 samples) and its checks; writes the
-// result's JSON to hopper_refinement.json. About 4 minutes on one thread with the defaults
-// (docs/refinement.md, "Hopper over three holes").
+// Positional: print_level is Ipopt's; then_n_s > 0: a second refinement with that many stages from
+// the first one's result (the order continuation); end_clustering: RefinementGrid::end_clustering;
+// local_error > 0: RefinementMesh::local_error_tolerance; warm_start_mu, max_split, mesh_max_iter:
+// RefinementMesh's. Then name=value pairs:
+//   resimulation_window=<s>        RefinementChecks::resimulation_window
+//   mesh_max_rounds=<n>            RefinementMesh::max_rounds
+//   normal_force_margin=<N>        RefinementOptions::normal_force_margin
+//   then_normal_force_margin=<N>   a second refinement with that margin, from the first one's result on its grid
+//   max_edits=<n>, edit_max_iter=<n>  RefinementEdits (max_edits is 0 here unless given)
+//   discovery_steps=<K>            the footsteps discovered from the paper's initialisation instead of
+//                                  the holes' ones (discovered_footsteps below)
+//   analysis_runs=<n>, analysis_R=<r>  the refined reference analysed by analyse_reference with n Monte
+//                                  Carlo runs under scenes::stance_start_lqr_analysis with R = r I
+//                                  (default 1e-3); report in hopper_analysis.json
+//   any other name=value           an Ipopt option (RefinementIpopt::options: an integer, a number or a
+//                                  string, e.g. mumps_pivot_order=0)
+//
+// The schedule by default is a user's guess, the footsteps the holes leave: four stances (the foot
+// sticking) at x = 0, 1, 2, 3, the first and the last `end_stance` seconds long, the two middle
+// ones `stance`, and three flights of equal length in between; the motion guessed by
+// scenes::footstep_guess (scenes/hopper_footsteps.hpp: kinematically consistent, the foot on its
+// foothold in a stance, ballistic hip arcs in a flight, velocities by central differences, zero
+// torques). The OCP is scenes/hopper_holes.hpp as it is (T = 2.5 s, |u| <= 60, the 11 path rows at
+// the full holes, the start at rest, the target q(T) = (3, 0.4, 0, 0)). Prints the refinement's
+// progress, its result, where each stance's closed contact drifts (largest |gap| and |normal
+// velocity| over 200 samples), the friction use and forces before each release, and its checks
+// (in windows and in one shot); writes the result's JSON to hopper_refinement.json. About 4
+// minutes on one thread with the defaults (docs/refinement.md, "Hopper over three holes").
 #include "scenes/all_scenes.hpp"
+#include "scenes/hopper_footsteps.hpp"
 #include "scenes/hopper_holes.hpp"
+#include "scenes/hopper_holes_refinement.hpp"
+#include "scenes/hopper_tracking.hpp"
 
 #include <saltus/sensitivity/analysis/reference_analysis.hpp>
 #include <saltus/sensitivity/analysis/reference_analysis_io.hpp>
-#include <saltus/timefreezing/refinement/refinement.hxx>
 #include <saltus/timefreezing/refinement/refinement_io.hpp>
-#include <saltus/timefreezing/refinement/schedule_extraction.hpp>
-
-#include <Eigen/SVD>
+#include <saltus/timefreezing/refinement/schedule_extraction.hxx>
 
 #include <algorithm>
 #include <cmath>
@@ -53,104 +56,56 @@ namespace {
 using saltus::scenes::Hopper;
 using Ocp = saltus::scenes::HopperOverThreeHoles;
 
-constexpr double hip_offset = 0.15;      // hip ahead of / behind the foothold at lift-off / touchdown [m]
-constexpr double stance_leg = 0.39;      // hip-to-foot distance in a stance [m]
-constexpr double link_length = 0.2;      // thigh = shank (scenes/hopper.hpp)
-
-/// (phi_hip, phi_knee) that put the foot at (fx, 0) below a hip at (hx, hz), the knee bent forward.
-saltus::Vec<2> leg_angles_reaching(double hx, double hz, double fx) {
-  const double rx = fx - hx, rz = -hz, reach = std::min(std::hypot(rx, rz), 2 * link_length);
-  const double knee = -2.0 * std::acos(std::min(1.0, reach / (2 * link_length)));
-  return saltus::Vec<2>(std::atan2(rx, -rz) - knee / 2, knee);
-}
-
-/// One phase of the guessed gait: [begin, end], a stance on `foothold` or a flight from it.
-struct GuessPhase {
-  double begin = 0.0, end = 0.0;
-  bool stance = true;
-  int foothold = 0;
-};
-
-saltus::Vec<4> stance_pose(const GuessPhase& p, double t) {
-  const double s = (t - p.begin) / (p.end - p.begin), x = p.foothold;
-  const double from = p.foothold == 0 ? 0.0 : x - hip_offset, to = p.foothold == 3 ? 3.0 : x + hip_offset;
-  const double leg = p.foothold == 0 ? 0.4 + (stance_leg - 0.4) * s
-                     : p.foothold == 3 ? stance_leg + (0.4 - stance_leg) * s : stance_leg;
-  const double hx = from + (to - from) * s, hz = std::sqrt(std::max(0.04, leg * leg - (hx - x) * (hx - x)));
-  const saltus::Vec<2> a = leg_angles_reaching(hx, hz, x);
-  return saltus::Vec<4>(hx, hz, a[0], a[1]);
-}
-
-saltus::Vec<4> flight_pose(const GuessPhase& p, double t) {
-  const double s = (t - p.begin) / (p.end - p.begin), z0 = std::sqrt(stance_leg * stance_leg - hip_offset * hip_offset);
-  const double x0 = p.foothold + hip_offset, x1 = p.foothold + 1 - hip_offset;
-  const saltus::Vec<2> a0 = leg_angles_reaching(x0, z0, p.foothold), a1 = leg_angles_reaching(x1, z0, p.foothold + 1);
-  const double hz = std::min(0.54, z0 + 0.5 * 9.81 * (t - p.begin) * (p.end - t));
-  const saltus::Vec<2> a = a0 + (a1 - a0) * s;
-  return saltus::Vec<4>(x0 + (x1 - x0) * s, hz, a[0], a[1]);
-}
-
-saltus::timefreezing::ScheduleGuess<Hopper> footstep_guess(const Hopper& hopper, double stance, double end_stance) {
-  using namespace saltus;
-  using namespace saltus::timefreezing;
+/// The footsteps the holes leave (file comment): stances on x = 0, 1, 2, 3, the first and the
+/// last `end_stance` long, the middle ones `stance`, three flights of equal length between them.
+saltus::scenes::HopperFootsteps holes_footsteps(double stance, double end_stance) {
   const double flight = (Ocp::horizon - 2 * end_stance - 2 * stance) / 3.0;
-  std::vector<GuessPhase> phases;
+  saltus::scenes::HopperFootsteps steps{{0.0, 1.0, 2.0, 3.0}, {}};
   double t = 0.0;
-  for (int k = 0; k < 4; ++k) {
-    const double d = (k == 0 || k == 3) ? end_stance : stance;
-    phases.push_back({t, t + d, true, k});
-    t += d;
-    if (k < 3) phases.push_back({t, t + flight, false, k});
-    if (k < 3) t += flight;
+  for (int k = 0; k < 3; ++k) {
+    t += (k == 0) ? end_stance : stance;
+    steps.event_times.push_back(t);
+    t += flight;
+    steps.event_times.push_back(t);
   }
-  ScheduleGuess<Hopper> g;
-  Mode<1> stick, open;
-  stick[0] = ContactState::stick();
-  for (const GuessPhase& p : phases) g.schedule.phases.push_back(p.stance ? stick : open);
-  for (std::size_t k = 0; k + 1 < phases.size(); ++k) {
-    g.schedule.events.push_back(guards_between(hopper, g.schedule.phases[k], g.schedule.phases[k + 1]));
-    g.event_times.push_back(phases[k].end);
-  }
-  g.schedule = validated(hopper, g.schedule);
-  g.state = [phases](int k, double t) {
-    const GuessPhase& p = phases[static_cast<std::size_t>(k)];
-    const auto pose = [&p](double s) { return p.stance ? stance_pose(p, s) : flight_pose(p, s); };
-    const double c = std::clamp(t, p.begin, p.end), a = std::max(p.begin, c - 1e-5), b = std::min(p.end, c + 1e-5);
-    VecT<double, 8> x;
-    x << pose(c), (pose(b) - pose(a)) / (b - a);
-    return x;
-  };
-  g.input = [](double) { return VecT<double, 2>::Zero(); };
-  return g;
+  return steps;
 }
 
-/// An LQR tracking design for a hopper reference (Q = 10 on q, 1 on v, R = `R` I, by default
-/// 1e-3: the torques reach 60 N m) and its check: deviations of the initial state that keep the first stance (the
-/// foot on the ground, at rest: the gap's and the foot velocity's rows removed), measured on the
-/// whole state.
-saltus::ReferenceAnalysisOptions<Hopper> hopper_analysis(const Hopper& hopper, const saltus::HybridTrajectory<Hopper>& ref,
-                                                         int runs, double R) {
-  using namespace saltus;
-  ReferenceAnalysisOptions<Hopper> o;
-  o.design.name = "LQR, Q = (10 q, 1 v), R = " + std::to_string(R) + " I";
-  o.design.weights.Q.diagonal() << 10, 10, 10, 10, 1, 1, 1, 1;
-  o.design.weights.Q_final = o.design.weights.Q;
-  o.design.weights.R *= R;
-  const VecT<double, 8> x0 = ref.state(0, ref.t_begin());
-  Kinematics<Hopper, double> kin;
-  evaluate_kinematics<Hopper, double>(hopper, VecT<double, 4>(x0.head<4>()), VecT<double, 4>(x0.tail<4>()), kin);
-  Eigen::Matrix<double, 3, 8> C = Eigen::Matrix<double, 3, 8>::Zero();  // gap, normal and tangential velocity
-  C.block<1, 4>(0, 0) = kin.contacts[0].wn.transpose();
-  C.block<1, 4>(1, 4) = kin.contacts[0].wn.transpose();
-  C.block<1, 4>(2, 4) = kin.contacts[0].Wt.col(0).transpose();
-  const Eigen::JacobiSVD<Eigen::Matrix<double, 3, 8>> svd(C, Eigen::ComputeFullV);
-  const Eigen::Matrix<double, 8, 5> E = svd.matrixV().rightCols<5>();
-  o.stability.initial_subspace = E;
-  o.monte_carlo.runs = runs;
-  o.monte_carlo.threads = 1;
-  o.monte_carlo.project = [E](const Vec<8>& d) { return Vec<8>(E * (E.transpose() * d)); };
-  o.progress = &std::cout;
-  return o;
+/// The footsteps discovered from the paper's initialisation (the start state at every node, zero
+/// torques): discover_schedule_by_continuation with the hole continuation and at most `steps`
+/// homotopy steps on the paper's grid, each relaxed solution read with the gap widened to
+/// 0.15 sigma m (at most 1.5 cm) and the normal velocity to 100 sigma m/s (at most 10 m/s: a
+/// reading by the gap alone; the extraction's micro_flight_gap the same 1.5 cm), then
+/// scenes::footsteps_of (a final flight lands for its last 0.1 s).
+saltus::scenes::HopperFootsteps discovered_footsteps(const Hopper& hopper, int steps) {
+  using namespace saltus::timefreezing;
+  DiscoveryOptions options;
+  options.max_steps = steps;
+  options.extraction.micro_flight_gap = 0.015;  // the reading's gap (a stance's gap wanders within it)
+  options.reading.gap_per_sigma = 0.15;
+  options.reading.gap_max = 0.015;
+  options.reading.velocity_per_sigma = 100.0;
+  options.reading.velocity_max = 10.0;
+  options.progress = &std::cout;
+  const DiscoveryResult<Hopper> d = discover_schedule_by_continuation(
+      hopper, Ocp::system(), Ocp::hole_continuation(), Ocp{}, Ocp::q0(), Ocp::v0(), Ocp::grid(), Ocp::solver(), options);
+  std::cout << "discovery: " << d.message << ", " << d.seconds << " s (continuation " << d.continuation_seconds << " s)\n";
+  SALTUS_REQUIRE(d.schedule_found, "discovery found no schedule: ", d.message);
+  return saltus::scenes::footsteps_of(hopper, d.discovered.guess, Ocp::q0(), Ocp::q_target(), Ocp::horizon);
+}
+
+/// The element boundaries of a refined result as RefinementGrid::element_boundaries (per phase,
+/// fractions of its duration).
+std::vector<std::vector<double>> element_boundaries_of(const saltus::timefreezing::RefinementResult<Hopper>& r) {
+  std::vector<std::vector<double>> out;
+  for (const auto& seg : r.trajectory.segments) {
+    std::vector<double> s{0.0};
+    for (double t : r.element_times)
+      if (t > seg.t_begin + 1e-12 && t < seg.t_end - 1e-12) s.push_back((t - seg.t_begin) / (seg.t_end - seg.t_begin));
+    s.push_back(1.0);
+    out.push_back(s);
+  }
+  return out;
 }
 
 }  // namespace
@@ -169,8 +124,6 @@ int main(int argc, char** argv) {
   const double end_clustering = argc > 9 ? std::atof(argv[9]) : 0.0;
   const double local_error = argc > 10 ? std::atof(argv[10]) : 0.0;
   const Hopper hopper{};
-  const ScheduleGuess<Hopper> guess = footstep_guess(hopper, stance, end_stance);
-  std::cout << "schedule: " << describe(hopper, guess.schedule) << "\n";
   OcpHorizon<Hopper> horizon;
   horizon.x0 << Ocp::q0(), Ocp::v0();
   horizon.final_time = Ocp::horizon;
@@ -191,6 +144,8 @@ int main(int argc, char** argv) {
   if (argc > 13) options.mesh.max_iter = std::atoi(argv[13]);
   int analysis_runs = 0;
   double analysis_R = 1e-3;
+  double then_margin = 0.0;
+  int discovery_steps = 0;
   for (int a = 14; a < argc; ++a) {
     const std::string arg = argv[a];
     const std::size_t eq = arg.find('=');
@@ -200,12 +155,32 @@ int main(int argc, char** argv) {
       options.checks.resimulation_window = std::atof(value.c_str());
       continue;
     }
-    if (name == "analysis_runs") {  // analyse_reference with that many Monte Carlo runs (hopper_analysis below)
+    if (name == "analysis_runs") {  // analyse_reference with that many Monte Carlo runs (scenes::stance_start_lqr_analysis)
       analysis_runs = std::atoi(value.c_str());
       continue;
     }
-    if (name == "analysis_R") {  // the LQR's input weight R = analysis_R I (hopper_analysis below)
+    if (name == "analysis_R") {  // the LQR's input weight R = analysis_R I (scenes::stance_start_lqr_analysis)
       analysis_R = std::atof(value.c_str());
+      continue;
+    }
+    if (name == "normal_force_margin") {  // RefinementOptions::normal_force_margin [N]
+      options.normal_force_margin = std::atof(value.c_str());
+      continue;
+    }
+    if (name == "max_edits") {  // RefinementEdits::max_edits (0 by default here)
+      options.edits.max_edits = std::atoi(value.c_str());
+      continue;
+    }
+    if (name == "edit_max_iter") {  // RefinementEdits::max_iter
+      options.edits.max_iter = std::atoi(value.c_str());
+      continue;
+    }
+    if (name == "discovery_steps") {  // the footsteps discovered from the paper's initialisation
+      discovery_steps = std::atoi(value.c_str());
+      continue;
+    }
+    if (name == "then_normal_force_margin") {  // a second refinement with this margin, from the first's result
+      then_margin = std::atof(value.c_str());
       continue;
     }
     if (name == "mesh_max_rounds") {  // RefinementMesh::max_rounds
@@ -222,11 +197,26 @@ int main(int argc, char** argv) {
     if (*end == '\0') options.ipopt.options.push_back({name, d});
     else options.ipopt.options.push_back({name, value});
   }
+  scenes::HopperFootsteps steps = holes_footsteps(stance, end_stance);
+  if (discovery_steps > 0) steps = discovered_footsteps(hopper, discovery_steps);
+  const ScheduleGuess<Hopper> guess = scenes::footstep_guess(hopper, steps, Ocp::q0(), Ocp::q_target(), Ocp::horizon);
+  std::cout << "schedule: " << describe(hopper, guess.schedule) << "\nfootholds:";
+  for (double x : steps.footholds) std::cout << " " << x;
+  std::cout << "\nevent times:";
+  for (double t : steps.event_times) std::cout << " " << t;
+  std::cout << "\n";
   RefinementResult<Hopper> r = refine_schedule(hopper, Ocp{}, horizon, guess, options);
   if (then_stages > 0) {
     std::cout << "first solve (n_s = " << stages << "): objective " << r.objective << ", contact drift " << r.contact_drift
               << ", per-phase re-simulation " << r.phase_resim_max_error << ", " << r.seconds << " s\n";
     options.grid.stages = then_stages;
+    r = refine_schedule(hopper, Ocp{}, horizon, extract_schedule(hopper, r.trajectory).guess, options);
+  }
+  if (then_margin > 0.0) {
+    std::cout << "first refinement: " << r.stage << ", objective " << r.objective << ", local error " << r.local_error
+              << ", " << r.seconds << " s; again with normal_force_margin " << then_margin << " N on its grid\n";
+    options.normal_force_margin = then_margin;
+    options.grid.element_boundaries = element_boundaries_of(r);
     r = refine_schedule(hopper, Ocp{}, horizon, extract_schedule(hopper, r.trajectory).guess, options);
   }
   std::cout << r.stage << " (" << r.message << ")\n  objective " << r.objective << ", mode validity "
@@ -240,6 +230,10 @@ int main(int argc, char** argv) {
   // the refined trajectory (its dense output, 200 samples per phase).
   for (std::size_t k = 0; k < r.schedule.phases.size() && k < r.trajectory.segments.size(); ++k) {
     if (!r.schedule.phases[k][0].closed()) continue;
+    if (r.trajectory.segments[k].t_end - r.trajectory.segments[k].t_begin < 0.01) {
+      std::cout << "  stance phase " << k << ": shorter than 10 ms\n";
+      continue;
+    }
     const auto& seg = r.trajectory.segments[k];
     double gap = 0, zeta = 0, t_gap = seg.t_begin, t_zeta = seg.t_begin;
     for (int i = 0; i <= 200; ++i) {
@@ -286,7 +280,9 @@ int main(int argc, char** argv) {
   }
   std::ofstream("hopper_refinement.json") << to_json(hopper, r).dump(1) << "\n";
   if (analysis_runs > 0 && r.converged) {
-    const ReferenceAnalysis<Hopper> a = analyse_reference(hopper, r.trajectory, SimulationOptions{}, hopper_analysis(hopper, r.trajectory, analysis_runs, analysis_R));
+    const ReferenceAnalysis<Hopper> a =
+        analyse_reference(hopper, r.trajectory, SimulationOptions{},
+                          scenes::stance_start_lqr_analysis(hopper, r.trajectory, analysis_runs, analysis_R, &std::cout));
     std::cout << "analysis: " << (a.completed() ? "completed" : "failed at " + std::string(to_string(*a.failed_at)) + ": " + a.failure);
     if (a.stability) std::cout << "; upper rate " << a.stability->upper_rate;
     if (a.monte_carlo)

@@ -24,7 +24,7 @@
 //
 // The mode-schedule refinement (refinement/refinement.hpp) has its pairs too:
 // SALTUS_DECLARE/INSTANTIATE_SCHEDULE_REFINEMENT_SCENE(S) (the re-simulations of refined references)
-// and SALTUS_DECLARE/INSTANTIATE_SCHEDULE_REFINEMENT(S, Ocp) (ScheduleRefinementNlp, refine_schedule, discover_schedule).
+// and SALTUS_DECLARE/INSTANTIATE_SCHEDULE_REFINEMENT(S, Ocp) (ScheduleRefinementNlp, refine_schedule, discover_schedule and its _by_continuation).
 //
 // What is compiled: per scene, recover_trajectory and recover_reference of its FESD points; per
 // (scene, OCP), FesdMpcc<S, Ocp> and solve_time_freezing_ocp, _from_guess and _by_continuation; per
@@ -95,6 +95,11 @@
   prefix template saltus::timefreezing::DiscoveryResult<S> saltus::timefreezing::discover_schedule<S, Ocp>(   \
       const S&, const saltus::timefreezing::TimeFreezingSystem<S>&, const Ocp&, const saltus::Vec<S::nq>&,    \
       const saltus::Vec<S::nq>&, const saltus::timefreezing::FesdOptions&,                                    \
+      const saltus::timefreezing::MpccSolverOptions&, const saltus::timefreezing::DiscoveryOptions&);  \
+  prefix template saltus::timefreezing::DiscoveryResult<S>                                                    \
+  saltus::timefreezing::discover_schedule_by_continuation<S, Ocp>(                                           \
+      const S&, const saltus::timefreezing::TimeFreezingSystem<S>&, const std::vector<Ocp>&, const Ocp&,      \
+      const saltus::Vec<S::nq>&, const saltus::Vec<S::nq>&, const saltus::timefreezing::FesdOptions&,         \
       const saltus::timefreezing::MpccSolverOptions&, const saltus::timefreezing::DiscoveryOptions&);
 
 /// In the scene's header: the re-simulations of refined references of scene S (refinement.hpp)

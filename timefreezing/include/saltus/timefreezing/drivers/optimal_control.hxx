@@ -64,6 +64,52 @@ TimeFreezingOcpResult<S> solve_time_freezing_ocp_from_guess(const TimeFreezingSy
   return detail::solve_and_read<S>(problem, start, fesd, solver);
 }
 
+namespace detail {
+/// Where a continuation on the OCP's data ended: the start of the next solve (the last stage's
+/// primal and dual solution), the stages' relaxed steps, and why it stopped early ("" when not).
+struct ContinuationRun {
+  MpccStart start;
+  std::vector<MpccHomotopyStep> steps;
+  int iterations = 0;
+  double seconds = 0.0;
+  std::string interrupted;
+};
+
+/// One relaxed NLP per stage of `continuation` at the solver's sigma_0 (no polish), in order, each
+/// warm-started from the one before, the first from the initial state at every stage point; stops
+/// at the first stage Ipopt does not solve. One progress line per stage when `progress` is set.
+template <Scene S, class Ocp>
+ContinuationRun run_continuation(const TimeFreezingSystem<S>& system, const std::vector<Ocp>& continuation,
+                                 const Vec<S::nq>& q0, const Vec<S::nq>& v0, const FesdOptions& fesd,
+                                 const MpccSolverOptions& solver, std::ostream* progress) {
+  SALTUS_REQUIRE(!continuation.empty(), "the continuation is empty");
+  MpccSolverOptions one_step = solver;
+  one_step.homotopy.max_steps = 1;
+  one_step.polish.enabled = false;
+  ContinuationRun run;
+  for (std::size_t c = 0; c < continuation.size(); ++c) {
+    const FesdMpcc<S, Ocp> stage(system, continuation[c], q0, v0, fesd);
+    if (c == 0) {
+      run.start.x.resize(stage.variable_count());
+      stage.initial_point(run.start.x);
+    }
+    const MpccSolution r = solve_mpcc(stage, run.start, one_step);
+    for (MpccHomotopyStep st : r.steps) run.steps.push_back(st);
+    run.iterations += r.ipopt_iterations;
+    run.seconds += r.seconds;
+    if (progress) *progress << "continuation stage " << c + 1 << " of " << continuation.size() << " done\n";
+    run.start = MpccStart{r.x, r.constraint_multipliers, r.bound_multipliers_lower, r.bound_multipliers_upper};
+    if (r.steps.empty() || !r.steps.back().ipopt_succeeded) {
+      run.interrupted = "continuation stopped at stage " + std::to_string(c + 1) + " of " +
+                        std::to_string(continuation.size()) + " (" +
+                        (r.steps.empty() ? std::string("no solve") : r.steps.back().ipopt_status) + "); ";
+      break;
+    }
+  }
+  return run;
+}
+}  // namespace detail
+
 template <Scene S, class Ocp>
 TimeFreezingOcpResult<S> solve_time_freezing_ocp_by_continuation(const TimeFreezingSystem<S>& system,
                                                                  const std::vector<Ocp>& continuation, const Ocp& ocp,
@@ -71,41 +117,13 @@ TimeFreezingOcpResult<S> solve_time_freezing_ocp_by_continuation(const TimeFreez
                                                                  const FesdOptions& fesd,
                                                                  const MpccSolverOptions& solver) {
   SALTUS_REQUIRE(!continuation.empty(), "solve_time_freezing_ocp_by_continuation: the continuation is empty");
-  MpccSolverOptions one_step = solver;
-  one_step.homotopy.max_steps = 1;
-  one_step.polish.enabled = false;
-  MpccStart start;
-  std::vector<MpccHomotopyStep> steps;
-  int iterations = 0;
-  double seconds = 0.0;
-  std::string interrupted;
-  for (std::size_t c = 0; c < continuation.size(); ++c) {
-    const FesdMpcc<S, Ocp> stage(system, continuation[c], q0, v0, fesd);
-    if (c == 0) {
-      start.x.resize(stage.variable_count());
-      stage.initial_point(start.x);
-    }
-    const MpccSolution r = solve_mpcc(stage, start, one_step);
-    for (MpccHomotopyStep st : r.steps) steps.push_back(st);
-    iterations += r.ipopt_iterations;
-    seconds += r.seconds;
-    if (solver.progress) *solver.progress << "continuation stage " << c + 1 << " of " << continuation.size() << " done\n";
-    start.x = r.x;
-    start.constraint_multipliers = r.constraint_multipliers;
-    start.bound_multipliers_lower = r.bound_multipliers_lower;
-    start.bound_multipliers_upper = r.bound_multipliers_upper;
-    if (r.steps.empty() || !r.steps.back().ipopt_succeeded) {
-      interrupted = "continuation stopped at stage " + std::to_string(c + 1) + " of " + std::to_string(continuation.size()) +
-                    " (" + (r.steps.empty() ? std::string("no solve") : r.steps.back().ipopt_status) + "); ";
-      break;
-    }
-  }
+  detail::ContinuationRun run = detail::run_continuation<S>(system, continuation, q0, v0, fesd, solver, solver.progress);
   const FesdMpcc<S, Ocp> problem(system, ocp, q0, v0, fesd);
-  TimeFreezingOcpResult<S> out = detail::solve_and_read<S>(problem, start, fesd, solver);
-  out.continuation_steps = std::move(steps);
-  out.solution.ipopt_iterations += iterations;
-  out.solution.seconds += seconds;
-  out.solution.message = interrupted + out.solution.message;
+  TimeFreezingOcpResult<S> out = detail::solve_and_read<S>(problem, run.start, fesd, solver);
+  out.continuation_steps = std::move(run.steps);
+  out.solution.ipopt_iterations += run.iterations;
+  out.solution.seconds += run.seconds;
+  out.solution.message = run.interrupted + out.solution.message;
   return out;
 }
 

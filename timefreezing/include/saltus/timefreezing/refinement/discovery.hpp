@@ -92,7 +92,11 @@ struct DiscoveryResult {
   bool settled = false;
   std::vector<DiscoveryStep> steps;
   std::string message;  ///< where and why the discovery stopped
-  double seconds = 0.0;
+  /// discover_schedule_by_continuation: the continuation's relaxed solves, one per stage, and their
+  /// wall time [s] (included in `seconds`); empty and 0 for discover_schedule
+  std::vector<MpccHomotopyStep> continuation_steps;
+  double continuation_seconds = 0.0;
+  double seconds = 0.0;  ///< wall time of the whole discovery [s]
 };
 
 /// Runs the homotopy of the time-freezing OCP `ocp` from (q0, v0) on the grid `fesd` with the
@@ -105,5 +109,20 @@ template <Scene S, class Ocp>
 DiscoveryResult<S> discover_schedule(const S& scene, const TimeFreezingSystem<S>& system, const Ocp& ocp,
                                      const Vec<S::nq>& q0, const Vec<S::nq>& v0, const FesdOptions& fesd,
                                      const MpccSolverOptions& solver, const DiscoveryOptions& options = {});
+
+/// discover_schedule preceded by a continuation on the OCP's data (as
+/// solve_time_freezing_ocp_by_continuation): one relaxed solve per OCP of `continuation` at the
+/// solver's sigma_0, in order, the first from the initial state at every stage point, each
+/// warm-started from the one before; then the discovery's homotopy steps on `ocp` from the last
+/// stage's solution. The hopper over three holes grows its holes this way
+/// (scenes/hopper_holes.hpp, hole_continuation): nothing in it hints at the contacts. A stage that
+/// Ipopt does not solve ends the discovery without a step (`message` says which). One progress line
+/// per stage and per step. Throws InvalidArgument as discover_schedule and for an empty continuation.
+template <Scene S, class Ocp>
+DiscoveryResult<S> discover_schedule_by_continuation(const S& scene, const TimeFreezingSystem<S>& system,
+                                                     const std::vector<Ocp>& continuation, const Ocp& ocp,
+                                                     const Vec<S::nq>& q0, const Vec<S::nq>& v0,
+                                                     const FesdOptions& fesd, const MpccSolverOptions& solver,
+                                                     const DiscoveryOptions& options = {});
 
 }  // namespace saltus::timefreezing

@@ -34,7 +34,8 @@ std::vector<std::vector<double>> split_elements(const ScheduleRefinementNlp<S, O
       }
       int k = 1;
       if (err > tol) {
-        k = std::clamp(int(std::ceil(std::pow(err / (mesh.safety * tol), exponent))), 2, mesh.max_split);
+        // clamped as a double: an infinite error (the flow failed over the element) splits the most
+        k = int(std::clamp(std::ceil(std::pow(err / (mesh.safety * tol), exponent)), 2.0, double(mesh.max_split)));
         ++round.elements_split;
       }
       for (int j = 1; j < k; ++j) s.push_back(begin + length * double(j) / double(k));

@@ -20,7 +20,8 @@
 // MODE VALIDITY at every stage point and at every element's start under the element's input (the
 // input jumps there; inequality rows >= 0), from the flow's contact forces:
 //     open contact:             h_n(q)                    (no penetration)
-//     closed contact:           lambda_n                  (no pull)
+//     closed contact:           lambda_n                  (no pull; minus RefinementOptions::normal_force_margin
+//                               where the schedule keeps the contact closed past the phase's end)
 //     sticking planar contact:  mu lambda_n - lambda_t,  mu lambda_n + lambda_t   (in the cone;
 //                               mu times 1 - RefinementOptions::stick_cone_margin, default 1)
 //     slipping planar contact:  s zeta_t                  (the slip keeps its sign s)
@@ -217,8 +218,11 @@ class ScheduleRefinementNlp final : public Mpcc {
   /// y(t_e) = X_{e,start} under the element's input (classical Runge-Kutta with step doubling until
   /// its own error estimate is below 1 % of the distance or 1e-13, Richardson-extrapolated; at most
   /// 8192 steps). The re-simulation's per-phase distance is these errors carried through the
-  /// phase's flow. A zero-length element has local error 0. Throws what the flow throws
-  /// (NonSpdMassMatrix).
+  /// phase's flow. A zero-length element has local error 0. Where the flow fails at every step
+  /// count (NumericalFailure: the Runge-Kutta steps run into a non-finite or singular state, as from
+  /// an element whose collocation is far from its flow: the hopper's coarse first solves), the
+  /// element's local error is +infinity and the mesh refinement splits it the most. Throws what
+  /// the flow throws otherwise (NonSpdMassMatrix).
   std::vector<double> element_local_errors(const Eigen::Ref<const Eigen::VectorXd>& x) const;
   /// The validity values at point (e, r) of x in the order of the file comment (count:
   /// validity_count); r = -1 is the element's start under its input, r = 0..n_s-1 its stages.
@@ -293,6 +297,7 @@ class ScheduleRefinementNlp final : public Mpcc {
   VecT<T, S::nu> input_law(const T& t, const VecT<T, S::nu>& decision) const;
   template <class T>
   void write_validity(int p, const FlowWorkspace<S, T>& ws, VecT<T, stage_outputs>& out) const;
+  double normal_margin(int p, int i) const;
 
   // local vectors and their globals. A point (e, r): r = -1 the element's start (its start state
   // under its own input: validity rows only), r = 0..n_s-1 its stages.

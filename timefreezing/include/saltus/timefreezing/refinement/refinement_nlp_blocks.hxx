@@ -31,7 +31,7 @@ void ScheduleRefinementNlp<S, Ocp>::write_validity(int p, const FlowWorkspace<S,
       out[k++] = ws.kin.contacts[i].gap;
       continue;
     }
-    out[k++] = ws.force[i].normal;
+    out[k++] = ws.force[i].normal - T(normal_margin(p, i));
     if (scene_.contact(i).tangents() == 0) continue;
     if (c.mode == ContactMode::Slip) {
       out[k++] = T(c.slip_direction[0]) * ws.kin.contacts[i].zeta_t[0];
@@ -48,6 +48,15 @@ void ScheduleRefinementNlp<S, Ocp>::write_validity(int p, const FlowWorkspace<S,
     out[k++] = mu_lambda - lambda_t;
     out[k++] = mu_lambda + lambda_t;
   }
+}
+
+/// RefinementOptions::normal_force_margin for closed contact i of phase p when the schedule keeps
+/// it closed past the phase's end, 0 when it releases it there.
+template <Scene S, class Ocp>
+double ScheduleRefinementNlp<S, Ocp>::normal_margin(int p, int i) const {
+  const std::size_t next = static_cast<std::size_t>(p) + 1;
+  const bool kept = next == schedule_.phases.size() || schedule_.phases[next][i].closed();
+  return kept ? options_.normal_force_margin : 0.0;
 }
 
 template <Scene S, class Ocp>

@@ -4,6 +4,8 @@
 
 #include <saltus/timefreezing/refinement/refinement_nlp_rows.hxx>
 
+#include <limits>
+
 namespace saltus::timefreezing {
 
 inline void RefinementOptions::validate() const {
@@ -46,6 +48,8 @@ inline void RefinementOptions::validate() const {
                  "refinement: min_phase_duration must be >= 0, got ", min_phase_duration);
   SALTUS_REQUIRE(stick_cone_margin >= 0.0 && stick_cone_margin < 1.0,
                  "refinement: stick_cone_margin must lie in [0, 1), got ", stick_cone_margin);
+  SALTUS_REQUIRE(std::isfinite(normal_force_margin) && normal_force_margin >= 0.0,
+                 "refinement: normal_force_margin must be finite and >= 0 [N], got ", normal_force_margin);
   SALTUS_REQUIRE(implied_row_tolerance > 0.0 && implied_row_tolerance < 1.0,
                  "refinement: implied_row_tolerance must lie in (0, 1), got ", implied_row_tolerance);
   SALTUS_REQUIRE(std::isfinite(implied_terminal_value_tolerance) && implied_terminal_value_tolerance > 0.0,
@@ -178,25 +182,41 @@ std::vector<double> ScheduleRefinementNlp<S, Ocp>::element_local_errors(const Ei
       evaluate_flow<S, double>(scene_, mode, y, input_law<double>(t, decision), ws);
       return VecT<double, nx>(ws.xdot);
     };
-    const auto rk4 = [&](int steps) {  // classical Runge-Kutta, `steps` equal steps over the element
-      VecT<double, nx> y = start;
+    // classical Runge-Kutta, `steps` equal steps over the element; false where the flow fails
+    // (a step into a singular or non-finite state: the element's motion is far from its flow)
+    const auto rk4 = [&](int steps, VecT<double, nx>& y) {
+      y = start;
       const double dt = h / steps;
-      for (int k = 0; k < steps; ++k) {
-        const double t = t_a + dt * k;
-        const VecT<double, nx> k1 = f(t, y), k2 = f(t + dt / 2, y + dt / 2 * k1), k3 = f(t + dt / 2, y + dt / 2 * k2),
-                               k4 = f(t + dt, y + dt * k3);
-        y += dt / 6 * (k1 + 2 * k2 + 2 * k3 + k4);
+      try {
+        for (int k = 0; k < steps; ++k) {
+          const double t = t_a + dt * k;
+          const VecT<double, nx> k1 = f(t, y), k2 = f(t + dt / 2, y + dt / 2 * k1), k3 = f(t + dt / 2, y + dt / 2 * k2),
+                                 k4 = f(t + dt, y + dt * k3);
+          y += dt / 6 * (k1 + 2 * k2 + 2 * k3 + k4);
+        }
+      } catch (const NumericalFailure&) {
+        return false;
       }
-      return y;
+      return y.allFinite();
     };
-    VecT<double, nx> coarse = rk4(8), fine = rk4(16);
-    for (int steps = 32; steps <= 8192; steps *= 2) {
-      const double estimate = (fine - coarse).cwiseAbs().maxCoeff() / 15.0;  // of `fine` (order 4)
-      if (estimate <= std::max(1e-2 * (fine - end).cwiseAbs().maxCoeff(), 1e-13)) break;
+    // step doubling from 8 steps until two successive results agree to 1 % of the error (Richardson);
+    // no two successive results up to 8192 steps: the error is reported as infinite
+    out[std::size_t(e)] = std::numeric_limits<double>::infinity();
+    VecT<double, nx> coarse, fine;
+    bool have_coarse = false;
+    for (int steps = 8; steps <= 8192; steps *= 2) {
+      if (!rk4(steps, fine)) {
+        have_coarse = false;
+        continue;
+      }
+      if (have_coarse) {
+        const double estimate = (fine - coarse).cwiseAbs().maxCoeff() / 15.0;  // of `fine` (order 4)
+        out[std::size_t(e)] = (fine + (fine - coarse) / 15.0 - end).cwiseAbs().maxCoeff();
+        if (estimate <= std::max(1e-2 * (fine - end).cwiseAbs().maxCoeff(), 1e-13)) break;
+      }
       coarse = fine;
-      fine = rk4(steps);
+      have_coarse = true;
     }
-    out[std::size_t(e)] = (fine + (fine - coarse) / 15.0 - end).cwiseAbs().maxCoeff();
   }
   return out;
 }

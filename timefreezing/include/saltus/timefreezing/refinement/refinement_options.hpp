@@ -122,6 +122,14 @@ struct RefinementOptions {
   /// keep the cone itself; mode_validity_violation reads the rows as imposed (with the margin), so
   /// the physical cone holds with room to spare where it is small.
   double stick_cone_margin = 0.0;
+  /// [N], >= 0. A closed contact that the schedule does not release at its phase's end (it stays
+  /// closed into the next phase, or the phase is the last) has the row lambda_n - normal_force_margin
+  /// >= 0 inside the phase instead of lambda_n >= 0: the refined stance keeps its foot loaded, so a
+  /// perturbed motion tracking it does not lift the foot off (a stance that starts nearly unloaded
+  /// after a grazing touchdown is the case: the hopper's last stance, docs/refinement.md). A stance
+  /// that ends in a release keeps lambda_n >= 0 (its force reaches 0 at the release by design).
+  /// mode_validity_violation reads the rows as imposed. 0: no margin.
+  double normal_force_margin = 0.0;
   /// An equality path row of a phase whose gradient lies in the span of the closed contacts' gap
   /// gradients (relative least-squares residual <= this, and no dependence on v and u) is implied
   /// by the mode and is not imposed inside the phase; a guard whose gradient lies in the span of

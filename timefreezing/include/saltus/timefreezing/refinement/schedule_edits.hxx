@@ -171,11 +171,15 @@ std::optional<ScheduleGuess<S>> edited_guess(const S& scene, const HybridTraject
   }
   ModeSchedule<S::nc> edited;
   ScheduleGuess<S> guess;
+  std::vector<std::vector<int>> sources;  // per edited phase, the old phases it reads, in time order
   for (std::size_t k = 0; k < modes.size(); ++k) {
-    if (k > 0 && guards_between(scene, edited.phases.back(), modes[k]).guards.empty()) continue;  // same mode: merge
+    if (k > 0 && guards_between(scene, edited.phases.back(), modes[k]).guards.empty()) {  // same mode: merge
+      if (sources.back().back() != source[k]) sources.back().push_back(source[k]);
+      continue;
+    }
     if (k > 0) guess.event_times.push_back(starts[k]);
     edited.phases.push_back(modes[k]);
-    source[edited.phases.size() - 1] = source[k];
+    sources.push_back({source[k]});
   }
   for (std::size_t k = 1; k < edited.phases.size(); ++k) {
     ScheduleEvent e = guards_between(scene, edited.phases[k - 1], edited.phases[k]);
@@ -192,10 +196,14 @@ std::optional<ScheduleGuess<S>> edited_guess(const S& scene, const HybridTraject
   } catch (const InvalidArgument&) {
     return std::nullopt;
   }
-  source.resize(edited.phases.size());
   const auto shared = std::make_shared<const HybridTrajectory<S>>(traj);
-  guess.state = [shared, source](int phase, double t) {
-    const int old = source[static_cast<std::size_t>(phase)];
+  // A phase merged from several old ones (the neighbours of a vanished phase) reads, at t, the last
+  // of them that has begun by t: the refined motion itself on both sides of the removed phase.
+  guess.state = [shared, sources](int phase, double t) {
+    const std::vector<int>& olds = sources[static_cast<std::size_t>(phase)];
+    int old = olds.front();
+    for (int o : olds)
+      if (shared->segments[static_cast<std::size_t>(o)].t_begin <= t) old = o;
     const Segment<S>& s = shared->segments[static_cast<std::size_t>(old)];
     return shared->state(old, std::clamp(t, s.t_begin, s.t_end));
   };

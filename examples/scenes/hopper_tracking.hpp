@@ -1,0 +1,26 @@
+// A tracking design for a hopper reference that starts in a stance, and the analysis options that
+// check it (saltus/sensitivity/analysis/reference_analysis.hpp): used on the refined reference of
+// the hopper over three holes (examples/hopper.cpp --json, bench/experiments/hopper_refinement).
+#pragma once
+
+#include "scenes/hopper.hpp"
+
+#include <saltus/sensitivity/analysis/reference_analysis.hpp>
+
+#include <iosfwd>
+
+namespace saltus::scenes {
+
+/// The analysis of a hopper reference under an LQR reference-spreading design: Q = 10 on q and 1
+/// on v (also at T), R = `input_weight` I [1 / (N m)^2 relative to Q]; the stability check and
+/// `runs` Monte Carlo runs (one thread) from deviations of the initial state that keep the first
+/// stance: the foot on the ground and at rest, i.e. the 5-dimensional null space of the rows of
+/// the gap, the normal velocity and the tangential velocity at the reference's start (its SVD),
+/// the Monte Carlo deviations projected on it. One progress line per stage to `progress` (not
+/// owned; null: none). Precondition: the reference starts with the foot closed (not checked
+/// here; the analysis' runs fail with a named unplanned event otherwise). Throws InvalidArgument
+/// for runs < 0 or an input weight that is not finite and > 0.
+ReferenceAnalysisOptions<Hopper> stance_start_lqr_analysis(const Hopper& hopper, const HybridTrajectory<Hopper>& reference,
+                                                           int runs, double input_weight, std::ostream* progress);
+
+}  // namespace saltus::scenes
