@@ -16,10 +16,12 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <sstream>
 #include <string>
+#include <utility>
 
 namespace saltus::timefreezing {
 namespace {
@@ -668,6 +670,68 @@ TEST(ScheduleRefinement, ANormalForceMarginKeepsAStanceLoadedUnlessItEndsInARele
   EXPECT_NEAR(released.objective, plain.objective, 1e-8 * (1.0 + std::abs(plain.objective)));
   r.normal_force_margin = -1.0;
   expect_invalid([&] { (void)refine_schedule(frictional_mass(), PushAndLift{}, h, lift, r); }, {"normal_force_margin"});
+}
+
+/// A slide to x = 1 at rest at T = 1 s, for u'u: cheapest on the table, so a flight the schedule
+/// forces (stance, flight of at least 0.2 s, stance) stays low: it rises 1.3 cm and lands with an
+/// impact that takes its downward speed for free.
+struct SlideToOne {
+  static constexpr int terminal_constraint_count = 4;
+  template <class T>
+  T running_cost(const VecT<T, 4>&, const VecT<T, 2>& u) const {
+    return u.squaredNorm();
+  }
+  template <class T>
+  VecT<T, 4> terminal_constraints(const VecT<T, 4>& x, const T&) const {
+    return x;
+  }
+  Vec<4> terminal_lower() const { return Vec<4>(1, 0, 0, 0); }
+  Vec<4> terminal_upper() const { return terminal_lower(); }
+};
+
+/// The largest and smallest gap - clearance 4 s (1 - s) of phase 1 of `r` over its element
+/// boundaries inside the phase, s the phase fraction.
+std::pair<double, double> flight_gap_over_profile(const RefinementResult<PointMass>& r, double clearance) {
+  const auto& seg = r.trajectory.segments[1];
+  double largest = -1.0, smallest = 1.0;
+  for (double t : r.element_times) {
+    if (t <= seg.t_begin || t >= seg.t_end) continue;
+    const double s = (t - seg.t_begin) / (seg.t_end - seg.t_begin), gap = r.trajectory.state(1, t)[1];
+    largest = std::max(largest, gap - clearance * 4 * s * (1 - s));
+    smallest = std::min(smallest, gap - clearance * 4 * s * (1 - s));
+  }
+  return {largest, smallest};
+}
+
+// SlideToOne through a forced flight: without a clearance it stays below the profile of a 5 cm
+// clearance; with flight_clearance = 5 cm it rises above the profile (5 cm at mid-flight) and pays
+// for it. A negative clearance is refused by name.
+TEST(ScheduleRefinement, AFlightClearanceLiftsAFlightThatSkimsTheGround) {
+  ScheduleGuess<PointMass> g = sliding_on_the_table();
+  g.schedule.phases = {closed_mode(0), open_mode(), closed_mode(0)};
+  g.schedule.events = {guards_between(PointMass{}, g.schedule.phases[0], g.schedule.phases[1]),
+                       guards_between(PointMass{}, g.schedule.phases[1], g.schedule.phases[2])};
+  g.schedule = validated(PointMass{}, g.schedule);
+  g.event_times = {0.4, 0.6};
+  g.input = [](double) { return Vec<2>(0, 9.81); };
+  RefinementOptions o;
+  o.grid.max_element_duration = 0.05;
+  o.min_phase_duration = 0.2;
+  o.edits.max_edits = 0;
+  const RefinementResult<PointMass> skim = refine_schedule(PointMass{}, SlideToOne{}, from_rest_for_one_second(), g, o);
+  ASSERT_TRUE(skim.converged) << skim.message;
+  EXPECT_LT(flight_gap_over_profile(skim, 0.05).second, -0.01);
+  EXPECT_LT(flight_gap_over_profile(skim, 0.0).first, 0.02);
+  o.flight_clearance = 0.05;
+  const RefinementResult<PointMass> clear = refine_schedule(PointMass{}, SlideToOne{}, from_rest_for_one_second(), g, o);
+  ASSERT_TRUE(clear.converged) << clear.message;
+  EXPECT_LE(clear.mode_validity_violation, 1e-9);
+  EXPECT_GE(flight_gap_over_profile(clear, 0.05).second, -1e-9);
+  EXPECT_GE(flight_gap_over_profile(clear, 0.0).first, 0.049);  // about 5 cm up mid-flight
+  EXPECT_GT(clear.objective, skim.objective + 1.0);
+  o.flight_clearance = -0.01;
+  expect_invalid([&] { (void)refine_schedule(PointMass{}, SlideToOne{}, from_rest_for_one_second(), g, o); },
+                 {"flight_clearance"});
 }
 
 }  // namespace

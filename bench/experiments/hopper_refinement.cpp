@@ -12,6 +12,8 @@
 //   mesh_max_rounds=<n>            RefinementMesh::max_rounds
 //   normal_force_margin=<N>        RefinementOptions::normal_force_margin
 //   then_normal_force_margin=<N>   a second refinement with that margin, from the first one's result on its grid
+//   min_phase_duration=<s>         RefinementOptions::min_phase_duration
+//   flight_clearance=<m>           RefinementOptions::flight_clearance
 //   max_edits=<n>, edit_max_iter=<n>  RefinementEdits (max_edits is 0 here unless given)
 //   discovery_steps=<K>            the footsteps discovered from the paper's initialisation instead of
 //                                  the holes' ones (discovered_footsteps below)
@@ -73,25 +75,17 @@ saltus::scenes::HopperFootsteps holes_footsteps(double stance, double end_stance
 
 /// The footsteps discovered from the paper's initialisation (the start state at every node, zero
 /// torques): discover_schedule_by_continuation with the hole continuation and at most `steps`
-/// homotopy steps on the paper's grid, each relaxed solution read with the gap widened to
-/// 0.15 sigma m (at most 1.5 cm) and the normal velocity to 100 sigma m/s (at most 10 m/s: a
-/// reading by the gap alone; the extraction's micro_flight_gap the same 1.5 cm), then
+/// homotopy steps on the paper's grid, read as scenes::hopper_discovery_options says, then
 /// scenes::footsteps_of (a final flight lands for its last 0.1 s).
 saltus::scenes::HopperFootsteps discovered_footsteps(const Hopper& hopper, int steps) {
   using namespace saltus::timefreezing;
-  DiscoveryOptions options;
-  options.max_steps = steps;
-  options.extraction.micro_flight_gap = 0.015;  // the reading's gap (a stance's gap wanders within it)
-  options.reading.gap_per_sigma = 0.15;
-  options.reading.gap_max = 0.015;
-  options.reading.velocity_per_sigma = 100.0;
-  options.reading.velocity_max = 10.0;
-  options.progress = &std::cout;
-  const DiscoveryResult<Hopper> d = discover_schedule_by_continuation(
-      hopper, Ocp::system(), Ocp::hole_continuation(), Ocp{}, Ocp::q0(), Ocp::v0(), Ocp::grid(), Ocp::solver(), options);
+  const DiscoveryResult<Hopper> d =
+      discover_schedule_by_continuation(hopper, Ocp::system(), Ocp::hole_continuation(), Ocp{}, Ocp::q0(), Ocp::v0(),
+                                        Ocp::grid(), Ocp::solver(), saltus::scenes::hopper_discovery_options(steps, &std::cout));
   std::cout << "discovery: " << d.message << ", " << d.seconds << " s (continuation " << d.continuation_seconds << " s)\n";
-  SALTUS_REQUIRE(d.schedule_found, "discovery found no schedule: ", d.message);
-  return saltus::scenes::footsteps_of(hopper, d.discovered.guess, Ocp::q0(), Ocp::q_target(), Ocp::horizon);
+  saltus::scenes::HopperFootsteps footsteps;
+  (void)saltus::scenes::hopper_guess_from(d, &footsteps);
+  return footsteps;
 }
 
 /// The element boundaries of a refined result as RefinementGrid::element_boundaries (per phase,
@@ -124,11 +118,7 @@ int main(int argc, char** argv) {
   const double end_clustering = argc > 9 ? std::atof(argv[9]) : 0.0;
   const double local_error = argc > 10 ? std::atof(argv[10]) : 0.0;
   const Hopper hopper{};
-  OcpHorizon<Hopper> horizon;
-  horizon.x0 << Ocp::q0(), Ocp::v0();
-  horizon.final_time = Ocp::horizon;
-  horizon.control_lower = Eigen::VectorXd::Constant(2, -Ocp::torque_limit);
-  horizon.control_upper = Eigen::VectorXd::Constant(2, Ocp::torque_limit);
+  const OcpHorizon<Hopper> horizon = scenes::hopper_refinement_horizon();
   RefinementOptions options;
   options.progress = &std::cout;
   options.grid.max_element_duration = h;
@@ -165,6 +155,14 @@ int main(int argc, char** argv) {
     }
     if (name == "normal_force_margin") {  // RefinementOptions::normal_force_margin [N]
       options.normal_force_margin = std::atof(value.c_str());
+      continue;
+    }
+    if (name == "flight_clearance") {  // RefinementOptions::flight_clearance [m]
+      options.flight_clearance = std::atof(value.c_str());
+      continue;
+    }
+    if (name == "min_phase_duration") {  // RefinementOptions::min_phase_duration [s]
+      options.min_phase_duration = std::atof(value.c_str());
       continue;
     }
     if (name == "max_edits") {  // RefinementEdits::max_edits (0 by default here)
@@ -281,7 +279,7 @@ int main(int argc, char** argv) {
   std::ofstream("hopper_refinement.json") << to_json(hopper, r).dump(1) << "\n";
   if (analysis_runs > 0 && r.converged) {
     const ReferenceAnalysis<Hopper> a =
-        analyse_reference(hopper, r.trajectory, SimulationOptions{},
+        analyse_reference(hopper, r.trajectory, scenes::hopper_monte_carlo_simulation(),
                           scenes::stance_start_lqr_analysis(hopper, r.trajectory, analysis_runs, analysis_R, &std::cout));
     std::cout << "analysis: " << (a.completed() ? "completed" : "failed at " + std::string(to_string(*a.failed_at)) + ": " + a.failure);
     if (a.stability) std::cout << "; upper rate " << a.stability->upper_rate;

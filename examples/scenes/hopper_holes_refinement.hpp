@@ -2,13 +2,47 @@
 // and discover_schedule_by_continuation for scenes::HopperOverThreeHoles), declared here and
 // compiled once in hopper_holes_refinement.cpp, in its own library saltus_hopper_refinement: only
 // the programs that refine the hopper (examples/hopper.cpp --json, bench/experiments) link it, so
-// the tests' scene library does not compile it.
+// the tests' scene library does not compile it. With it, the settings of the hopper's chain
+// (docs/refinement.md, "Hopper over three holes"): discovery from the paper's initialisation, the
+// footsteps it finds, and the refinement of their schedule.
 #pragma once
 
+#include "scenes/hopper_footsteps.hpp"
 #include "scenes/hopper_holes.hpp"
 
 #include <saltus/timefreezing/refinement/discovery.hpp>
 #include <saltus/timefreezing/refinement/refinement.hpp>
 
+#include <iosfwd>
+
 SALTUS_DECLARE_SCHEDULE_REFINEMENT_SCENE(saltus::scenes::Hopper)
 SALTUS_DECLARE_SCHEDULE_REFINEMENT(saltus::scenes::Hopper, saltus::scenes::HopperOverThreeHoles)
+
+namespace saltus::scenes {
+
+/// Discovery on the hopper over three holes: at most `steps` homotopy steps (sigma = 1, 0.1, ...)
+/// after the hole continuation, each relaxed solution read by the gap alone (widened to
+/// 0.15 sigma m, at most 1.5 cm; the normal velocity to 100 sigma m/s, at most 10 m/s: the relaxed
+/// foot carries the body from up to a centimetre above the ground, at any speed), the extraction's
+/// micro_flight_gap the same 1.5 cm. One progress line per stage and step to `progress` (not owned).
+timefreezing::DiscoveryOptions hopper_discovery_options(int steps, std::ostream* progress);
+
+/// The refinement's settings on the hopper: Radau IIA n_s = 3 on elements of at most 0.05 s,
+/// Ipopt 3000 iterations, the sticking stances 5 % inside the friction cone, every phase at least
+/// 20 ms long (without it the refinement shrinks three of the discovered stances to touches of
+/// zero length, and its second mesh round does not solve), no schedule edit (the one-edit check
+/// is still reported), the mesh refined to local error 1e-6 (split 4, 10 rounds of
+/// at most 1000 iterations each, the rounds warm-started at mu = 0.1), the per-phase
+/// re-simulation in windows of 0.02 s (the stances are open-loop unstable at about 40 / s).
+timefreezing::RefinementOptions hopper_refinement_options(std::ostream* progress);
+
+/// The OCP's horizon for refine_schedule: from (q0, v0) at t = 0 to T = 2.5 s, |u_i| <= 60 N m.
+timefreezing::OcpHorizon<Hopper> hopper_refinement_horizon();
+
+/// The guess the refinement starts from after discovery: the footsteps of the discovered schedule
+/// (footsteps_of) with the kinematically consistent motion in them (footstep_guess). Throws
+/// InvalidArgument when discovery found no schedule, and as footsteps_of.
+timefreezing::ScheduleGuess<Hopper> hopper_guess_from(const timefreezing::DiscoveryResult<Hopper>& discovery,
+                                                      HopperFootsteps* footsteps = nullptr);
+
+}  // namespace saltus::scenes

@@ -38,4 +38,11 @@ ReferenceAnalysisOptions<Hopper> stance_start_lqr_analysis(const Hopper& hopper,
   return o;
 }
 
+SimulationOptions hopper_monte_carlo_simulation() {
+  SimulationOptions o;
+  o.max_events = 2000;
+  o.integrator.max_steps = 200000;
+  return o;
+}
+
 }  // namespace saltus::scenes

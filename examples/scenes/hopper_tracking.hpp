@@ -23,4 +23,11 @@ namespace saltus::scenes {
 ReferenceAnalysisOptions<Hopper> stance_start_lqr_analysis(const Hopper& hopper, const HybridTrajectory<Hopper>& reference,
                                                            int runs, double input_weight, std::ostream* progress);
 
+/// The plant's simulation in the hopper's Monte Carlo runs: SimulationOptions{} with at most 2000
+/// events and 200000 integration steps per segment (instead of 100000 and 10^7): a perturbed run
+/// that chatters or whose closed loop is stiff for the explicit integrator fails there, with its
+/// reason, instead of filling the memory with dense output (measured on the refined hopper: a run
+/// held 3 GB after a few minutes).
+SimulationOptions hopper_monte_carlo_simulation();
+
 }  // namespace saltus::scenes

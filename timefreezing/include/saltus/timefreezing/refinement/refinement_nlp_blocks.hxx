@@ -16,19 +16,22 @@ VecT<T, S::nu> ScheduleRefinementNlp<S, Ocp>::input_law(const T& t, const VecT<T
   else return decision;
 }
 
-/// The validity values of phase p's mode at a flow evaluation, in the order of the file comment,
-/// written from out[nx + 1] on. The cone rows of a sticking group's leader read the group's totals
+/// The validity values of phase p's mode at a flow evaluation at phase fraction theta, in the order
+/// of the file comment, written from out[nx + 1] on. The cone rows of a sticking group's leader read the group's totals
 /// (refinement_nlp.hpp, "IMPLIED ROWS" (d)).
 template <Scene S, class Ocp>
 template <class T>
-void ScheduleRefinementNlp<S, Ocp>::write_validity(int p, const FlowWorkspace<S, T>& ws, VecT<T, stage_outputs>& out) const {
+void ScheduleRefinementNlp<S, Ocp>::write_validity(int p, double theta, const FlowWorkspace<S, T>& ws,
+                                                   VecT<T, stage_outputs>& out) const {
   const Mode<nc>& mode = schedule_.phases[static_cast<std::size_t>(p)];
   const std::array<int, nc>& leader = friction_leader_[static_cast<std::size_t>(p)];
+  // RefinementOptions::flight_clearance: the clearance at phase fraction theta, 0 at the phase's ends
+  const double clearance = options_.flight_clearance * 4.0 * theta * (1.0 - theta);
   int k = nx + 1;
   for (int i = 0; i < nc; ++i) {
     const ContactState& c = mode[i];
     if (!c.closed()) {
-      out[k++] = ws.kin.contacts[i].gap;
+      out[k++] = ws.kin.contacts[i].gap - T(clearance);
       continue;
     }
     out[k++] = ws.force[i].normal - T(normal_margin(p, i));
@@ -78,7 +81,7 @@ VecT<T, ScheduleRefinementNlp<S, Ocp>::stage_outputs> ScheduleRefinementNlp<S, O
   if constexpr (HasTimedRunningCost<Ocp, T, nx, nu>) running = ocp_.template running_cost<T>(x, u, t);
   else if constexpr (HasRunningCost<Ocp, T, nx, nu>) running = ocp_.template running_cost<T>(x, u);
   out[nx] = h * running;
-  write_validity<T>(p, ws, out);
+  write_validity<T>(p, theta, ws, out);
   if constexpr (np > 0) out.template segment<np>(nx + 1 + max_validity) = ocp_.template path_constraints<T>(x, u);
   return out;
 }

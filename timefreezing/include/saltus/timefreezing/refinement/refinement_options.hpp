@@ -130,6 +130,13 @@ struct RefinementOptions {
   /// that ends in a release keeps lambda_n >= 0 (its force reaches 0 at the release by design).
   /// mode_validity_violation reads the rows as imposed. 0: no margin.
   double normal_force_margin = 0.0;
+  /// [m], >= 0. An open contact's row inside its phase is h_n - flight_clearance 4 s (1 - s) >= 0,
+  /// s in [0, 1] the fraction of the phase: the clearance at mid-phase, falling to 0 at the
+  /// phase's ends (a lift-off starts and a touchdown ends at h_n = 0). Without it the cheapest
+  /// flight may skim the ground (h_n = 0 active mid-flight), and a perturbed motion, or the
+  /// event-driven re-simulation, touches down there (the hopper's discovered gait,
+  /// docs/refinement.md). mode_validity_violation reads the rows as imposed. 0: no clearance.
+  double flight_clearance = 0.0;
   /// An equality path row of a phase whose gradient lies in the span of the closed contacts' gap
   /// gradients (relative least-squares residual <= this, and no dependence on v and u) is implied
   /// by the mode and is not imposed inside the phase; a guard whose gradient lies in the span of
