@@ -123,8 +123,10 @@ void judge_boundary(const HybridTrajectory<S>& run, const ModeSchedule<S::nc>& s
       last_at_boundary >= 0 ? run.events[static_cast<std::size_t>(last_at_boundary)].x_plus : state_before_events(run, t1, tolerance);
   r.x_plus_error = (x_after - x_plus).cwiseAbs().maxCoeff();
   r.event_guards_match = found == guard_set(schedule.events[static_cast<std::size_t>(p)].guards);
+  // the mode after the boundary's events: the event's own (a run that ends at the event has no
+  // segment after it), else the mode of the segment at t1
   r.next_mode_matches =
-      same_branches(last_at_boundary >= 0 ? run.segments[static_cast<std::size_t>(last_at_boundary + 1)].mode
+      same_branches(last_at_boundary >= 0 ? run.events[static_cast<std::size_t>(last_at_boundary)].mode_after
                                           : run.segments[static_cast<std::size_t>(run.segment_at(t1))].mode,
                     next);
   std::ostringstream why;
