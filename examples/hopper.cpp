@@ -18,7 +18,8 @@
 //                guards and jump maps, the mesh refined to local error 1e-6 (refinement.hpp);
 //   analysis     the refined reference's jump gains, an LQR reference-spreading design, its
 //                stability check and 200 perturbed closed-loop runs (scenes/hopper_tracking.hpp).
-// It prints {"converged", "stage" ("refined" or where it stopped), "mode_validity_violation",
+// It prints {"converged", "stage" ("refined", "converged, checks failed: ..." naming the failed
+// checks, or the stage where it stopped), "mode_validity_violation",
 // "max_path_violation", "target_error", "objective", "relaxed_objective", "schedule",
 // "schedule_edits", "events", "footholds", "phase_resim_max_error", "discovery_seconds",
 // "refinement_seconds", "solve_seconds", "discovery", "refinement", "analysis"} (refinement_io.hpp,

@@ -8,7 +8,8 @@
 // node, zero torques) by discover_schedule_by_continuation: the hole continuation
 // (HopperOverThreeHoles::hole_continuation), then at most K homotopy steps (sigma = 1, 0.1, ...),
 // each step's relaxed solution read with DiscoveryOptions::reading (gap_per_sigma [m],
-// velocity_per_sigma [m/s] per unit of sigma, velocity_max [m/s]) and its schedule extracted; stops
+// velocity_per_sigma [m/s] per unit of sigma, velocity_max [m/s]) and its schedule extracted (the
+// extraction's micro_flight_gap at least gap_max, as scenes::hopper_discovery_options has it); stops
 // when `agreeing` consecutive steps agree. Prints one line per continuation stage and per step,
 // then the discovered schedule, its event times and where the foot stands in each stance of the
 // reading, and the path rows and target of the last relaxed solution at the full holes.
@@ -18,6 +19,7 @@
 
 #include <saltus/timefreezing/refinement/mode_schedule.hxx>
 
+#include <algorithm>
 #include <cstdlib>
 #include <fstream>
 #include <iostream>
@@ -34,6 +36,7 @@ int main(int argc, char** argv) {
   if (argc > 4) options.reading.velocity_max = std::atof(argv[4]);
   if (argc > 5) options.agreeing_steps = std::atoi(argv[5]);
   if (argc > 6) options.reading.gap_max = std::atof(argv[6]);
+  options.extraction.micro_flight_gap = std::max(options.extraction.micro_flight_gap, options.reading.gap_max);
   options.progress = &std::cout;
   const scenes::Hopper hopper{};
   MpccSolverOptions solver = Ocp::solver();

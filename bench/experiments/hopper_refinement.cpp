@@ -19,7 +19,8 @@
 //                                  the holes' ones (discovered_footsteps below)
 //   analysis_runs=<n>, analysis_R=<r>  the refined reference analysed by analyse_reference with n Monte
 //                                  Carlo runs under scenes::stance_start_lqr_analysis with R = r I
-//                                  (default 1e-3); report in hopper_analysis.json
+//                                  (default 1e-3; `hopper --json` uses analysis_runs=200 analysis_R=1);
+//                                  report in hopper_analysis.json
 //   any other name=value           an Ipopt option (RefinementIpopt::options: an integer, a number or a
 //                                  string, e.g. mumps_pivot_order=0)
 //

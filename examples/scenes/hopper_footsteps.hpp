@@ -35,10 +35,13 @@ struct HopperGaitShape {
 
 /// The schedule of `steps` (each stance a sticking foot, each flight open, touchdowns plastic as
 /// the scene's restitution says) and the guess of the motion in it (file comment), over [0, T],
-/// from the pose q_start at t = 0 to q_end at t = T (both with the foot on its first / last foothold).
+/// from the pose q_start at t = 0 to q_end at t = T. Preconditions, not checked: q_start's and
+/// q_end's feet stand on the first and the last foothold (the guess takes their hip positions and
+/// leg lengths; its joint angles come from inverse kinematics, not from q_start and q_end).
 /// Throws InvalidArgument for no foothold, a count of event times other than 2 (stances - 1),
-/// event times not strictly increasing inside (0, T), non-finite values, or a shape whose leg does
-/// not fit the hopper (stance_leg >= thigh + shank, hip_offset >= stance_leg).
+/// event times not strictly increasing inside (0, T), a foothold or T that is not finite, T <= 0,
+/// or a shape whose leg does not fit the hopper (stance_leg outside (0, thigh + shank), hip_offset
+/// outside [0, stance_leg)).
 timefreezing::ScheduleGuess<Hopper> footstep_guess(const Hopper& hopper, const HopperFootsteps& steps,
                                                    const Vec<4>& q_start, const Vec<4>& q_end, double T,
                                                    const HopperGaitShape& shape = {});
@@ -50,8 +53,9 @@ timefreezing::ScheduleGuess<Hopper> footstep_guess(const Hopper& hopper, const H
 /// foot is on the ground at the start and at the end). A schedule that ends in a flight, as a
 /// relaxed motion whose foot reaches the ground only at T does, lands for the last
 /// `landing_stance` seconds of it [s, > 0]. Throws InvalidArgument when the schedule does not start
-/// with the foot closed, when its last flight is not longer than landing_stance, or for event
-/// times that do not match the phases.
+/// with the foot closed, when its last flight is not longer than landing_stance, when the count of
+/// event times does not match the phases, or for landing_stance <= 0; their order and T are not
+/// checked here (footstep_guess checks the footsteps it is given).
 HopperFootsteps footsteps_of(const Hopper& hopper, const timefreezing::ScheduleGuess<Hopper>& guess, const Vec<4>& q_start,
                              const Vec<4>& q_end, double T, double landing_stance = 0.1);
 

@@ -30,8 +30,8 @@ timefreezing::DiscoveryOptions hopper_discovery_options(int steps, std::ostream*
 /// The refinement's settings on the hopper: Radau IIA n_s = 3 on elements of at most 0.05 s,
 /// Ipopt 3000 iterations, the sticking stances 5 % inside the friction cone, every phase at least
 /// 20 ms long (without it the refinement shrinks three of the discovered stances to touches of
-/// zero length, and its second mesh round does not solve), no schedule edit (the one-edit check
-/// is still reported), the mesh refined to local error 1e-6 (split 4, 10 rounds of
+/// zero length, and its second mesh round does not solve), no schedule edit (an edit the last
+/// solve's multipliers propose is reported, not solved: schedule_check_passed is then false), the mesh refined to local error 1e-6 (split 4, 10 rounds of
 /// at most 1000 iterations each, the rounds warm-started at mu = 0.1), the per-phase
 /// re-simulation in windows of 0.02 s (the stances are open-loop unstable at about 40 / s).
 timefreezing::RefinementOptions hopper_refinement_options(std::ostream* progress);
@@ -40,8 +40,9 @@ timefreezing::RefinementOptions hopper_refinement_options(std::ostream* progress
 timefreezing::OcpHorizon<Hopper> hopper_refinement_horizon();
 
 /// The guess the refinement starts from after discovery: the footsteps of the discovered schedule
-/// (footsteps_of) with the kinematically consistent motion in them (footstep_guess). Throws
-/// InvalidArgument when discovery found no schedule, and as footsteps_of.
+/// (footsteps_of) with the kinematically consistent motion in them (footstep_guess). A discovery
+/// that did not settle is accepted (the chain reads its last relaxed solution). Throws
+/// InvalidArgument when discovery found no schedule, and as footsteps_of and footstep_guess.
 timefreezing::ScheduleGuess<Hopper> hopper_guess_from(const timefreezing::DiscoveryResult<Hopper>& discovery,
                                                       HopperFootsteps* footsteps = nullptr);
 

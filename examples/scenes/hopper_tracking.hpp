@@ -17,9 +17,10 @@ namespace saltus::scenes {
 /// stance: the foot on the ground and at rest, i.e. the 5-dimensional null space of the rows of
 /// the gap, the normal velocity and the tangential velocity at the reference's start (its SVD),
 /// the Monte Carlo deviations projected on it. One progress line per stage to `progress` (not
-/// owned; null: none). Precondition: the reference starts with the foot closed (not checked
-/// here; the analysis' runs fail with a named unplanned event otherwise). Throws InvalidArgument
-/// for runs < 0 or an input weight that is not finite and > 0.
+/// owned; null: none). Preconditions, not checked: the reference starts at rest with the foot
+/// closed (the velocity rows use the contact Jacobians alone, exact at rest; the analysis' runs fail
+/// with a named unplanned event otherwise). Throws InvalidArgument for runs < 0, an input weight
+/// that is not finite and > 0, or a reference without segments.
 ReferenceAnalysisOptions<Hopper> stance_start_lqr_analysis(const Hopper& hopper, const HybridTrajectory<Hopper>& reference,
                                                            int runs, double input_weight, std::ostream* progress);
 

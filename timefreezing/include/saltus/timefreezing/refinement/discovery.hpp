@@ -4,7 +4,7 @@
 // WHEN contacts happen long before it is good at complementarity: on the guiding example the
 // schedule is right from the first step (sigma = 1), on the plank-box flat landing the first two
 // steps (sigma = 1e-2, 1e-3) agree on "land flat, slide, lift off" and the refined reference of that
-// schedule is the better one (objective 40.77 against 55.33 for the schedule of the converged
+// schedule is the better one (objective 40.88 against 55.33 for the schedule of the converged
 // homotopy, whose stick phase the refinement does not solve: docs/refinement.md). The relaxed
 // solutions need not be accurate: the refinement (refinement.hpp) makes the reference exact.
 #pragma once
@@ -78,15 +78,17 @@ struct DiscoveryStep {
 
 template <Scene S>
 struct DiscoveryResult {
-  /// the last step's relaxed solution, its reference and its trajectory (read with the exact
-  /// tolerances of recover_trajectory)
+  /// the last solved step's relaxed solution, its reference and its trajectory (read with the
+  /// exact tolerances of recover_trajectory); empty when no step was solved (a continuation
+  /// stage or the first step failed)
   TimeFreezingOcpResult<S> relaxed;
-  /// the last step's relaxed solution read with DiscoveryOptions::reading (sigma-scaled
+  /// the last solved step's relaxed solution read with DiscoveryOptions::reading (sigma-scaled
   /// tolerances): the trajectory `discovered` is extracted from
   HybridTrajectory<S> relaxed_reading;
-  /// the schedule of the last step and its guess for refine_schedule (valid when `settled` or
-  /// when the last step gave a schedule; `schedule_found` says which)
+  /// the schedule of the last solved step and its guess for refine_schedule; valid only when
+  /// `schedule_found` (when that step's extraction failed it may still hold an earlier step's)
   ExtractedSchedule<S> discovered;
+  /// whether `discovered` is the last solved step's schedule (`settled` says whether it settled)
   bool schedule_found = false;
   /// the last agreeing_steps steps gave the same schedule
   bool settled = false;

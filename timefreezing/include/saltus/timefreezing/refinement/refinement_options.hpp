@@ -124,18 +124,19 @@ struct RefinementOptions {
   double stick_cone_margin = 0.0;
   /// [N], >= 0. A closed contact that the schedule does not release at its phase's end (it stays
   /// closed into the next phase, or the phase is the last) has the row lambda_n - normal_force_margin
-  /// >= 0 inside the phase instead of lambda_n >= 0: the refined stance keeps its foot loaded, so a
-  /// perturbed motion tracking it does not lift the foot off (a stance that starts nearly unloaded
-  /// after a grazing touchdown is the case: the hopper's last stance, docs/refinement.md). A stance
+  /// >= 0 inside the phase instead of lambda_n >= 0: the refined stance keeps its foot loaded, so
+  /// that a perturbed motion tracking it is less likely to lift the foot off (the hopper's last
+  /// stance, where its Monte Carlo runs do: docs/refinement.md; not measured there yet). A stance
   /// that ends in a release keeps lambda_n >= 0 (its force reaches 0 at the release by design).
   /// mode_validity_violation reads the rows as imposed. 0: no margin.
   double normal_force_margin = 0.0;
   /// [m], >= 0. An open contact's row inside its phase is h_n - flight_clearance 4 s (1 - s) >= 0,
   /// s in [0, 1] the fraction of the phase: the clearance at mid-phase, falling to 0 at the
-  /// phase's ends (a lift-off starts and a touchdown ends at h_n = 0). Without it the cheapest
-  /// flight may skim the ground (h_n = 0 active mid-flight), and a perturbed motion, or the
-  /// event-driven re-simulation, touches down there (the hopper's discovered gait,
-  /// docs/refinement.md). mode_validity_violation reads the rows as imposed. 0: no clearance.
+  /// phase's ends (a lift-off starts and a touchdown ends at h_n = 0); per phase, not per flight (a
+  /// flight split into several phases gets one hump each). Without it the cheapest flight may skim
+  /// the ground, and a perturbed motion, or the event-driven re-simulation, touches down there (two
+  /// flights of the hopper's discovered gait, docs/refinement.md). mode_validity_violation reads
+  /// the rows as imposed. 0: no clearance.
   double flight_clearance = 0.0;
   /// An equality path row of a phase whose gradient lies in the span of the closed contacts' gap
   /// gradients (relative least-squares residual <= this, and no dependence on v and u) is implied
