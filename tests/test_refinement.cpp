@@ -372,12 +372,13 @@ struct AboveTheTable : scenes::PointMassToTheTarget {
   Vec<4> terminal_upper() const { return terminal_lower(); }
 };
 
-/// A single sliding stance on the table (x = t at 1 m/s), from (0, 0, 1, 0).
-ScheduleGuess<PointMass> sliding_stance_guess() {
+/// A single stance on the table moving at 1 m/s (x = t), in the mode closed_mode(slip_sign) (the
+/// default: sliding forward), under a constant input.
+ScheduleGuess<PointMass> sliding_stance_guess(int slip_sign = 1, const Vec<2>& input = Vec<2>(1, 0)) {
   ScheduleGuess<PointMass> g;
-  g.schedule.phases = {closed_mode(1)};
+  g.schedule.phases = {closed_mode(slip_sign)};
   g.state = [](int, double t) { return Vec<4>(t, 0, 1, 0); };
-  g.input = [](double) { return Vec<2>(1, 0); };
+  g.input = [input](double) { return input; };
   return g;
 }
 
@@ -460,15 +461,6 @@ ScheduleGuess<PointMass> push_and_lift_guess() {
   g.event_times = {0.5};
   g.state = [](int p, double t) { return p == 0 ? Vec<4>(0, 0, 0, 0) : Vec<4>(0, 0.5 * (t - 0.5) * (t - 0.5), 0, t - 0.5); };
   g.input = [](double) { return Vec<2>(0, 10); };
-  return g;
-}
-
-/// One sticking stance: the mass sliding along the table at 1 m/s.
-ScheduleGuess<PointMass> sliding_on_the_table() {
-  ScheduleGuess<PointMass> g;
-  g.schedule.phases = {closed_mode(0)};
-  g.state = [](int, double t) { return Vec<4>(t, 0, 1, 0); };
-  g.input = [](double) { return Vec<2>(0, 0); };
   return g;
 }
 
@@ -602,7 +594,7 @@ struct LiftWish {
 };
 
 TEST(ScheduleRefinement, AStanceThatWantsToLiftOffIsEdited) {
-  const ScheduleGuess<PointMass> g = sliding_on_the_table();
+  const ScheduleGuess<PointMass> g = sliding_stance_guess(0, Vec<2>::Zero());
   const OcpHorizon<PointMass> h = from_rest_for_one_second();
   RefinementOptions o;
   o.grid.max_element_duration = 0.04;
@@ -642,7 +634,7 @@ TEST(ScheduleRefinement, AStanceThatWantsToLiftOffIsEdited) {
 // (the thrust stops at m g - 3 N) and pays for it. A stance that ends in a release (PushAndLift's)
 // keeps lambda_n >= 0 only: its optimum is unchanged. A negative margin is refused by name.
 TEST(ScheduleRefinement, ANormalForceMarginKeepsAStanceLoadedUnlessItEndsInARelease) {
-  const ScheduleGuess<PointMass> g = sliding_on_the_table();
+  const ScheduleGuess<PointMass> g = sliding_stance_guess(0, Vec<2>::Zero());
   const OcpHorizon<PointMass> h = from_rest_for_one_second();
   RefinementOptions o;
   o.grid.max_element_duration = 0.05;
@@ -675,16 +667,7 @@ TEST(ScheduleRefinement, ANormalForceMarginKeepsAStanceLoadedUnlessItEndsInARele
 /// A slide to x = 1 at rest at T = 1 s, for u'u: cheapest on the table, so a flight the schedule
 /// forces (stance, flight of at least 0.2 s, stance) stays low: it rises 1.3 cm and lands with an
 /// impact that takes its downward speed for free.
-struct SlideToOne {
-  static constexpr int terminal_constraint_count = 4;
-  template <class T>
-  T running_cost(const VecT<T, 4>&, const VecT<T, 2>& u) const {
-    return u.squaredNorm();
-  }
-  template <class T>
-  VecT<T, 4> terminal_constraints(const VecT<T, 4>& x, const T&) const {
-    return x;
-  }
+struct SlideToOne : scenes::PointMassToTheTarget {
   Vec<4> terminal_lower() const { return Vec<4>(1, 0, 0, 0); }
   Vec<4> terminal_upper() const { return terminal_lower(); }
 };
@@ -707,7 +690,7 @@ std::pair<double, double> flight_gap_over_profile(const RefinementResult<PointMa
 // clearance; with flight_clearance = 5 cm it rises above the profile (5 cm at mid-flight) and pays
 // for it. A negative clearance is refused by name.
 TEST(ScheduleRefinement, AFlightClearanceLiftsAFlightThatSkimsTheGround) {
-  ScheduleGuess<PointMass> g = sliding_on_the_table();
+  ScheduleGuess<PointMass> g = sliding_stance_guess(0, Vec<2>::Zero());
   g.schedule.phases = {closed_mode(0), open_mode(), closed_mode(0)};
   g.schedule.events = {guards_between(PointMass{}, g.schedule.phases[0], g.schedule.phases[1]),
                        guards_between(PointMass{}, g.schedule.phases[1], g.schedule.phases[2])};
