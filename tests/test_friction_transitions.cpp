@@ -58,6 +58,38 @@ TEST(RedundantFriction, StickingCornersShareTheFrictionInProportionToTheirLoads)
   }
 }
 
+// Baumgarte's stabilisation (FlowWorkspace::constraint_stabilisation): off the contact manifold a
+// sticking corner's normal and tangential velocities obey zeta_n' = -2 a zeta_n - a^2 h_n and
+// zeta_t' = -a zeta_t; with a = 0 both accelerations are zero, and the open corner is untouched.
+TEST(ConstraintStabilisation, ADriftedStickDecaysAtTheBaumgarteRate) {
+  PB pb;
+  Vec<8> x = flat_box_state(pb, 0.7, 0.02);
+  x[1] += 2e-3;                                       // both corners 2 mm above the plank
+  x.tail<4>() << 0.05, -0.03, 0.2, 0.1;               // and moving: drifted in velocity too
+  Mode<2> mode;
+  mode[0] = ContactState::stick();                    // corner 1 open: one full-rank stick
+  const Vec<3> u(1.5, 0.0, 0.4);
+  for (const double alpha : {0.0, 30.0}) {
+    FlowWorkspace<PB> ws;
+    ws.constraint_stabilisation = alpha;
+    evaluate_flow(pb, mode, x, u, ws);
+    const auto& c = ws.kin.contacts[0];
+    ASSERT_GT(std::abs(c.gap), 1e-3);
+    ASSERT_GT(std::abs(c.zeta_n), 1e-3);
+    ASSERT_GT(std::abs(c.zeta_t[0]), 1e-3);
+    const double scale = alpha * alpha * std::abs(c.gap) + alpha * std::abs(c.zeta_n) + 1.0;
+    EXPECT_NEAR(c.wn.dot(ws.acceleration) + c.kappa_n, -2.0 * alpha * c.zeta_n - alpha * alpha * c.gap, 1e-12 * scale);
+    EXPECT_NEAR(c.Wt.col(0).dot(ws.acceleration) + c.kappa_t[0], -alpha * c.zeta_t[0], 1e-12 * scale);
+    EXPECT_EQ(ws.force[1].normal, 0.0);
+  }
+  FlowWorkspace<PB> off, on;
+  on.constraint_stabilisation = 30.0;
+  const Vec<8> x_on = flat_box_state(pb, 0.7, 0.02);  // on the manifold (at rest): the same flow
+  evaluate_flow(pb, mode, x_on, u, off);
+  evaluate_flow(pb, mode, x_on, u, on);
+  EXPECT_LT((on.xdot - off.xdot).cwiseAbs().maxCoeff(), 1e-11);
+}
+
 TEST(RedundantFriction, FlowJacobianOfTheFlatStickMatchesCentralDifferences) {
   // The split changes the forces, never the accelerations of a sticking box: x' stays smooth, and
   // its AD Jacobian (through the weighted minimum-norm solve) matches central differences.

@@ -166,11 +166,13 @@ TEST(Prediction, HopperPushOffUnderFeedbackInClosedLoop) {
   // The protocol's range, eps = 1e-2 .. 1e-6, with a perturbation 3000 times larger (|z0| ~ 3,
   // so the absolute perturbation runs from 3e-2 to 3e-6): the remainder stays above the
   // integration floor (~1e-12) down to the smallest eps, and the slope is fitted on all points.
+#if !defined(SALTUS_TESTS_UNDER_SANITIZERS)  // the same code path as above: release stage only (20 s under ASan)
   const Vec<8> z0_large = 3000.0 * references::hopper_push_off_perturbation();
   const auto full_range = prediction_remainder(lin, ref.options, z0_large, v, samples, slope_eps(default_prediction_eps()));
   expect_slope(full_range, 1.9);
   EXPECT_GT(*std::min_element(full_range.remainder.begin(), full_range.remainder.end()), 1e-11)
       << "a point at the noise floor: the fit over 1e-2..1e-6 would not be on all points";
+#endif
 
   LinearisationOptions signal = closed_loop;
   signal.gains.feedback = FeedbackTreatment::Signal;

@@ -211,6 +211,8 @@ TEST(Tracking, ClosedLoopPredictionHasSlopeTwoOnTheHopper) {
     std::printf("\n");
   };
 
+#if !defined(SALTUS_TESTS_UNDER_SANITIZERS)  // the joint PD half runs in the release stage (40 s under ASan);
+  // the LQR half below runs the same closed-loop machinery under the sanitizers
   Mat<2, 4> Kp = Mat<2, 4>::Zero(), Kd = Mat<2, 4>::Zero();
   Kp(0, 2) = Kp(1, 3) = 100.0;  // hip and knee angles
   Kd(0, 2) = Kd(1, 3) = 3.0;
@@ -222,6 +224,7 @@ TEST(Tracking, ClosedLoopPredictionHasSlopeTwoOnTheHopper) {
   report("joint PD", pd_fit);
   EXPECT_TRUE(pd_fit.structure_matched);
   EXPECT_GE(pd_fit.slope, 1.9);
+#endif
 
   LqrWeights<Hopper> w;
   w.Q.diagonal() << 1, 1, 100, 100, 1, 1, 1, 1;

@@ -14,6 +14,7 @@
 //   then_normal_force_margin=<N>   a second refinement with that margin, from the first one's result on its grid
 //   min_phase_duration=<s>         RefinementOptions::min_phase_duration
 //   flight_clearance=<m>           RefinementOptions::flight_clearance
+//   contact_stabilisation=<1/s>    RefinementOptions::contact_stabilisation
 //   max_edits=<n>, edit_max_iter=<n>  RefinementEdits (max_edits is 0 here unless given)
 //   discovery_steps=<K>            the footsteps discovered from the paper's initialisation instead of
 //                                  the holes' ones (discovered_footsteps below)
@@ -160,6 +161,10 @@ int main(int argc, char** argv) {
     }
     if (name == "flight_clearance") {  // RefinementOptions::flight_clearance [m]
       options.flight_clearance = std::atof(value.c_str());
+      continue;
+    }
+    if (name == "contact_stabilisation") {  // RefinementOptions::contact_stabilisation [1/s]
+      options.contact_stabilisation = std::atof(value.c_str());
       continue;
     }
     if (name == "min_phase_duration") {  // RefinementOptions::min_phase_duration [s]

@@ -29,7 +29,9 @@ timefreezing::RefinementOptions hopper_refinement_options(std::ostream* progress
   o.edits.max_edits = 0;
   o.stick_cone_margin = 0.05;
   o.min_phase_duration = 0.02;
-  o.mesh.local_error_tolerance = 1e-6;
+  o.contact_stabilisation = 20.0;
+  o.flight_clearance = 0.005;
+  o.mesh.local_error_tolerance = 2e-7;
   o.mesh.max_split = 4;
   o.mesh.max_rounds = 10;
   o.mesh.max_iter = 1000;

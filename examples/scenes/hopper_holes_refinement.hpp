@@ -31,9 +31,14 @@ timefreezing::DiscoveryOptions hopper_discovery_options(int steps, std::ostream*
 /// Ipopt 3000 iterations, the sticking stances 5 % inside the friction cone, every phase at least
 /// 20 ms long (without it the refinement shrinks three of the discovered stances to touches of
 /// zero length, and its second mesh round does not solve), no schedule edit (an edit the last
-/// solve's multipliers propose is reported, not solved: schedule_check_passed is then false), the mesh refined to local error 1e-6 (split 4, 10 rounds of
-/// at most 1000 iterations each, the rounds warm-started at mu = 0.1), the per-phase
-/// re-simulation in windows of 0.02 s (the stances are open-loop unstable at about 40 / s).
+/// solve's multipliers propose is reported, not solved: schedule_check_passed is then false),
+/// Baumgarte's stabilisation of the closed foot at 20 / s (contact_stabilisation: without it the
+/// stances' drift, up to 5e-5, reached the re-simulation at every lift-off), flights 5 mm clear of
+/// the ground at their peak (flight_clearance, after the release's s^3 hump: without it two flights
+/// skim the ground and the re-simulation touches down in them), the mesh refined to local error
+/// 2e-7 (split 4, 10 rounds of at most 1000 iterations each, the rounds warm-started at mu = 0.1),
+/// the per-phase re-simulation in windows of 0.02 s (the stances are open-loop unstable at about
+/// 40 / s). docs/refinement.md, "Hopper over three holes".
 timefreezing::RefinementOptions hopper_refinement_options(std::ostream* progress);
 
 /// The OCP's horizon for refine_schedule: from (q0, v0) at t = 0 to T = 2.5 s, |u_i| <= 60 N m.

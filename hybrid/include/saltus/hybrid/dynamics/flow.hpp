@@ -64,6 +64,14 @@ struct FlowWorkspace {
   MinNormSolve<T, max_rows> delassus;  ///< D, factorised by value
   std::array<ContactRows, nc> layout{};
   std::array<VecT<T, 2>, nc> slip_direction{};  ///< unit direction used by each slipping contact
+  /// Baumgarte's constraint stabilisation alpha [1/s], >= 0 (Baumgarte 1972): a closed contact is
+  /// held by zeta_n' + 2 alpha zeta_n + alpha^2 h_n = 0 instead of zeta_n' = 0, and a sticking
+  /// one's tangential velocity by zeta_t' + alpha zeta_t = 0. On the contact manifold (h_n = zeta_n
+  /// = 0, zeta_t = 0) the flow is unchanged; off it (the drift of a discretised flow, which the
+  /// acceleration-level condition alone lets grow linearly in time) the drift decays at the rate
+  /// alpha. 0 (default): the flow of the hybrid core. Used by the mode-schedule refinement
+  /// (RefinementOptions::contact_stabilisation); the event-driven simulator keeps 0.
+  double constraint_stabilisation = 0.0;
 
   VecT<T, nq> a_free, acceleration, free_force;
   VecT<T, nx> xdot;

@@ -85,6 +85,12 @@ void evaluate_flow(const S& scene, const Mode<S::nc>& mode, const VecT<T, 2 * S:
     ws.rhs[as.normal_row[i]] = -c.kappa_n;
     if (as.tangent_row[i] >= 0)
       for (int k = 0; k < c.tangents; ++k) ws.rhs[as.tangent_row[i] + k] = -c.kappa_t[k];
+    if (ws.constraint_stabilisation > 0.0) {  // Baumgarte (flow.hpp, FlowWorkspace::constraint_stabilisation)
+      const double alpha = ws.constraint_stabilisation;
+      ws.rhs[as.normal_row[i]] -= T(2.0 * alpha) * c.zeta_n + T(alpha * alpha) * c.gap;
+      if (as.tangent_row[i] >= 0)
+        for (int k = 0; k < c.tangents; ++k) ws.rhs[as.tangent_row[i] + k] -= T(alpha) * c.zeta_t[k];
+    }
   }
 
   if (m == 0) {

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <saltus/hybrid/dynamics/constraints.hpp>
+#include <saltus/hybrid/vocabulary/guard.hpp>
 #include <saltus/timefreezing/refinement/refinement.hpp>
 
 #include <algorithm>
@@ -11,6 +12,7 @@
 #include <limits>
 #include <set>
 #include <sstream>
+#include <string>
 #include <utility>
 
 namespace saltus::timefreezing {
@@ -138,7 +140,14 @@ void judge_boundary(const HybridTrajectory<S>& run, const ModeSchedule<S::nc>& s
         break;
       }
   } else if (!r.event_guards_match) {
-    why << "the simulator's event at the phase's end has other guards";
+    const auto list = [](const std::set<std::pair<int, int>>& guards) {
+      std::string out;
+      for (const auto& [contact, kind] : guards)
+        out += (out.empty() ? "" : ", ") + std::string(to_string(static_cast<GuardKind>(kind))) + " " + std::to_string(contact);
+      return out;
+    };
+    why << "the simulator's event at the phase's end has other guards (" << list(found) << "; the schedule's: "
+        << list(guard_set(schedule.events[static_cast<std::size_t>(p)].guards)) << ")";
   }
   if (!r.next_mode_matches) why << (why.tellp() > 0 ? ", " : "") << "after it the simulator is in another mode";
   if (why.tellp() > 0) r.note += std::string(r.note.empty() ? "" : "; ") + why.str();

@@ -20,7 +20,8 @@
 // MODE VALIDITY at every stage point and at every element's start under the element's input (the
 // input jumps there; inequality rows >= 0), from the flow's contact forces:
 //     open contact:             h_n(q)                    (no penetration; minus
-//                               RefinementOptions::flight_clearance 4 s (1 - s), s the phase fraction)
+//                               RefinementOptions::flight_clearance times a hump in the phase
+//                               fraction s: 4 s (1 - s), or (256/27) s^3 (1 - s) after a release)
 //     closed contact:           lambda_n                  (no pull; minus RefinementOptions::normal_force_margin
 //                               where the schedule keeps the contact closed past the phase's end)
 //     sticking planar contact:  mu lambda_n - lambda_t,  mu lambda_n + lambda_t   (in the cone;
@@ -299,6 +300,7 @@ class ScheduleRefinementNlp final : public Mpcc {
   template <class T>
   void write_validity(int p, double theta, const FlowWorkspace<S, T>& ws, VecT<T, stage_outputs>& out) const;
   double normal_margin(int p, int i) const;
+  double clearance(int p, int i, double theta) const;
 
   // local vectors and their globals. A point (e, r): r = -1 the element's start (its start state
   // under its own input: validity rows only), r = 0..n_s-1 its stages.

@@ -25,13 +25,11 @@ void ScheduleRefinementNlp<S, Ocp>::write_validity(int p, double theta, const Fl
                                                    VecT<T, stage_outputs>& out) const {
   const Mode<nc>& mode = schedule_.phases[static_cast<std::size_t>(p)];
   const std::array<int, nc>& leader = friction_leader_[static_cast<std::size_t>(p)];
-  // RefinementOptions::flight_clearance: the clearance at phase fraction theta, 0 at the phase's ends
-  const double clearance = options_.flight_clearance * 4.0 * theta * (1.0 - theta);
   int k = nx + 1;
   for (int i = 0; i < nc; ++i) {
     const ContactState& c = mode[i];
     if (!c.closed()) {
-      out[k++] = ws.kin.contacts[i].gap - T(clearance);
+      out[k++] = ws.kin.contacts[i].gap - T(clearance(p, i, theta));
       continue;
     }
     out[k++] = ws.force[i].normal - T(normal_margin(p, i));
@@ -51,6 +49,23 @@ void ScheduleRefinementNlp<S, Ocp>::write_validity(int p, double theta, const Fl
     out[k++] = mu_lambda - lambda_t;
     out[k++] = mu_lambda + lambda_t;
   }
+}
+
+/// RefinementOptions::flight_clearance for open contact i of phase p at phase fraction theta: a
+/// hump of height flight_clearance, 0 at the phase's ends, of the order the gap can follow there.
+/// A touchdown ends the phase with an approach speed: the gap falls linearly, (1 - s). A release
+/// (lambda_n = 0, no impact) starts it with h_n = zeta_n = 0 and zeta_n' = 0 (the free acceleration
+/// equals the constrained one where lambda_n = 0), so the gap rises like s^3 and a linear hump
+/// would ask for a jerk of order clearance / (s^3 d_p^3) at the first stage points: the hump
+/// is (256/27) s^3 (1 - s) there (its peak 1 at s = 3/4). Any other start (the initial state, an
+/// impact that opens the contact): 4 s (1 - s).
+template <Scene S, class Ocp>
+double ScheduleRefinementNlp<S, Ocp>::clearance(int p, int i, double theta) const {
+  if (options_.flight_clearance == 0.0) return 0.0;
+  const bool released = p > 0 && schedule_.phases[static_cast<std::size_t>(p - 1)][i].closed() &&
+                        !schedule_.events[static_cast<std::size_t>(p - 1)].impact();
+  const double hump = released ? 256.0 / 27.0 * theta * theta * theta * (1.0 - theta) : 4.0 * theta * (1.0 - theta);
+  return options_.flight_clearance * hump;
 }
 
 /// RefinementOptions::normal_force_margin for closed contact i of phase p when the schedule keeps
@@ -74,6 +89,7 @@ VecT<T, ScheduleRefinementNlp<S, Ocp>::stage_outputs> ScheduleRefinementNlp<S, O
   const T t = t_begin + T(theta) * (t_end - t_begin);
   const VecT<T, nu> u = input_law<T>(t, VecT<T, nu>(w.template segment<nu>(nx)));
   const Mode<nc>& mode = schedule_.phases[static_cast<std::size_t>(p)];
+  ws.constraint_stabilisation = options_.contact_stabilisation;
   evaluate_flow<S, T>(scene_, mode, x, u, ws);
   VecT<T, stage_outputs> out = VecT<T, stage_outputs>::Zero();
   out.template head<nx>() = h * ws.xdot;
@@ -95,6 +111,7 @@ VecT<T, ScheduleRefinementNlp<S, Ocp>::event_outputs> ScheduleRefinementNlp<S, O
   const Mode<nc>& after = schedule_.phases[static_cast<std::size_t>(b + 1)];
   const VecT<T, nx> x_minus = w.template head<nx>();
   const VecT<T, nu> u = input_law<T>(w[nx + nu], VecT<T, nu>(w.template segment<nu>(nx)));
+  fws.constraint_stabilisation = options_.contact_stabilisation;
   evaluate_flow<S, T>(scene_, before, x_minus, u, fws);  // the forces of the ending phase, and ws.kin at x-
   VecT<T, event_outputs> out = VecT<T, event_outputs>::Zero();
   int k = 0;

@@ -52,6 +52,8 @@ inline void RefinementOptions::validate() const {
                  "refinement: normal_force_margin must be finite and >= 0 [N], got ", normal_force_margin);
   SALTUS_REQUIRE(std::isfinite(flight_clearance) && flight_clearance >= 0.0,
                  "refinement: flight_clearance must be finite and >= 0 [m], got ", flight_clearance);
+  SALTUS_REQUIRE(std::isfinite(contact_stabilisation) && contact_stabilisation >= 0.0,
+                 "refinement: contact_stabilisation must be finite and >= 0 [1/s], got ", contact_stabilisation);
   SALTUS_REQUIRE(implied_row_tolerance > 0.0 && implied_row_tolerance < 1.0,
                  "refinement: implied_row_tolerance must lie in (0, 1), got ", implied_row_tolerance);
   SALTUS_REQUIRE(std::isfinite(implied_terminal_value_tolerance) && implied_terminal_value_tolerance > 0.0,
@@ -181,6 +183,7 @@ std::vector<double> ScheduleRefinementNlp<S, Ocp>::element_local_errors(const Ei
     const VecT<double, nx> start = x.template segment<nx>(element_start_index(e));
     const VecT<double, nx> end = x.template segment<nx>(stage_index(e, tableau_.stages - 1));
     const auto f = [&](double t, const VecT<double, nx>& y) {
+      ws.constraint_stabilisation = options_.contact_stabilisation;
       evaluate_flow<S, double>(scene_, mode, y, input_law<double>(t, decision), ws);
       return VecT<double, nx>(ws.xdot);
     };

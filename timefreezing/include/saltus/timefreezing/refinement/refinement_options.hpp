@@ -130,14 +130,25 @@ struct RefinementOptions {
   /// that ends in a release keeps lambda_n >= 0 (its force reaches 0 at the release by design).
   /// mode_validity_violation reads the rows as imposed. 0: no margin.
   double normal_force_margin = 0.0;
-  /// [m], >= 0. An open contact's row inside its phase is h_n - flight_clearance 4 s (1 - s) >= 0,
-  /// s in [0, 1] the fraction of the phase: the clearance at mid-phase, falling to 0 at the
-  /// phase's ends (a lift-off starts and a touchdown ends at h_n = 0); per phase, not per flight (a
+  /// [m], >= 0. An open contact's row inside its phase is h_n - flight_clearance b(s) >= 0, s in
+  /// [0, 1] the fraction of the phase and b a hump of peak 1 that is 0 at the phase's ends (a
+  /// lift-off starts and a touchdown ends at h_n = 0): b = 4 s (1 - s), or (256/27) s^3 (1 - s) when
+  /// a release starts the phase (the gap rises like s^3 after it; refinement_nlp_blocks.hxx,
+  /// ScheduleRefinementNlp::clearance); per phase, not per flight (a
   /// flight split into several phases gets one hump each). Without it the cheapest flight may skim
   /// the ground, and a perturbed motion, or the event-driven re-simulation, touches down there (two
   /// flights of the hopper's discovered gait, docs/refinement.md). mode_validity_violation reads
   /// the rows as imposed. 0: no clearance.
   double flight_clearance = 0.0;
+  /// [1/s], >= 0. Baumgarte's stabilisation of the closed contacts in every phase's flow
+  /// (FlowWorkspace::constraint_stabilisation): zeta_n' + 2 a zeta_n + a^2 h_n = 0 and, sticking,
+  /// zeta_t' + a zeta_t = 0, a = contact_stabilisation. The phase's start imposes h_n = zeta_n = 0
+  /// (and zeta_t = 0 when sticking), where the stabilised flow is the mode's flow; what it changes
+  /// is the collocation's drift off that manifold, which without it grows with the phase's length
+  /// (each element's local error adds to it) and reaches the re-simulation as the distance of its
+  /// projected starts (PhaseResimulation::start_projection) and as a released contact's gap at a
+  /// lift-off. 0: the mode's flow as the hybrid core defines it.
+  double contact_stabilisation = 0.0;
   /// An equality path row of a phase whose gradient lies in the span of the closed contacts' gap
   /// gradients (relative least-squares residual <= this, and no dependence on v and u) is implied
   /// by the mode and is not imposed inside the phase; a guard whose gradient lies in the span of
