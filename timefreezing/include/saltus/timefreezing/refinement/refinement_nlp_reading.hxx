@@ -172,6 +172,7 @@ template <Scene S, class Ocp>
 std::vector<double> ScheduleRefinementNlp<S, Ocp>::element_local_errors(const Eigen::Ref<const Eigen::VectorXd>& x) const {
   std::vector<double> out(static_cast<std::size_t>(element_count()), 0.0);
   FlowWorkspace<S, double> ws;
+  ws.constraint_stabilisation = options_.contact_stabilisation;  // the phases' flow, as the collocation's
   for (int e = 0; e < element_count(); ++e) {
     const int p = phase_of(e);
     const Mode<nc>& mode = schedule_.phases[static_cast<std::size_t>(p)];
@@ -183,7 +184,6 @@ std::vector<double> ScheduleRefinementNlp<S, Ocp>::element_local_errors(const Ei
     const VecT<double, nx> start = x.template segment<nx>(element_start_index(e));
     const VecT<double, nx> end = x.template segment<nx>(stage_index(e, tableau_.stages - 1));
     const auto f = [&](double t, const VecT<double, nx>& y) {
-      ws.constraint_stabilisation = options_.contact_stabilisation;
       evaluate_flow<S, double>(scene_, mode, y, input_law<double>(t, decision), ws);
       return VecT<double, nx>(ws.xdot);
     };
