@@ -447,7 +447,15 @@ TEST(RefinementNlp, TerminalRowsHeldByTheLastStanceAreImpliedWhereTheirValueHold
 /// release the whole contact force vanishes: lambda_n = 0 (the guard) and lambda_t = 0 (the
 /// friction cone with lambda_n = 0), so the push has to be off there; without the tangential row
 /// the release point kept lambda_t = -2 N against lambda_n = 0 (mode validity violation 2).
+/// The input is the decision plus a thrust rising at 20 N/s, so that lambda_n = m g - u_z falls
+/// through 0 at the release: under an input constant over the last element it would be 0 over
+/// that whole element, where the event-driven re-simulation's release-or-touchdown is a tie
+/// broken by rounding (measured: 17 events at one instant, release and touchdown in turn).
 struct PushAndLift {
+  template <class T>
+  VecT<T, 2> input(const T& t, const VecT<T, 2>& decision) const {
+    return VecT<T, 2>(decision[0], decision[1] + T(20.0) * t);
+  }
   template <class T>
   T running_cost(const VecT<T, 4>&, const VecT<T, 2>& u) const {
     return (u[0] - T(2.0)) * (u[0] - T(2.0)) + (u[1] - T(15.0)) * (u[1] - T(15.0));
@@ -465,6 +473,15 @@ ScheduleGuess<PointMass> push_and_lift_guess() {
   return g;
 }
 
+/// PushAndLift's refinement settings: 0.05 s elements, the stance at least 0.3 s, no edit.
+RefinementOptions push_and_lift_options() {
+  RefinementOptions o;
+  o.grid.max_element_duration = 0.05;
+  o.min_phase_duration = 0.3;
+  o.edits.max_edits = 0;
+  return o;
+}
+
 /// From rest at the origin, T = 1 s.
 OcpHorizon<PointMass> from_rest_for_one_second() {
   OcpHorizon<PointMass> h;
@@ -476,11 +493,7 @@ OcpHorizon<PointMass> from_rest_for_one_second() {
 TEST(ScheduleRefinement, AReleaseFromStickLeavesNoTangentialForceAndResimulatesInWindows) {
   const ScheduleGuess<PointMass> g = push_and_lift_guess();
   const OcpHorizon<PointMass> h = from_rest_for_one_second();
-  RefinementOptions o;
-  o.grid.max_element_duration = 0.05;
-  o.min_phase_duration = 0.3;
-  o.edits.max_edits = 0;
-  const RefinementResult<PointMass> r = refine_schedule(frictional_mass(), PushAndLift{}, h, g, o);
+  const RefinementResult<PointMass> r = refine_schedule(frictional_mass(), PushAndLift{}, h, g, push_and_lift_options());
   ASSERT_TRUE(r.converged) << r.message;
   EXPECT_LE(r.mode_validity_violation, 1e-9);
   EXPECT_NEAR(r.event_times[0], 0.3, 1e-6);  // the stance as short as allowed
@@ -506,6 +519,66 @@ TEST(ScheduleRefinement, AReleaseFromStickLeavesNoTangentialForceAndResimulatesI
   expect_invalid([&] { (void)resimulate_phases(frictional_mass(), r.trajectory, r.schedule, r.element_times,
                                                precise_simulation(), -1.0); },
                  {"window must be >= 0"});
+}
+
+// RELEASE CONSISTENCY (refinement_nlp.hpp): the input may jump at the release, so the flight's
+// start point carries the released contact's normal acceleration under the flight's first input,
+// h_n'' >= 0, in place of its gap (0 there by the event). For the point mass h_n'' = u_z / m - g:
+// a flight input of 4 N (the decision -6 N and the ramp's 10 N at 0.5 s) against m g = 9.81 N
+// reads -5.81 m/s^2 and is the worst validity value;
+// later points keep the gap row. The rows' derivatives stay exact.
+TEST(RefinementNlp, AReleasedContactAcceleratesAwayUnderTheFlightsFirstInput) {
+  ScheduleGuess<PointMass> g = push_and_lift_guess();
+  g.input = [](double t) { return t < 0.5 ? Vec<2>(0, -1) : Vec<2>(0, -6); };  // the stance loaded, lambda_n >= 0.81 N
+  RefinementOptions o = grid_options(0.25, 2);
+  const scenes::PointMassParameters par = scenes::PointMassToTheTarget::parameters();
+  const ScheduleRefinementNlp<PointMass, PushAndLift> nlp(frictional_mass(), {}, from_rest_for_one_second(), g, o);
+  Eigen::VectorXd x(nlp.variable_count());
+  nlp.initial_point(x);
+  const int flight = nlp.first_element(1);
+  ASSERT_EQ(nlp.imposed_validity(flight, -1), std::vector<int>{0});  // imposed, not dropped as the gap was
+  EXPECT_NEAR(nlp.validity_values(x, flight, -1)[0], 4.0 / par.mass - par.gravity, 1e-12);
+  EXPECT_NEAR(nlp.validity_values(x, flight + 1, -1)[0], x[nlp.element_start_index(flight + 1) + 1], 1e-15);  // the gap
+  EXPECT_NEAR(nlp.mode_validity_violation(x), par.gravity - 4.0 / par.mass, 1e-12);
+  const DerivativeCheckReport r = check_derivatives(nlp, x, 1e-7, 1e-5);
+  EXPECT_EQ(r.errors, 0) << r.output;
+}
+
+// The judge of a phase's end event: a simulator event that fires the released contact's slip onset
+// with its release (at lambda_n = 0 the cone is a point) matches a schedule's release, since the
+// contact is open after either; a slip onset alone, leaving the contact closed and slipping, does not.
+TEST(PhaseResimulation, ASlipOnsetAtTheReleaseOfTheSameContactIsNotAnotherEvent) {
+  const Mode<1> stick = closed_mode(0), flight = open_mode(), slip = closed_mode(1);
+  ModeSchedule<1> schedule;
+  schedule.phases = {stick, flight};
+  schedule.events = {ScheduleEvent{{Guard{0, GuardKind::Release}}}};
+  const Vec<4> x(0.3, 0.0, 1.0, 0.0);
+  const auto run_with = [&](std::vector<std::vector<Guard>> transitions, const Mode<1>& after) {
+    HybridTrajectory<PointMass> run;
+    Event<PointMass> ev;
+    ev.t = 0.5;
+    ev.x_minus = ev.x_plus = x;
+    ev.mode_before = stick;
+    ev.mode_after = after;
+    for (auto& guards : transitions) {
+      Transition<PointMass> tr;
+      tr.guards = std::move(guards);
+      ev.transitions.push_back(tr);
+    }
+    run.events.push_back(ev);
+    return run;
+  };
+  PhaseResimulation both;
+  detail::judge_boundary(run_with({{Guard{0, GuardKind::SlipOnset}}, {Guard{0, GuardKind::Release}}}, flight), schedule,
+                         flight, x, 0, 0.5, 1e-9, both);
+  EXPECT_TRUE(both.event_guards_match) << both.note;
+  EXPECT_TRUE(both.next_mode_matches);
+  EXPECT_EQ(both.x_plus_error, 0.0);
+  PhaseResimulation slip_only;
+  detail::judge_boundary(run_with({{Guard{0, GuardKind::SlipOnset}}}, slip), schedule, flight, x, 0, 0.5, 1e-9, slip_only);
+  EXPECT_FALSE(slip_only.event_guards_match);
+  EXPECT_FALSE(slip_only.next_mode_matches);
+  EXPECT_NE(slip_only.note.find("other guards (slip-onset 0; the schedule's: release 0)"), std::string::npos) << slip_only.note;
 }
 
 /// A push the table's friction cannot hold: the cost wants u = (20, 0) N throughout while the
@@ -652,10 +725,7 @@ TEST(ScheduleRefinement, ANormalForceMarginKeepsAStanceLoadedUnlessItEndsInARele
   EXPECT_LE(loaded.phase_resim_max_error, 1e-8);
 
   const ScheduleGuess<PointMass> lift = push_and_lift_guess();
-  RefinementOptions r;
-  r.grid.max_element_duration = 0.05;
-  r.min_phase_duration = 0.3;
-  r.edits.max_edits = 0;
+  RefinementOptions r = push_and_lift_options();
   const RefinementResult<PointMass> plain = refine_schedule(frictional_mass(), PushAndLift{}, h, lift, r);
   r.normal_force_margin = 3.0;
   const RefinementResult<PointMass> released = refine_schedule(frictional_mass(), PushAndLift{}, h, lift, r);
@@ -663,6 +733,37 @@ TEST(ScheduleRefinement, ANormalForceMarginKeepsAStanceLoadedUnlessItEndsInARele
   EXPECT_NEAR(released.objective, plain.objective, 1e-8 * (1.0 + std::abs(plain.objective)));
   r.normal_force_margin = -1.0;
   expect_invalid([&] { (void)refine_schedule(frictional_mass(), PushAndLift{}, h, lift, r); }, {"normal_force_margin"});
+}
+
+// PushAndLift's stance wants its thrust above m g, so its normal force is as small as the rows let
+// it be. With stance_load = 3 N the stance that ends in a release keeps lambda_n >= 3 N 4 s (1 - s)
+// (s its phase fraction), the bound held at the element boundaries (where the input jumps) and
+// met somewhere, and it pays for it; the re-simulation still agrees. A negative load is refused.
+TEST(ScheduleRefinement, AStanceLoadKeepsAReleasedStanceLoadedBetweenItsEvents) {
+  const ScheduleGuess<PointMass> lift = push_and_lift_guess();
+  const OcpHorizon<PointMass> h = from_rest_for_one_second();
+  RefinementOptions o = push_and_lift_options();
+  const RefinementResult<PointMass> plain = refine_schedule(frictional_mass(), PushAndLift{}, h, lift, o);
+  o.stance_load = 3.0;
+  const RefinementResult<PointMass> loaded = refine_schedule(frictional_mass(), PushAndLift{}, h, lift, o);
+  ASSERT_TRUE(plain.converged && loaded.converged) << plain.message << "; " << loaded.message;
+  EXPECT_LE(loaded.mode_validity_violation, 1e-9);
+  EXPECT_GT(loaded.objective, plain.objective + 0.1);
+  EXPECT_LE(loaded.phase_resim_max_error, 1e-8);
+  const PointMass scene = frictional_mass();
+  FlowWorkspace<PointMass> ws;
+  const double t0 = loaded.trajectory.segments[0].t_begin, t1 = loaded.trajectory.segments[0].t_end;
+  double least_slack = std::numeric_limits<double>::infinity();
+  for (double t : loaded.element_times) {
+    if (t >= t1) break;
+    evaluate_flow(scene, loaded.trajectory.segments[0].mode, loaded.trajectory.state(0, t), loaded.trajectory.input_at(0, t), ws);
+    const double s = (t - t0) / (t1 - t0);
+    least_slack = std::min(least_slack, ws.force[0].normal - 3.0 * 4.0 * s * (1.0 - s));
+  }
+  EXPECT_GE(least_slack, -1e-8);
+  EXPECT_LE(least_slack, 0.5);  // the load is what holds the thrust back
+  o.stance_load = -1.0;
+  expect_invalid([&] { (void)refine_schedule(frictional_mass(), PushAndLift{}, h, lift, o); }, {"stance_load", ">= 0"});
 }
 
 /// A slide to x = 1 at rest at T = 1 s, for u'u: cheapest on the table, so a flight the schedule

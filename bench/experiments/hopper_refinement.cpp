@@ -159,6 +159,10 @@ int main(int argc, char** argv) {
       options.normal_force_margin = std::atof(value.c_str());
       continue;
     }
+    if (name == "stance_load") {  // RefinementOptions::stance_load [N]
+      options.stance_load = std::atof(value.c_str());
+      continue;
+    }
     if (name == "flight_clearance") {  // RefinementOptions::flight_clearance [m]
       options.flight_clearance = std::atof(value.c_str());
       continue;

@@ -35,7 +35,9 @@ timefreezing::DiscoveryOptions hopper_discovery_options(int steps, std::ostream*
 /// Baumgarte's stabilisation of the closed foot at 20 / s (contact_stabilisation: without it the
 /// stances' drift, up to 5e-5, reached the re-simulation at every lift-off), flights 5 mm clear of
 /// the ground at their peak (flight_clearance, after the release's s^3 hump: without it two flights
-/// skim the ground and the re-simulation touches down in them), the mesh refined to local error
+/// skim the ground and the re-simulation touches down in them), the stances that end in a release
+/// loaded to 20 N at their middle (stance_load: without it the stance before the last flight
+/// grazes, lambda_n 0.13 N, and the re-simulation slips and lifts off early), the mesh refined to local error
 /// 2e-7 (split 4, 10 rounds of at most 1000 iterations each, the rounds warm-started at mu = 0.1),
 /// the per-phase re-simulation in windows of 0.02 s (the stances are open-loop unstable at about
 /// 40 / s). docs/refinement.md, "Hopper over three holes".

@@ -105,8 +105,24 @@ inline std::vector<double> window_starts(const std::vector<double>& nodes, doubl
   return starts;
 }
 
+/// The guards of `found` less the friction guards (stop, slip onset) of a contact that the same
+/// boundary releases: where lambda_n reaches 0 the friction cone is a point, so the simulator may
+/// fire a released contact's slip onset at the instant of its release, and which of the two its
+/// event location finds first is decided by round-off. The contact is open after either, so its
+/// friction guard says nothing about the motion (the mode after the boundary is compared as well).
+inline std::set<std::pair<int, int>> without_friction_guards_of_released(std::set<std::pair<int, int>> found) {
+  for (auto it = found.begin(); it != found.end();) {
+    const auto kind = static_cast<GuardKind>(it->second);
+    const bool friction = kind == GuardKind::SlipOnset || kind == GuardKind::Stop;
+    if (friction && found.count({it->first, static_cast<int>(GuardKind::Release)})) it = found.erase(it);
+    else ++it;
+  }
+  return found;
+}
+
 /// The boundary at the end of phase p: the events the simulator finds within `tolerance` of t1,
-/// their guards against the schedule's, the mode after them against phase p + 1's, and the state
+/// their guards against the schedule's (a released contact's friction guards aside on both sides:
+/// without_friction_guards_of_released), the mode after them against phase p + 1's, and the state
 /// after them (x+ of the last one, else the state at t1) against the reference's x+.
 template <Scene S>
 void judge_boundary(const HybridTrajectory<S>& run, const ModeSchedule<S::nc>& schedule, const Mode<S::nc>& next,
@@ -124,7 +140,8 @@ void judge_boundary(const HybridTrajectory<S>& run, const ModeSchedule<S::nc>& s
   const VecT<double, 2 * S::nq> x_after =
       last_at_boundary >= 0 ? run.events[static_cast<std::size_t>(last_at_boundary)].x_plus : state_before_events(run, t1, tolerance);
   r.x_plus_error = (x_after - x_plus).cwiseAbs().maxCoeff();
-  r.event_guards_match = found == guard_set(schedule.events[static_cast<std::size_t>(p)].guards);
+  r.event_guards_match = without_friction_guards_of_released(found) ==
+                         without_friction_guards_of_released(guard_set(schedule.events[static_cast<std::size_t>(p)].guards));
   // the mode after the boundary's events: the event's own (a run that ends at the event has no
   // segment after it), else the mode of the segment at t1
   r.next_mode_matches =

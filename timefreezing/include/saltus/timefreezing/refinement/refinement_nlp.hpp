@@ -22,8 +22,13 @@
 //     open contact:             h_n(q)                    (no penetration; minus
 //                               RefinementOptions::flight_clearance times a hump in the phase
 //                               fraction s: 4 s (1 - s), or (256/27) s^3 (1 - s) after a release)
+//                               at the start of a phase that a release begins, instead:
+//                               h_n'' = w_n' a + kappa_n  (the released contact accelerates away
+//                               under the phase's first input; see RELEASE CONSISTENCY)
 //     closed contact:           lambda_n                  (no pull; minus RefinementOptions::normal_force_margin
-//                               where the schedule keeps the contact closed past the phase's end)
+//                               where the schedule keeps the contact closed past the phase's end,
+//                               minus RefinementOptions::stance_load times 4 s (1 - s) where it
+//                               releases it there)
 //     sticking planar contact:  mu lambda_n - lambda_t,  mu lambda_n + lambda_t   (in the cone;
 //                               mu times 1 - RefinementOptions::stick_cone_margin, default 1)
 //     slipping planar contact:  s zeta_t                  (the slip keeps its sign s)
@@ -77,10 +82,20 @@
 // makes active (touchdown: gap = 0 for gap >= 0; release: lambda_n = 0 for lambda_n >= 0 and the
 // cone; stop: zeta_t = 0 for s zeta_t >= 0; slip onset: the cone); at the next phase's start point
 // (its first element's start under its input) the rows that continuity or the impulse rows already
-// fix go (after a release the gap, after a slip onset the slip sign, after an impact the slip sign
-// of the contacts taking an impulse and the gap of the contacts it throws off); at the very first
+// fix go (after a slip onset the slip sign, after an impact the slip sign of the contacts taking an
+// impulse and the gap of the contacts it throws off; after a release the gap, whose row there is
+// the release consistency below); at the very first
 // point the gaps of x0, which no variable moves. Otherwise each would be a second, dependent row
 // active at the same point (LICQ), and a drift of the collocation could make it infeasible.
+//
+// RELEASE CONSISTENCY. The input is constant per element, so it may jump at a release: the guard
+// lambda_n(x-, u-) = 0 holds under the ending phase's last input u-, while the flight starts under
+// its own first input u+. If the released contact's free normal acceleration under u+ were
+// negative, the contact would not open (the event-driven simulator, following the reference's
+// input, closes it again an instant later with zero approach speed: a grazing re-touch). So the
+// open contact's row at the released phase's start point (x+ = x-, u+) is h_n'' >= 0, the normal
+// acceleration of the phase's open-contact flow. Under a continuous input it is 0 (lambda_n = 0
+// makes the free and the constrained acceleration equal), so it costs nothing where u is smooth.
 //
 // COST AND CONSTRAINTS of the OCP struct (the one the time-freezing solver takes,
 // formulation/ocp concepts in fesd.hpp): the running cost in physical time by the Radau
@@ -134,6 +149,11 @@ class ScheduleRefinementNlp final : public Mpcc {
   /// Stage block: w = (x, u, t_p, t_{p+1}); outputs (h f [nx], h l [1], validity, path [np]).
   static constexpr int nw = nx + nu + 2;
   static constexpr int stage_outputs = nx + 1 + max_validity + np;
+  /// Whether the stage block depends on time only through h (no input law in t, no running cost in
+  /// t): its outputs are then h F(x, u) (collocation, running cost) and G(x, u) (validity, path), and
+  /// the Hessian is taken over (x, u) alone (stage_hessian).
+  static constexpr bool stages_time_invariant =
+      !HasInputLaw<Ocp, double, nu> && !HasTimedRunningCost<Ocp, double, nx, nu>;
   /// Event block: w = (x-, u-, t); outputs (guards, approach, x+, impulse validity, separation).
   static constexpr int nwe = nx + nu + 1;
   static constexpr int event_outputs = 2 * nc + nc + nx + 3 * nc + nc;
@@ -290,6 +310,17 @@ class ScheduleRefinementNlp final : public Mpcc {
   // the local blocks (refinement_nlp_blocks.hxx)
   template <class T>
   VecT<T, stage_outputs> stage_block(int e, double theta, const VecT<T, nw>& w, FlowWorkspace<S, T>& ws) const;
+  /// The stage block's outputs from (x, u, h, t) (stage_block computes h, t and u from w).
+  template <class T>
+  VecT<T, stage_outputs> stage_values(int e, double theta, const VecT<T, nx>& x, const VecT<T, nu>& u, const T& h,
+                                      const T& t, FlowWorkspace<S, T>& ws) const;
+  /// H = sum_k weight_k d2 out_k / dw2 at a stage point when stages_time_invariant: with
+  /// L = h A(x, u) + B(x, u) (A the weighted collocation and running-cost outputs over h, B the
+  /// rest) and h linear in (t_p, t_{p+1}), d2L/dz2 = h A'' + B'', d2L/dz dt = (dh/dt) A', d2L/dt2 = 0
+  /// (z = (x, u)): forward-over-forward AD over the nx + nu entries of z instead of all nw,
+  /// ((nx + nu + 1) / (nw + 1))^2 of the work (0.72 for the hopper).
+  void stage_hessian(int e, double theta, const VecT<double, nw>& w, const VecT<double, stage_outputs>& weight,
+                     MatT<double, nw, nw>& hessian) const;
   template <class T>
   VecT<T, event_outputs> event_block(int b, const VecT<T, nwe>& w, FlowWorkspace<S, T>& fws,
                                      JumpWorkspace<S, T>& jws) const;
@@ -299,8 +330,9 @@ class ScheduleRefinementNlp final : public Mpcc {
   VecT<T, S::nu> input_law(const T& t, const VecT<T, S::nu>& decision) const;
   template <class T>
   void write_validity(int p, double theta, const FlowWorkspace<S, T>& ws, VecT<T, stage_outputs>& out) const;
-  double normal_margin(int p, int i) const;
+  double normal_margin(int p, int i, double theta) const;
   double clearance(int p, int i, double theta) const;
+  bool released_at_start(int p, int i) const;  // contact i closed in phase p - 1, opened by a release
 
   // local vectors and their globals. A point (e, r): r = -1 the element's start (its start state
   // under its own input: validity rows only), r = 0..n_s-1 its stages.

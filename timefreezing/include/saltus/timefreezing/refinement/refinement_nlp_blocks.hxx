@@ -29,10 +29,12 @@ void ScheduleRefinementNlp<S, Ocp>::write_validity(int p, double theta, const Fl
   for (int i = 0; i < nc; ++i) {
     const ContactState& c = mode[i];
     if (!c.closed()) {
-      out[k++] = ws.kin.contacts[i].gap - T(clearance(p, i, theta));
+      const auto& ci = ws.kin.contacts[i];
+      if (theta == 0.0 && released_at_start(p, i)) out[k++] = ci.wn.dot(ws.acceleration) + ci.kappa_n;  // RELEASE CONSISTENCY
+      else out[k++] = ci.gap - T(clearance(p, i, theta));
       continue;
     }
-    out[k++] = ws.force[i].normal - T(normal_margin(p, i));
+    out[k++] = ws.force[i].normal - T(normal_margin(p, i, theta));
     if (scene_.contact(i).tangents() == 0) continue;
     if (c.mode == ContactMode::Slip) {
       out[k++] = T(c.slip_direction[0]) * ws.kin.contacts[i].zeta_t[0];
@@ -62,19 +64,28 @@ void ScheduleRefinementNlp<S, Ocp>::write_validity(int p, double theta, const Fl
 template <Scene S, class Ocp>
 double ScheduleRefinementNlp<S, Ocp>::clearance(int p, int i, double theta) const {
   if (options_.flight_clearance == 0.0) return 0.0;
-  const bool released = p > 0 && schedule_.phases[static_cast<std::size_t>(p - 1)][i].closed() &&
-                        !schedule_.events[static_cast<std::size_t>(p - 1)].impact();
-  const double hump = released ? 256.0 / 27.0 * theta * theta * theta * (1.0 - theta) : 4.0 * theta * (1.0 - theta);
+  const double hump = released_at_start(p, i) ? 256.0 / 27.0 * theta * theta * theta * (1.0 - theta) : 4.0 * theta * (1.0 - theta);
   return options_.flight_clearance * hump;
 }
 
-/// RefinementOptions::normal_force_margin for closed contact i of phase p when the schedule keeps
-/// it closed past the phase's end, 0 when it releases it there.
+/// Whether open contact i of phase p was closed in phase p - 1 and opened by a release (the event
+/// has no impact). Read from the schedule: the event rows (events_) are built after the first
+/// evaluations of the blocks.
 template <Scene S, class Ocp>
-double ScheduleRefinementNlp<S, Ocp>::normal_margin(int p, int i) const {
+bool ScheduleRefinementNlp<S, Ocp>::released_at_start(int p, int i) const {
+  return p > 0 && schedule_.phases[static_cast<std::size_t>(p - 1)][i].closed() &&
+         !schedule_.phases[static_cast<std::size_t>(p)][i].closed() &&
+         !schedule_.events[static_cast<std::size_t>(p - 1)].impact();
+}
+
+/// The lower bound of closed contact i's lambda_n in phase p at phase fraction theta [N]:
+/// RefinementOptions::normal_force_margin when the schedule keeps the contact closed past the
+/// phase's end, RefinementOptions::stance_load 4 theta (1 - theta) when it releases it there.
+template <Scene S, class Ocp>
+double ScheduleRefinementNlp<S, Ocp>::normal_margin(int p, int i, double theta) const {
   const std::size_t next = static_cast<std::size_t>(p) + 1;
   const bool kept = next == schedule_.phases.size() || schedule_.phases[next][i].closed();
-  return kept ? options_.normal_force_margin : 0.0;
+  return kept ? options_.normal_force_margin : options_.stance_load * 4.0 * theta * (1.0 - theta);
 }
 
 template <Scene S, class Ocp>
@@ -82,12 +93,20 @@ template <class T>
 VecT<T, ScheduleRefinementNlp<S, Ocp>::stage_outputs> ScheduleRefinementNlp<S, Ocp>::stage_block(
     int e, double theta, const VecT<T, nw>& w, FlowWorkspace<S, T>& ws) const {
   const int p = phase_of(e);
-  const VecT<T, nx> x = w.template head<nx>();
   const T& t_begin = w[nx + nu];
   const T& t_end = w[nx + nu + 1];
   const T h = (t_end - t_begin) * T(element_length_scaled_[std::size_t(e)]) / T(double(elements_in(p)));
   const T t = t_begin + T(theta) * (t_end - t_begin);
   const VecT<T, nu> u = input_law<T>(t, VecT<T, nu>(w.template segment<nu>(nx)));
+  return stage_values<T>(e, theta, VecT<T, nx>(w.template head<nx>()), u, h, t, ws);
+}
+
+template <Scene S, class Ocp>
+template <class T>
+VecT<T, ScheduleRefinementNlp<S, Ocp>::stage_outputs> ScheduleRefinementNlp<S, Ocp>::stage_values(
+    int e, double theta, const VecT<T, nx>& x, const VecT<T, nu>& u, const T& h, [[maybe_unused]] const T& t,
+    FlowWorkspace<S, T>& ws) const {
+  const int p = phase_of(e);
   const Mode<nc>& mode = schedule_.phases[static_cast<std::size_t>(p)];
   ws.constraint_stabilisation = options_.contact_stabilisation;
   evaluate_flow<S, T>(scene_, mode, x, u, ws);

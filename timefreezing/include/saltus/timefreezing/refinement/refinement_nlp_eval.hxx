@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <type_traits>
 
 namespace saltus::timefreezing {
 
@@ -298,7 +299,7 @@ template <class Emit>
 void ScheduleRefinementNlp<S, Ocp>::walk_hessian(const Eigen::Ref<const Eigen::VectorXd>& x, double sigma,
                                                  const Eigen::Ref<const Eigen::VectorXd>& lambda, Emit&& emit) const {
   const bool values = lambda.size() > 0;
-  thread_local FlowWorkspace<S, detail::Ad2<nw>> stage_ws;
+  [[maybe_unused]] thread_local std::conditional_t<stages_time_invariant, int, FlowWorkspace<S, detail::Ad2<nw>>> stage_ws;
   thread_local FlowWorkspace<S, detail::Ad2<nwe>> event_ws;
   thread_local JumpWorkspace<S, detail::Ad2<nwe>> jump_ws;
   const auto emit_lower = [&](const auto& H, const auto& global) {
@@ -313,8 +314,11 @@ void ScheduleRefinementNlp<S, Ocp>::walk_hessian(const Eigen::Ref<const Eigen::V
     for (int l = -1; l < tableau_.stages; ++l) {
       if (values) {
         const double theta = point_theta(e, l);
-        detail::local_hessian<nw, stage_outputs>([&](const auto& w) { return stage_block(e, theta, w, stage_ws); },
-                                                 point_local(x, e, l), point_weights(e, l, sigma, lambda), Hs);
+        if constexpr (stages_time_invariant)
+          stage_hessian(e, theta, point_local(x, e, l), point_weights(e, l, sigma, lambda), Hs);
+        else
+          detail::local_hessian<nw, stage_outputs>([&](const auto& w) { return stage_block(e, theta, w, stage_ws); },
+                                                   point_local(x, e, l), point_weights(e, l, sigma, lambda), Hs);
       }
       emit_lower(Hs, [&](int a) { return point_global(e, l, a); });
     }
@@ -335,6 +339,33 @@ void ScheduleRefinementNlp<S, Ocp>::walk_hessian(const Eigen::Ref<const Eigen::V
                                                  weight, Ht);
   }
   emit_lower(Ht, [&](int a) { return terminal_global(a); });
+}
+
+template <Scene S, class Ocp>
+void ScheduleRefinementNlp<S, Ocp>::stage_hessian(int e, double theta, const VecT<double, nw>& w,
+                                                  const VecT<double, stage_outputs>& weight,
+                                                  MatT<double, nw, nw>& hessian) const {
+  constexpr int nz = nx + nu;
+  using A2 = detail::Ad2<nz>;
+  thread_local FlowWorkspace<S, A2> ws;
+  const double dh_dt = element_length_scaled_[static_cast<std::size_t>(e)] / double(elements_in(phase_of(e)));
+  const double h = (w[nz + 1] - w[nz]) * dh_dt, t = w[nz] + theta * (w[nz + 1] - w[nz]);
+  const VecT<A2, nz> z = detail::seed_second<nz>(VecT<double, nz>(w.template head<nz>()));
+  const VecT<A2, stage_outputs> y = stage_values<A2>(e, theta, VecT<A2, nx>(z.template head<nx>()),
+                                                     VecT<A2, nu>(z.template tail<nu>()), A2(1.0), A2(t), ws);
+  hessian.setZero();
+  VecT<double, nz> gradient_a = VecT<double, nz>::Zero();  // A' (the outputs scaled by h, at h = 1)
+  for (int k = 0; k < stage_outputs; ++k) {
+    if (weight[k] == 0.0) continue;
+    const bool scaled = k <= nx;
+    for (int a = 0; a < nz; ++a)
+      hessian.row(a).template head<nz>() += (scaled ? h : 1.0) * weight[k] * y[k].derivatives()[a].derivatives().transpose();
+    if (scaled) gradient_a += weight[k] * y[k].value().derivatives();
+  }
+  hessian.template block<nz, 1>(0, nz) = -dh_dt * gradient_a;
+  hessian.template block<nz, 1>(0, nz + 1) = dh_dt * gradient_a;
+  hessian.template block<1, nz>(nz, 0) = -dh_dt * gradient_a.transpose();
+  hessian.template block<1, nz>(nz + 1, 0) = dh_dt * gradient_a.transpose();
 }
 
 template <Scene S, class Ocp>

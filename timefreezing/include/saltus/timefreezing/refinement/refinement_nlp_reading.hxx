@@ -50,6 +50,8 @@ inline void RefinementOptions::validate() const {
                  "refinement: stick_cone_margin must lie in [0, 1), got ", stick_cone_margin);
   SALTUS_REQUIRE(std::isfinite(normal_force_margin) && normal_force_margin >= 0.0,
                  "refinement: normal_force_margin must be finite and >= 0 [N], got ", normal_force_margin);
+  SALTUS_REQUIRE(std::isfinite(stance_load) && stance_load >= 0.0,
+                 "refinement: stance_load must be finite and >= 0 [N], got ", stance_load);
   SALTUS_REQUIRE(std::isfinite(flight_clearance) && flight_clearance >= 0.0,
                  "refinement: flight_clearance must be finite and >= 0 [m], got ", flight_clearance);
   SALTUS_REQUIRE(std::isfinite(contact_stabilisation) && contact_stabilisation >= 0.0,

@@ -139,7 +139,7 @@ void ScheduleRefinementNlp<S, Ocp>::restrict_event_ends() {
       if (p > 0) {
         const ScheduleEvent& before = schedule_.events[static_cast<std::size_t>(p - 1)];
         const bool thrown_off = before.impact() && !mode[i].closed() && schedule_.phases[static_cast<std::size_t>(p - 1)][i].closed();
-        if (before.has(i, GuardKind::Release) || thrown_off) drop(v.at_start, first, last);
+        if (thrown_off) drop(v.at_start, first, last);  // a release keeps the row: RELEASE CONSISTENCY
         if ((before.has(i, GuardKind::SlipOnset) || (before.impact() && mode[i].closed())) && frictional &&
             mode[i].mode == ContactMode::Slip)
           drop(v.at_start, first + 1, last);  // the slip sign

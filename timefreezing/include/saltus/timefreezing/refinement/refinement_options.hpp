@@ -130,6 +130,16 @@ struct RefinementOptions {
   /// that ends in a release keeps lambda_n >= 0 (its force reaches 0 at the release by design).
   /// mode_validity_violation reads the rows as imposed. 0: no margin.
   double normal_force_margin = 0.0;
+  /// [N], >= 0. A closed contact that the schedule releases at its phase's end has the row
+  /// lambda_n - stance_load 4 s (1 - s) >= 0 inside the phase, s in [0, 1] the fraction of the
+  /// phase: a hump of peak stance_load, 0 at the phase's ends (the force may start anywhere after a
+  /// touchdown and falls through 0 at the release, now at a rate of at least 4 stance_load per
+  /// phase duration). The stance's counterpart of flight_clearance: without it the cheapest stance
+  /// before a release may be a grazing one, its foot barely loaded (the hopper's stance before its
+  /// last flight: lambda_n 0.13 N 5 ms before the release against the body's weight of 60 N), whose
+  /// friction cone the event-driven re-simulation leaves between stage points (docs/refinement.md).
+  /// mode_validity_violation reads the rows as imposed. 0: none.
+  double stance_load = 0.0;
   /// [m], >= 0. An open contact's row inside its phase is h_n - flight_clearance b(s) >= 0, s in
   /// [0, 1] the fraction of the phase and b a hump of peak 1 that is 0 at the phase's ends (a
   /// lift-off starts and a touchdown ends at h_n = 0): b = 4 s (1 - s), or (256/27) s^3 (1 - s) when
