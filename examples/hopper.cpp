@@ -15,7 +15,7 @@
 //   discovery    the hole continuation, then the time-freezing homotopy for two steps (sigma = 1,
 //                0.1), the footsteps read off its relaxed motion (scenes/hopper_holes_refinement.hpp);
 //   refinement   the smooth multi-phase OCP of those footsteps' schedule on the hopper's own flows,
-//                guards and jump maps, the mesh refined to local error 1e-6 (refinement.hpp);
+//                guards and jump maps, the mesh refined to local error 2e-7 (refinement.hpp);
 //   analysis     the refined reference's jump gains, an LQR reference-spreading design, its
 //                stability check and 200 perturbed closed-loop runs (scenes/hopper_tracking.hpp).
 // It prints {"converged", "stage" ("refined", "converged, checks failed: ..." naming the failed

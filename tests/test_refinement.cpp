@@ -473,14 +473,18 @@ ScheduleGuess<PointMass> push_and_lift_guess() {
   return g;
 }
 
-/// PushAndLift's refinement settings: 0.05 s elements, the stance at least 0.3 s, no edit.
-RefinementOptions push_and_lift_options() {
+/// Refinement settings of the short point-mass schedules: 0.05 s elements, every phase at least
+/// min_phase [s], no edit.
+RefinementOptions short_schedule_options(double min_phase) {
   RefinementOptions o;
   o.grid.max_element_duration = 0.05;
-  o.min_phase_duration = 0.3;
+  o.min_phase_duration = min_phase;
   o.edits.max_edits = 0;
   return o;
 }
+
+/// PushAndLift's: the stance at least 0.3 s.
+RefinementOptions push_and_lift_options() { return short_schedule_options(0.3); }
 
 /// From rest at the origin, T = 1 s.
 OcpHorizon<PointMass> from_rest_for_one_second() {
@@ -774,6 +778,20 @@ struct SlideToOne : scenes::PointMassToTheTarget {
   Vec<4> terminal_upper() const { return terminal_lower(); }
 };
 
+/// SlideToOne's forced flight: a stance, a flight (released at 0.4 s, landing at 0.6 s in the
+/// guess), a stance, all sticking; the guess holds the mass at rest at the origin.
+ScheduleGuess<PointMass> forced_flight_guess() {
+  ScheduleGuess<PointMass> g = sliding_stance_guess(0, Vec<2>::Zero());
+  g.schedule.phases = {closed_mode(0), open_mode(), closed_mode(0)};
+  g.schedule.events = {guards_between(PointMass{}, g.schedule.phases[0], g.schedule.phases[1]),
+                       guards_between(PointMass{}, g.schedule.phases[1], g.schedule.phases[2])};
+  g.schedule = validated(PointMass{}, g.schedule);
+  g.event_times = {0.4, 0.6};
+  g.input = [](double) { return Vec<2>(0, 9.81); };
+  return g;
+}
+
+
 /// The largest and smallest gap - clearance 4 s (1 - s) of phase 1 of `r` over its element
 /// boundaries inside the phase, s the phase fraction.
 std::pair<double, double> flight_gap_over_profile(const RefinementResult<PointMass>& r, double clearance) {
@@ -794,17 +812,8 @@ std::pair<double, double> flight_gap_over_profile(const RefinementResult<PointMa
 // flight: the hump after a release, ScheduleRefinementNlp::clearance) and pays for it. A negative
 // clearance is refused by name.
 TEST(ScheduleRefinement, AFlightClearanceLiftsAFlightThatSkimsTheGround) {
-  ScheduleGuess<PointMass> g = sliding_stance_guess(0, Vec<2>::Zero());
-  g.schedule.phases = {closed_mode(0), open_mode(), closed_mode(0)};
-  g.schedule.events = {guards_between(PointMass{}, g.schedule.phases[0], g.schedule.phases[1]),
-                       guards_between(PointMass{}, g.schedule.phases[1], g.schedule.phases[2])};
-  g.schedule = validated(PointMass{}, g.schedule);
-  g.event_times = {0.4, 0.6};
-  g.input = [](double) { return Vec<2>(0, 9.81); };
-  RefinementOptions o;
-  o.grid.max_element_duration = 0.05;
-  o.min_phase_duration = 0.2;
-  o.edits.max_edits = 0;
+  const ScheduleGuess<PointMass> g = forced_flight_guess();
+  RefinementOptions o = short_schedule_options(0.2);
   const RefinementResult<PointMass> skim = refine_schedule(PointMass{}, SlideToOne{}, from_rest_for_one_second(), g, o);
   ASSERT_TRUE(skim.converged) << skim.message;
   EXPECT_LT(flight_gap_over_profile(skim, 0.05).second, -0.01);
@@ -819,6 +828,30 @@ TEST(ScheduleRefinement, AFlightClearanceLiftsAFlightThatSkimsTheGround) {
   o.flight_clearance = -0.01;
   expect_invalid([&] { (void)refine_schedule(PointMass{}, SlideToOne{}, from_rest_for_one_second(), g, o); },
                  {"flight_clearance"});
+}
+
+// SlideToOne through a forced flight lands with the downward speed its low flight gives; with
+// touchdown_speed = 1.5 m/s the touchdown comes in at least that fast (the row active: the
+// flight rises higher, or is pushed down, and pays for it). A negative speed is refused by name.
+TEST(ScheduleRefinement, ATouchdownSpeedMakesTheLandingComeInFast) {
+  const ScheduleGuess<PointMass> g = forced_flight_guess();
+  RefinementOptions o = short_schedule_options(0.2);
+  const auto approach_speed = [](const RefinementResult<PointMass>& r) {
+    return -r.trajectory.state(1, r.trajectory.segments[1].t_end)[3];  // -zeta_n(x-) = -v_z
+  };
+  const RefinementResult<PointMass> slow = refine_schedule(PointMass{}, SlideToOne{}, from_rest_for_one_second(), g, o);
+  ASSERT_TRUE(slow.converged) << slow.message;
+  EXPECT_LT(approach_speed(slow), 1.0);
+  o.touchdown_speed = 1.5;
+  const RefinementResult<PointMass> fast = refine_schedule(PointMass{}, SlideToOne{}, from_rest_for_one_second(), g, o);
+  ASSERT_TRUE(fast.converged) << fast.message;
+  EXPECT_LE(fast.mode_validity_violation, 1e-9);
+  EXPECT_NEAR(approach_speed(fast), 1.5, 1e-8);
+  EXPECT_GT(fast.objective, slow.objective + 0.1);
+  EXPECT_LE(fast.phase_resim_max_error, 1e-8);
+  o.touchdown_speed = -1.0;
+  expect_invalid([&] { (void)refine_schedule(PointMass{}, SlideToOne{}, from_rest_for_one_second(), g, o); },
+                 {"touchdown_speed", ">= 0"});
 }
 
 }  // namespace

@@ -14,6 +14,8 @@
 //   then_normal_force_margin=<N>   a second refinement with that margin, from the first one's result on its grid
 //   min_phase_duration=<s>         RefinementOptions::min_phase_duration
 //   flight_clearance=<m>           RefinementOptions::flight_clearance
+//   stance_load=<N>                RefinementOptions::stance_load
+//   touchdown_speed=<m/s>          RefinementOptions::touchdown_speed
 //   contact_stabilisation=<1/s>    RefinementOptions::contact_stabilisation
 //   max_edits=<n>, edit_max_iter=<n>  RefinementEdits (max_edits is 0 here unless given)
 //   discovery_steps=<K>            the footsteps discovered from the paper's initialisation instead of
@@ -157,6 +159,10 @@ int main(int argc, char** argv) {
     }
     if (name == "normal_force_margin") {  // RefinementOptions::normal_force_margin [N]
       options.normal_force_margin = std::atof(value.c_str());
+      continue;
+    }
+    if (name == "touchdown_speed") {  // RefinementOptions::touchdown_speed [m/s]
+      options.touchdown_speed = std::atof(value.c_str());
       continue;
     }
     if (name == "stance_load") {  // RefinementOptions::stance_load [N]

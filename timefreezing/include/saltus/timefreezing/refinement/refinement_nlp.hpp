@@ -40,7 +40,8 @@
 //
 // EVENTS (the boundary between phase p and p + 1, at x- = the last stage of phase p, u- = its last
 // input, t = t_{p+1}), with the hybrid core's event physics:
-//     touchdown of i:   h_n,i(q-) = 0 and zeta_n,i(x-) <= 0 (approaching)
+//     touchdown of i:   h_n,i(q-) = 0 and zeta_n,i(x-) <= -RefinementOptions::touchdown_speed
+//                       (approaching; at least that fast)
 //     release of i:     lambda_n,i(x-, u-) = 0   (the flow of m_p); released from stick also
 //                       lambda_t,i(x-, u-) = 0 (the cone rows, dropped at x-, would leave it free)
 //     stop of i:        zeta_t,i(x-) = 0

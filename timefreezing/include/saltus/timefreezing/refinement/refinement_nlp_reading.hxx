@@ -52,6 +52,8 @@ inline void RefinementOptions::validate() const {
                  "refinement: normal_force_margin must be finite and >= 0 [N], got ", normal_force_margin);
   SALTUS_REQUIRE(std::isfinite(stance_load) && stance_load >= 0.0,
                  "refinement: stance_load must be finite and >= 0 [N], got ", stance_load);
+  SALTUS_REQUIRE(std::isfinite(touchdown_speed) && touchdown_speed >= 0.0,
+                 "refinement: touchdown_speed must be finite and >= 0 [m/s], got ", touchdown_speed);
   SALTUS_REQUIRE(std::isfinite(flight_clearance) && flight_clearance >= 0.0,
                  "refinement: flight_clearance must be finite and >= 0 [m], got ", flight_clearance);
   SALTUS_REQUIRE(std::isfinite(contact_stabilisation) && contact_stabilisation >= 0.0,
@@ -94,7 +96,8 @@ double ScheduleRefinementNlp<S, Ocp>::mode_validity_violation(const Eigen::Ref<c
   for (std::size_t b = 0; b < events_.size(); ++b) {
     const EventRows& ev = events_[b];
     const auto& phi = event_value_[b];
-    for (std::size_t k = 0; k < ev.approach_contacts.size(); ++k) worst = std::max(worst, phi[2 * nc + static_cast<int>(k)]);
+    for (std::size_t k = 0; k < ev.approach_contacts.size(); ++k)
+      worst = std::max(worst, phi[2 * nc + static_cast<int>(k)] + options_.touchdown_speed);
     for (int k = 0; k < ev.impulse_rows; ++k) worst = std::max(worst, -phi[3 * nc + nx + k]);
     for (std::size_t k = 0; k < ev.separating_contacts.size(); ++k)
       worst = std::max(worst, -phi[6 * nc + nx + static_cast<int>(k)]);

@@ -308,6 +308,7 @@ void ScheduleRefinementNlp<S, Ocp>::bounds(Eigen::Ref<Eigen::VectorXd> x_lower, 
   for (const EventRows& ev : events_) {
     const int approach = ev.first_row + static_cast<int>(ev.imposed_guards.size() + ev.released_sticking.size());
     g_lower.segment(approach, static_cast<int>(ev.approach_contacts.size())).setConstant(-inf);
+    g_upper.segment(approach, static_cast<int>(ev.approach_contacts.size())).setConstant(-options_.touchdown_speed);
     const int signs = approach + static_cast<int>(ev.approach_contacts.size()) + nx;
     g_upper.segment(signs, ev.impulse_rows + static_cast<int>(ev.separating_contacts.size())).setConstant(inf);
   }

@@ -150,6 +150,13 @@ struct RefinementOptions {
   /// flights of the hopper's discovered gait, docs/refinement.md). mode_validity_violation reads
   /// the rows as imposed. 0: no clearance.
   double flight_clearance = 0.0;
+  /// [m/s], >= 0. A touchdown's approach row is zeta_n(x-) <= -touchdown_speed instead of <= 0:
+  /// the foot comes in at least that fast along the contact normal. A touchdown that comes in
+  /// nearly tangentially has a saltation matrix of norm about (tangential speed / normal speed)
+  /// (the hopper's chain without it: 2.4e3 .. 2.9e5 at four of its six touchdowns), and a tracking
+  /// design's perturbed runs meet the ground at very different times and states there
+  /// (docs/refinement.md). mode_validity_violation reads the rows as imposed. 0: approaching only.
+  double touchdown_speed = 0.0;
   /// [1/s], >= 0. Baumgarte's stabilisation of the closed contacts in every phase's flow
   /// (FlowWorkspace::constraint_stabilisation): zeta_n' + 2 a zeta_n + a^2 h_n = 0 and, sticking,
   /// zeta_t' + a zeta_t = 0, a = contact_stabilisation. The phase's start imposes h_n = zeta_n = 0
