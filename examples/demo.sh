@@ -31,7 +31,7 @@ OPENBLAS_NUM_THREADS=1 "$build/examples/guiding_example" --json | tee "$SALTUS_R
 # refinement (the exact reference), its re-simulations, then the analysis of the refined reference
 # (jump gains, an LQR tracking design, its stability check and 100 perturbed runs). About 4
 # minutes. The hopper over three holes is not run here: its chain (discovery of its footholds,
-# their refinement, the analysis: `build/examples/hopper --json`) takes about 15 minutes on one
+# their refinement, the analysis: `build/examples/hopper --json`) takes about 8 minutes on one
 # thread, beyond the main job's budget (docs/refinement.md, "Hopper over three holes").
 ocp_summary() {
   python3 - "$1" <<'PY'

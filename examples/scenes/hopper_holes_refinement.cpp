@@ -32,6 +32,7 @@ timefreezing::RefinementOptions hopper_refinement_options(std::ostream* progress
   o.contact_stabilisation = 20.0;
   o.flight_clearance = 0.005;
   o.stance_load = 20.0;
+  o.touchdown_speed = 0.3;
   o.mesh.local_error_tolerance = 2e-7;
   o.mesh.max_split = 4;
   o.mesh.max_rounds = 10;
