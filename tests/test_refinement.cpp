@@ -283,7 +283,8 @@ TEST(RefinementNlp, BadGuessesAndStatesNameThePhase) {
 
 /// Discovery stopped where the schedule settles: on the guiding example the first two homotopy
 /// steps (sigma = 1, 0.1) agree; the refinement of that schedule reaches the optimum of the
-/// refinement from the converged homotopy (18.7116, the test below).
+/// refinement from the converged homotopy (18.7116, the test below). The same schedule after a
+/// continuation and from a guess of the motion.
 TEST(ScheduleDiscovery, GuidingExampleSettlesAfterTwoStepsAndRefinesToTheOptimum) {
   const PointMass mass = frictional_mass();
   const DiscoveryResult<PointMass> d =
@@ -313,6 +314,19 @@ TEST(ScheduleDiscovery, GuidingExampleSettlesAfterTwoStepsAndRefinesToTheOptimum
   expect_invalid([&] { (void)discover_schedule_by_continuation(mass, Case::system(), std::vector<Case>{}, Case{}, Case::q0(),
                                                                Case::v0(), Case::grid(), Case::solver()); },
                  {"continuation is empty"});
+
+  // From a guess of the motion (the second initialisation): the refined reference itself, as a
+  // user's imported motion would be; the same steps find the same schedule. A guess that is not
+  // finite is refused.
+  const MotionGuess refined_motion = [&](double t) { return Eigen::VectorXd(r.trajectory.state_at(t)); };
+  const DiscoveryResult<PointMass> g = discover_schedule_from_guess(mass, Case::system(), Case{}, Case::q0(), Case::v0(),
+                                                                    Case::grid(), refined_motion, Case::solver());
+  ASSERT_TRUE(g.settled) << g.message;
+  for (const DiscoveryStep& s : g.steps) EXPECT_EQ(s.schedule, "table:open [touchdown table] table:slip+");
+  const MotionGuess broken = [](double) { return Eigen::VectorXd::Constant(4, std::nan("")); };
+  EXPECT_THROW((void)discover_schedule_from_guess(mass, Case::system(), Case{}, Case::q0(), Case::v0(), Case::grid(), broken,
+                                                  Case::solver()),
+               InvalidArgument);
 }
 
 /// The guiding example's OCP refined from its time-freezing solution (the musts: converged, mode

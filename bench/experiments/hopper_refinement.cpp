@@ -18,6 +18,7 @@
 //   touchdown_speed=<m/s>          RefinementOptions::touchdown_speed
 //   contact_stabilisation=<1/s>    RefinementOptions::contact_stabilisation
 //   max_edits=<n>, edit_max_iter=<n>  RefinementEdits (max_edits is 0 here unless given)
+//   discovery_from=hop_guess       discovery from the second initialisation (Ocp::hop_guess), no continuation
 //   discovery_steps=<K>            the footsteps discovered from the paper's initialisation instead of
 //                                  the holes' ones (discovered_footsteps below)
 //   analysis_runs=<n>, analysis_R=<r>  the refined reference analysed by analyse_reference with n Monte
@@ -78,14 +79,19 @@ saltus::scenes::HopperFootsteps holes_footsteps(double stance, double end_stance
 }
 
 /// The footsteps discovered from the paper's initialisation (the start state at every node, zero
-/// torques): discover_schedule_by_continuation with the hole continuation and at most `steps`
+/// torques; or, from_hop_guess, from the second one, Ocp::hop_guess, by discover_schedule_from_guess
+/// without a continuation): discover_schedule_by_continuation with the hole continuation and at most `steps`
 /// homotopy steps on the paper's grid, read as scenes::hopper_discovery_options says, then
 /// scenes::footsteps_of (a final flight lands for its last 0.1 s).
-saltus::scenes::HopperFootsteps discovered_footsteps(const Hopper& hopper, int steps) {
+saltus::scenes::HopperFootsteps discovered_footsteps(const Hopper& hopper, int steps, bool from_hop_guess) {
   using namespace saltus::timefreezing;
+  const DiscoveryOptions options = saltus::scenes::hopper_discovery_options(steps, &std::cout);
+  const MotionGuess hops = [](double t) { return Eigen::VectorXd(Ocp::hop_guess(t)); };
   const DiscoveryResult<Hopper> d =
-      discover_schedule_by_continuation(hopper, Ocp::system(), Ocp::hole_continuation(), Ocp{}, Ocp::q0(), Ocp::v0(),
-                                        Ocp::grid(), Ocp::solver(), saltus::scenes::hopper_discovery_options(steps, &std::cout));
+      from_hop_guess
+          ? discover_schedule_from_guess(hopper, Ocp::system(), Ocp{}, Ocp::q0(), Ocp::v0(), Ocp::grid(), hops, Ocp::solver(), options)
+          : discover_schedule_by_continuation(hopper, Ocp::system(), Ocp::hole_continuation(), Ocp{}, Ocp::q0(), Ocp::v0(),
+                                              Ocp::grid(), Ocp::solver(), options);
   std::cout << "discovery: " << d.message << ", " << d.seconds << " s (continuation " << d.continuation_seconds << " s)\n";
   saltus::scenes::HopperFootsteps footsteps;
   (void)saltus::scenes::hopper_guess_from(d, &footsteps);
@@ -140,6 +146,7 @@ int main(int argc, char** argv) {
   double analysis_R = 1e-3;
   double then_margin = 0.0;
   int discovery_steps = 0;
+  bool discovery_from_hop_guess = false;
   for (int a = 14; a < argc; ++a) {
     const std::string arg = argv[a];
     const std::size_t eq = arg.find('=');
@@ -189,6 +196,10 @@ int main(int argc, char** argv) {
       options.edits.max_iter = std::atoi(value.c_str());
       continue;
     }
+    if (name == "discovery_from") {  // "hop_guess": discovery from Ocp::hop_guess (the second initialisation)
+      discovery_from_hop_guess = value == "hop_guess";
+      continue;
+    }
     if (name == "discovery_steps") {  // the footsteps discovered from the paper's initialisation
       discovery_steps = std::atoi(value.c_str());
       continue;
@@ -212,7 +223,7 @@ int main(int argc, char** argv) {
     else options.ipopt.options.push_back({name, value});
   }
   scenes::HopperFootsteps steps = holes_footsteps(stance, end_stance);
-  if (discovery_steps > 0) steps = discovered_footsteps(hopper, discovery_steps);
+  if (discovery_steps > 0) steps = discovered_footsteps(hopper, discovery_steps, discovery_from_hop_guess);
   const ScheduleGuess<Hopper> guess = scenes::footstep_guess(hopper, steps, Ocp::q0(), Ocp::q_target(), Ocp::horizon);
   std::cout << "schedule: " << describe(hopper, guess.schedule) << "\nfootholds:";
   for (double x : steps.footholds) std::cout << " " << x;

@@ -96,6 +96,10 @@
       const S&, const saltus::timefreezing::TimeFreezingSystem<S>&, const Ocp&, const saltus::Vec<S::nq>&,    \
       const saltus::Vec<S::nq>&, const saltus::timefreezing::FesdOptions&,                                    \
       const saltus::timefreezing::MpccSolverOptions&, const saltus::timefreezing::DiscoveryOptions&);  \
+  prefix template saltus::timefreezing::DiscoveryResult<S> saltus::timefreezing::discover_schedule_from_guess<S, Ocp>( \
+      const S&, const saltus::timefreezing::TimeFreezingSystem<S>&, const Ocp&, const saltus::Vec<S::nq>&,    \
+      const saltus::Vec<S::nq>&, const saltus::timefreezing::FesdOptions&, const saltus::timefreezing::MotionGuess&, \
+      const saltus::timefreezing::MpccSolverOptions&, const saltus::timefreezing::DiscoveryOptions&);  \
   prefix template saltus::timefreezing::DiscoveryResult<S>                                                    \
   saltus::timefreezing::discover_schedule_by_continuation<S, Ocp>(                                           \
       const S&, const saltus::timefreezing::TimeFreezingSystem<S>&, const std::vector<Ocp>&, const Ocp&,      \

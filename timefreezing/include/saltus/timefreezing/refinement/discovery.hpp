@@ -112,6 +112,17 @@ DiscoveryResult<S> discover_schedule(const S& scene, const TimeFreezingSystem<S>
                                      const Vec<S::nq>& q0, const Vec<S::nq>& v0, const FesdOptions& fesd,
                                      const MpccSolverOptions& solver, const DiscoveryOptions& options = {});
 
+/// discover_schedule from a guess of the motion instead of the initial state at every stage point
+/// (the second initialisation, as solve_time_freezing_ocp_from_guess: `guess(t)` -> (q, v) at
+/// physical time t, FesdMpcc::initial_point_from_guess). E.g. the hopper's hop_guess
+/// (scenes/hopper_holes.hpp): where the feet go, not how. Throws InvalidArgument as
+/// discover_schedule and for a guess that is not finite.
+template <Scene S, class Ocp>
+DiscoveryResult<S> discover_schedule_from_guess(const S& scene, const TimeFreezingSystem<S>& system, const Ocp& ocp,
+                                                const Vec<S::nq>& q0, const Vec<S::nq>& v0, const FesdOptions& fesd,
+                                                const MotionGuess& guess, const MpccSolverOptions& solver,
+                                                const DiscoveryOptions& options = {});
+
 /// discover_schedule preceded by a continuation on the OCP's data (as
 /// solve_time_freezing_ocp_by_continuation): one relaxed solve per OCP of `continuation` at the
 /// solver's sigma_0, in order, the first from the initial state at every stage point, each

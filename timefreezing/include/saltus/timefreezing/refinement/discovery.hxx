@@ -133,6 +133,23 @@ DiscoveryResult<S> discover_schedule(const S& scene, const TimeFreezingSystem<S>
 }
 
 template <Scene S, class Ocp>
+DiscoveryResult<S> discover_schedule_from_guess(const S& scene, const TimeFreezingSystem<S>& system, const Ocp& ocp,
+                                                const Vec<S::nq>& q0, const Vec<S::nq>& v0, const FesdOptions& fesd,
+                                                const MotionGuess& guess, const MpccSolverOptions& solver,
+                                                const DiscoveryOptions& options) {
+  options.validate();
+  const auto clock = std::chrono::steady_clock::now();
+  const FesdMpcc<S, Ocp> problem(system, ocp, q0, v0, fesd);
+  MpccStart start;
+  start.x.resize(problem.variable_count());
+  problem.initial_point_from_guess(start.x, guess);
+  DiscoveryResult<S> out;
+  detail::run_discovery_steps(scene, problem, std::move(start), fesd, solver, options, out);
+  out.seconds = detail::seconds_since(clock);
+  return out;
+}
+
+template <Scene S, class Ocp>
 DiscoveryResult<S> discover_schedule_by_continuation(const S& scene, const TimeFreezingSystem<S>& system,
                                                      const std::vector<Ocp>& continuation, const Ocp& ocp,
                                                      const Vec<S::nq>& q0, const Vec<S::nq>& v0,
