@@ -149,11 +149,9 @@ HopperFootsteps footsteps_of(const Hopper& hopper, const timefreezing::ScheduleG
     if (last + 1 < phases.size()) steps.event_times.push_back(end(last));
     k = last + 1;
   }
-  if (!phases.back()[0].closed()) {  // ends in a flight: land for the last landing_stance seconds
-    const double touchdown = T - landing_stance;
-    SALTUS_REQUIRE(touchdown > steps.event_times.back(), "footsteps_of: the last flight [", steps.event_times.back(), ", ", T,
-                   "] is not longer than landing_stance = ", landing_stance, " s");
-    steps.event_times.push_back(touchdown);
+  if (!phases.back()[0].closed()) {  // ends in a flight: land for its last landing_stance seconds, at most half of it
+    const double release = steps.event_times.back();
+    steps.event_times.push_back(T - std::min(landing_stance, 0.5 * (T - release)));
     steps.footholds.push_back(0.0);
   }
   steps.footholds.front() = hopper.foot<double>(VecT<double, 4>(q_start))[0];

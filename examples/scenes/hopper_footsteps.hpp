@@ -52,8 +52,9 @@ timefreezing::ScheduleGuess<Hopper> footstep_guess(const Hopper& hopper, const H
 /// motion, except the first and the last, which stand where q_start's and q_end's feet stand (the
 /// foot is on the ground at the start and at the end). A schedule that ends in a flight, as a
 /// relaxed motion whose foot reaches the ground only at T does, lands for the last
-/// `landing_stance` seconds of it [s, > 0]. Throws InvalidArgument when the schedule does not start
-/// with the foot closed, when its last flight is not longer than landing_stance, when the count of
+/// `landing_stance` seconds of it [s, > 0], or for its second half when it is shorter than twice
+/// that (the hopper's discovery from hop_guess ends in a flight of 38 ms). Throws InvalidArgument
+/// when the schedule does not start with the foot closed, when the count of
 /// event times does not match the phases, or for landing_stance <= 0; their order and T are not
 /// checked here (footstep_guess checks the footsteps it is given).
 HopperFootsteps footsteps_of(const Hopper& hopper, const timefreezing::ScheduleGuess<Hopper>& guess, const Vec<4>& q_start,
