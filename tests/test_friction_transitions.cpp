@@ -208,5 +208,27 @@ TEST(Release, ContactBelowTheGapToleranceOpensWithoutCycling) {
   EXPECT_NEAR(x1[0], x_release + 0.5 * vx, 1e-9);
 }
 
+// A release by an input jump: the point mass rests on the ground under a thrust u_y = g / 2 that
+// jumps to 2 g at the breakpoint t = 0.5. Under the new input the closed contact would pull
+// (lambda_n = m g - 2 m g < 0): the contact releases AT the breakpoint, with no sign change of
+// lambda_n inside a step, and the mass rises with y'' = g: y(1) = g / 8.
+TEST(Release, AnInputJumpReleasesAtTheBreakpoint) {
+  const scenes::PointMass mass;
+  constexpr double g = 9.81;
+  SimulationOptions o;
+  o.integrator.relative_tolerance = 1e-12;
+  o.integrator.absolute_tolerance = 1e-13;
+  o.breakpoints = {0.5};
+  Simulator<scenes::PointMass> sim(mass, o);
+  const auto law = open_loop<scenes::PointMass>([](double t) { return Vec<2>(0.0, t < 0.5 ? 0.5 * g : 2 * g); });
+  const auto traj = sim.run(Vec<4>::Zero(), 0.0, 1.0, law);
+  ASSERT_EQ(traj.events.size(), 1u);
+  EXPECT_EQ(traj.events[0].guards().at(0).kind, GuardKind::Release);
+  EXPECT_EQ(traj.events[0].t, 0.5);
+  EXPECT_FALSE(traj.segments.back().mode[0].closed());
+  EXPECT_NEAR(traj.final_state()[1], g / 8.0, 1e-10);
+  EXPECT_NEAR(traj.final_state()[3], g / 2.0, 1e-10);
+}
+
 }  // namespace
 }  // namespace saltus::testing

@@ -285,6 +285,35 @@ TEST(JumpGains, Example3ReleaseGainHasItsClosedForm) {
   EXPECT_TRUE(matrices_near(gain.G_v, Mat<4, 2>::Zero(), 0.0, 1e-8));
 }
 
+// A release by an input jump at a breakpoint (the mass pressed on the table by its weight less
+// a thrust that jumps from g / 2 to 2 g at t = 0.5): the event's time is the jump's, whatever the
+// state, so dt = 0, G_z = I and G_v = 0 (jump_gain.hpp: a first guard already below zero), and the
+// numerical twin, which re-simulates perturbed motions through the breakpoint, agrees.
+TEST(JumpGains, AReleaseByAnInputJumpHasAFixedTime) {
+  references::Reference<scenes::PointMass> ref{"release by an input jump", scenes::PointMass{}, {}, {}};
+  ref.options.integrator.relative_tolerance = 1e-12;
+  ref.options.integrator.absolute_tolerance = 1e-13;
+  ref.options.breakpoints = {0.5};
+  const auto law = open_loop<scenes::PointMass>(
+      [](double t) { return Vec<2>(1.0, t < 0.5 ? 0.5 * references::g : 2 * references::g); });
+  Simulator<scenes::PointMass> sim(ref.scene, ref.options);
+  Vec<4> x0(0.0, 0.0, 0.2, 0.0);
+  ref.trajectory = sim.run(x0, 0.0, 0.8, law);
+  ASSERT_EQ(ref.trajectory.events.size(), 1u);
+  ASSERT_EQ(ref.trajectory.events[0].t, 0.5);
+  JumpGainSolver<scenes::PointMass> solver(ref.scene);
+  const auto& gain = solver.compute(ref.trajectory.events[0], ref.trajectory.input);
+  EXPECT_TRUE(gain.info[0].immediate);
+  EXPECT_TRUE(matrices_near(gain.G_z, Mat<4, 4>::Identity(), 0.0, 1e-14));
+  EXPECT_TRUE(matrices_near(gain.G_v, Mat<4, 2>::Zero(), 0.0, 1e-14));
+  EXPECT_TRUE(matrices_near(gain.dt_dz, Eigen::RowVector4d::Zero(), 0.0, 0.0));
+  const auto kinds = check_against_twin(ref);
+  EXPECT_TRUE(kinds.count("release"));
+  // No activation orders at a fixed time: the conewise gain refuses the event and says why.
+  expect_invalid([&] { ConewiseJumpGain<scenes::PointMass> c(ref.scene, ref.trajectory.events[0], ref.trajectory.input); },
+                 {"where the input jumps", "JumpGainSolver"});
+}
+
 // Without the input-rate term the release of Example 3 has gamma_dot = Dgamma_x f = 0 (lambda_n
 // does not depend on the state): the gain does not exist, and Saltus says so rather than
 // dividing by zero. (The slope test of the term on a state-input guard with Dgamma_x f != 0 is

@@ -539,6 +539,36 @@ TEST(ScheduleRefinement, AReleaseFromStickLeavesNoTangentialForceAndResimulatesI
                  {"window must be >= 0"});
 }
 
+// RELEASE AT AN INPUT JUMP (RefinementOptions::releases_at_input_jumps): PushAndLift's stance
+// need not unload the mass under its last input; the flight's first input lifts it (u_z >= m g).
+// The optimum then keeps pushing sideways up to the release with lambda_n > 0 there, costs less
+// than the release by the guard, and the event-driven re-simulation finds the release at the
+// input's breakpoint, on time to the last bit.
+TEST(ScheduleRefinement, AReleaseAtAnInputJumpKeepsTheStanceLoadedToItsEnd) {
+  const ScheduleGuess<PointMass> g = push_and_lift_guess();
+  const OcpHorizon<PointMass> h = from_rest_for_one_second();
+  const RefinementResult<PointMass> by_guard = refine_schedule(frictional_mass(), PushAndLift{}, h, g, push_and_lift_options());
+  RefinementOptions o = push_and_lift_options();
+  o.releases_at_input_jumps = true;
+  const RefinementResult<PointMass> r = refine_schedule(frictional_mass(), PushAndLift{}, h, g, o);
+  ASSERT_TRUE(by_guard.converged) << by_guard.message;
+  ASSERT_TRUE(r.converged) << r.message;
+  EXPECT_LE(r.mode_validity_violation, 1e-9);
+  EXPECT_LT(r.objective, by_guard.objective - 1.0) << "the jump frees the push at the release";
+  const double t_release = r.event_times[0];
+  const scenes::PointMassParameters par = scenes::PointMassToTheTarget::parameters();
+  const Vec<4> x_minus = r.trajectory.state(0, t_release);
+  const Vec<2> u_minus = r.trajectory.input(t_release - 1e-9, x_minus, r.schedule.phases[0]);
+  const Vec<2> u_plus = r.trajectory.input(t_release + 1e-9, x_minus, r.schedule.phases[1]);
+  EXPECT_GT(par.mass * par.gravity - u_minus[1], 0.5) << "lambda_n before the jump";
+  EXPECT_GE(u_plus[1], par.mass * par.gravity - 1e-6) << "the flight's first input lifts the mass";
+  EXPECT_GT(u_minus[0], 0.5) << "the sideways push is kept up to the release";
+  EXPECT_LE(r.phase_resim_max_error, 1e-8);
+  EXPECT_TRUE(r.phase_resimulation[0].event_guards_match) << r.phase_resimulation[0].note;
+  EXPECT_TRUE(r.phase_resimulation[0].next_mode_matches);
+  EXPECT_LE(std::abs(r.phase_resimulation[0].event_time_error), 1e-12);
+}
+
 // RELEASE CONSISTENCY (refinement_nlp.hpp): the input may jump at the release, so the flight's
 // start point carries the released contact's normal acceleration under the flight's first input,
 // h_n'' >= 0, in place of its gap (0 there by the event). For the point mass h_n'' = u_z / m - g:

@@ -16,6 +16,7 @@
 //   flight_clearance=<m>           RefinementOptions::flight_clearance
 //   stance_load=<N>                RefinementOptions::stance_load
 //   touchdown_speed=<m/s>          RefinementOptions::touchdown_speed
+//   releases_at_input_jumps=<0|1>  RefinementOptions::releases_at_input_jumps
 //   contact_stabilisation=<1/s>    RefinementOptions::contact_stabilisation
 //   max_edits=<n>, edit_max_iter=<n>  RefinementEdits (max_edits is 0 here unless given)
 //   discovery_from=hop_guess       discovery from the second initialisation (Ocp::hop_guess), no continuation
@@ -170,6 +171,10 @@ int main(int argc, char** argv) {
     }
     if (name == "touchdown_speed") {  // RefinementOptions::touchdown_speed [m/s]
       options.touchdown_speed = std::atof(value.c_str());
+      continue;
+    }
+    if (name == "releases_at_input_jumps") {  // RefinementOptions::releases_at_input_jumps
+      options.releases_at_input_jumps = std::atoi(value.c_str()) != 0;
       continue;
     }
     if (name == "stance_load") {  // RefinementOptions::stance_load [N]

@@ -36,6 +36,8 @@ auto JumpGainSolver<S>::compute(const Event<S>& event, const InputLaw<S>& law, c
   Zv_ = incoming_v;
   dz_.setZero();
   dv_.setZero();
+  g.dt_dz.setZero();  // stays 0 for a fixed-time event (no guard, or one already below zero)
+  g.dt_dv.setZero();
   bool first_guarded = true;
   for (std::size_t k = 0; k < event.transitions.size(); ++k) {
     const Transition<S>& tr = event.transitions[k];
@@ -47,7 +49,18 @@ auto JumpGainSolver<S>::compute(const Event<S>& event, const InputLaw<S>& law, c
     if (k == 0) g.f_minus = f_before_;
 
     if (!tr.guards.empty()) {
-      if (tr.guards.size() != 1) {
+      const Guard& guard = tr.guards.front();
+      info.guarded = true;
+      evaluate_crossing(law, t, tr.x_before, tr.mode_before, guard, f_before_);
+      const GuardCrossing<S>& c = crossing_;
+      info.gamma = c.gamma;
+      info.gamma_dot = c.gamma_dot;
+      info.rate_scale = c.rate_scale;
+      // Clearly below zero: the transition does not move with the state. After another one it is
+      // immediate (dt_k = dt_{k-1}); as the event's first, its time is that of an input jump (a
+      // release at a breakpoint: the guard jumped below zero with the input), dt = 0.
+      info.immediate = info.gamma < -options_.chain_time_tolerance * info.rate_scale;
+      if (!info.immediate && tr.guards.size() != 1) {
         // Guards that fire together in every nearby motion (their first-order crossing-time
         // shifts are the same function of (z-, v), see "Coincident guards" in jump_gain.hpp)
         // have a linear gain: any one of them gives it. Otherwise the gain is conewise.
@@ -58,15 +71,8 @@ auto JumpGainSolver<S>::compute(const Event<S>& event, const InputLaw<S>& law, c
                       " guards at once whose crossing times split under perturbation (relative difference ",
                       mismatch, " of their first-order shifts); its first-order gain is conewise (one per activation "
                       "order, ConewiseJumpGain in conewise_gain.hpp), not computed by JumpGainSolver"));
+        evaluate_crossing(law, t, tr.x_before, tr.mode_before, guard, f_before_);  // the check used crossing_
       }
-      const Guard& guard = tr.guards.front();
-      info.guarded = true;
-      evaluate_crossing(law, t, tr.x_before, tr.mode_before, guard, f_before_);
-      const GuardCrossing<S>& c = crossing_;
-      info.gamma = c.gamma;
-      info.gamma_dot = c.gamma_dot;
-      info.rate_scale = c.rate_scale;
-      info.immediate = !first_guarded && info.gamma < -options_.chain_time_tolerance * info.rate_scale;
       if (!info.immediate) {
         if (!(std::abs(info.gamma_dot) > options_.grazing_threshold * info.rate_scale) ||
             !std::isfinite(info.gamma_dot)) {

@@ -8,7 +8,9 @@
 #include <saltus/hybrid/vocabulary/input_law.hpp>
 
 #include <array>
+#include <cmath>
 #include <functional>
+#include <limits>
 
 namespace saltus {
 
@@ -76,8 +78,19 @@ class ModeSystem {
   const S& scene() const { return scene_; }
   const InputLaw<S>& input_law() const { return input_; }
 
-  /// u(t, x, mode()); while a contact slides (set_sliding), the equivalent control.
+  /// u(t, x, mode()); while a contact slides (set_sliding), the equivalent control. At t >= the
+  /// input jump (set_input_jump), the law is evaluated at the largest double below it.
   Input input(double t, const State& x);
+
+  /// The time of the next input breakpoint (SimulationOptions::breakpoints) of the integration
+  /// under way, +inf for none: evaluations at t >= t_jump take the law at the largest double below
+  /// t_jump, its left limit, so that the step that ends at the breakpoint integrates, and its
+  /// guards see, the input before a jump there (Dormand-Prince evaluates its last stages at the
+  /// step's end). The input after the jump is the next integration's.
+  void set_input_jump(double t_jump) {
+    input_jump_ = t_jump;
+    input_left_limit_ = std::nextafter(t_jump, -std::numeric_limits<double>::infinity());
+  }
 
   /// x' at (t, x).
   void rhs(double t, const State& x, State& xdot);
@@ -106,6 +119,8 @@ class ModeSystem {
   Mode<nc> sliding_open_mode_{};
   double sliding_force_floor_ = 0.0;
   long rhs_evaluations_ = 0;
+  double input_jump_ = std::numeric_limits<double>::infinity();
+  double input_left_limit_ = std::numeric_limits<double>::max();
 };
 
 }  // namespace saltus

@@ -26,6 +26,7 @@ void ModeSystem<S>::set_sliding(int contact, const Mode<nc>& open_mode, double f
 
 template <Scene S>
 auto ModeSystem<S>::input(double t, const State& x) -> Input {
+  if (t >= input_jump_) t = input_left_limit_;
   if (sliding_contact_ < 0) return input_(t, x, mode_);
   return sliding_input(scene_, input_, t, x, mode_, sliding_contact_, sliding_open_mode_, sliding_force_floor_,
                        sliding_flow_);

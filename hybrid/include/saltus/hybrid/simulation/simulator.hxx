@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <saltus/hybrid/simulation/simulator.hpp>
 
 namespace saltus {
@@ -147,16 +148,25 @@ HybridTrajectory<S> Simulator<S>::run_impl(const State& x0, std::optional<Mode<n
       for (double b : options_.breakpoints)
         if (b > t * (1 + 1e-15) + 1e-300 && b < t_stop) t_stop = b;
       DenseOutput<nx>* dense = options_.record_dense_output ? &seg.x : nullptr;
+      sys.set_input_jump(t_stop);  // the step that ends at a breakpoint sees the input before it
 #if defined(SALTUS_WITH_CVODE) && SALTUS_WITH_CVODE
       end = cvode_ ? cvode_->integrate(sys, t, x, t_stop, options_.simultaneity, dense)
                    : dopri_.integrate(sys, t, x, t_stop, options_.simultaneity, dense);
 #else
       end = dopri_.integrate(sys, t, x, t_stop, options_.simultaneity, dense);
 #endif
+      sys.set_input_jump(std::numeric_limits<double>::infinity());
       stats.steps += end.steps;
       stats.rejected_steps += end.rejected_steps;
       t = end.t;
       if (end.at_guard || t_stop == t_final) break;
+      // At a breakpoint the input may jump so that the mode is no longer consistent under the
+      // input after it (a thrust that outgrows the weight: lambda_n < 0 at once, with no root
+      // inside a step). A guard due there under that input is an event at the breakpoint.
+      if (!transitions_.guards_due(sys, t, x).empty()) {
+        end.at_guard = true;
+        break;
+      }
     }
     stats.rhs_evaluations += sys.rhs_evaluations() - rhs_before;
     check_no_penetration(x_begin, x, mode, end.t);

@@ -98,6 +98,19 @@
 // acceleration of the phase's open-contact flow. Under a continuous input it is 0 (lambda_n = 0
 // makes the free and the constrained acceleration equal), so it costs nothing where u is smooth.
 //
+// RELEASE AT AN INPUT JUMP (RefinementOptions::releases_at_input_jumps). The release guard
+// lambda_n(x-, u-) = 0 asks the stance's last input to unload the contact. Where the optimum
+// wants the force up to the lift-off (a push-off), the mesh then cuts the stance's last element
+// ever shorter and its input all but unloads the foot in it. With the option, the release guard
+// is not a row: the stance's validity rows are kept at x- (lambda_n(x-, u-) >= 0, a sticking
+// contact in its cone) and the flight's start row h_n''(x-, u+) >= 0 (RELEASE CONSISTENCY) says
+// that under the flight's first input the contact separates. For one released contact, with the
+// Delassus matrix positive, h_n''(open, u+) >= 0 is the same as lambda_n(closed, x-, u+) <= 0, so
+// the acceleration-level mode selection under u+ opens it: the release happens at the input's
+// jump, a time event. With several released at once (the plank-box's two corners), h'' >= 0 for
+// each with lambda = 0 solves the contact LCP under u+, which has one solution for a P-matrix.
+// Under a continuous input both rows meet at lambda_n = 0, the guard's release.
+//
 // COST AND CONSTRAINTS of the OCP struct (the one the time-freezing solver takes,
 // formulation/ocp concepts in fesd.hpp): the running cost in physical time by the Radau
 // quadrature, sum_e h_p sum_l b_l l(x_{e,l}, u_e[, t_{e,l}]); the terminal cost and terminal rows

@@ -146,7 +146,8 @@ void ScheduleRefinementNlp<S, Ocp>::restrict_event_ends() {
       }
       if (p + 1 < P) {
         const ScheduleEvent& after = schedule_.events[static_cast<std::size_t>(p)];
-        if (after.has(i, GuardKind::Touchdown) || after.has(i, GuardKind::Release)) drop(v.at_end, first, last);
+        const bool released_by_guard = after.has(i, GuardKind::Release) && !options_.releases_at_input_jumps;
+        if (after.has(i, GuardKind::Touchdown) || released_by_guard) drop(v.at_end, first, last);
         if ((after.has(i, GuardKind::Stop) || after.has(i, GuardKind::SlipOnset)) && frictional) drop(v.at_end, first + 1, last);
       }
     }
@@ -200,8 +201,13 @@ void ScheduleRefinementNlp<S, Ocp>::find_implied_guards() {
         row.head(nq) = kin.contacts[i].wn;
         detail::append_row(K, row);
       }
-    ev.imposed_guards = se.guards;
-    for (const Guard& g : se.guards)
+    // RELEASE AT AN INPUT JUMP: the release guards are not rows; the stance's validity rows at x-
+    // and the flight's h_n'' >= 0 at its start make the release.
+    std::vector<Guard> guards = se.guards;
+    if (options_.releases_at_input_jumps)
+      std::erase_if(guards, [](const Guard& g) { return g.kind == GuardKind::Release; });
+    ev.imposed_guards = guards;
+    for (const Guard& g : guards)
       if (g.kind == GuardKind::Release && before[g.contact].mode == ContactMode::Stick && scene_.contact(g.contact).tangents() > 0)
         ev.released_sticking.push_back(g.contact);
     VecT<double, event_outputs> ev_value;
@@ -209,17 +215,17 @@ void ScheduleRefinementNlp<S, Ocp>::find_implied_guards() {
     detail::local_jacobian<nwe, event_outputs>([&](const auto& w) { return event_block(b, w, fws, jws); },
                                                event_local(guess_x_, b), ev_value, ev_jacobian);
     std::vector<Guard> kept;
-    for (std::size_t k = 0; k < se.guards.size(); ++k) {
+    for (std::size_t k = 0; k < guards.size(); ++k) {
       const Eigen::VectorXd grad = ev_jacobian.row(static_cast<int>(k)).head(nx + nu).transpose();
       const double residual = detail::span_residual(K, grad);
       if (grad.norm() > 0.0 && residual <= tol) {
         implied_.push_back({-1, b, static_cast<int>(k),
-                            std::string(to_string(se.guards[k].kind)) + " " + scene_.contact(se.guards[k].contact).name +
+                            std::string(to_string(guards[k].kind)) + " " + scene_.contact(guards[k].contact).name +
                                 " at event " + std::to_string(b),
                             residual});
         continue;
       }
-      kept.push_back(se.guards[k]);
+      kept.push_back(guards[k]);
       detail::append_row(K, grad);
     }
     ev.imposed_guards = kept;

@@ -157,6 +157,16 @@ struct RefinementOptions {
   /// design's perturbed runs meet the ground at very different times and states there
   /// (docs/refinement.md). mode_validity_violation reads the rows as imposed. 0: approaching only.
   double touchdown_speed = 0.0;
+  /// Releases at an input jump (refinement_nlp.hpp, "RELEASE AT AN INPUT JUMP"): false, a release
+  /// is the guard lambda_n(x-, u-) = 0 (the force falls to zero under the stance's last input);
+  /// true, the release guard is not imposed: the stance's validity rows hold at x- (lambda_n >= 0,
+  /// a sticking contact in its cone) and the flight's first input makes the contact separate
+  /// (h_n''(x-, u+) >= 0, RELEASE CONSISTENCY), so the force may drop from any value to zero where
+  /// the piecewise-constant input jumps at the phase's end. The event-driven simulator finds such a
+  /// release at the input breakpoint (Simulator: a guard due under the input after a breakpoint is
+  /// an event there). Without it, a push-off that wants its force up to the lift-off spends its
+  /// last, sub-millisecond element unloading the foot (the hopper, docs/refinement.md).
+  bool releases_at_input_jumps = false;
   /// [1/s], >= 0. Baumgarte's stabilisation of the closed contacts in every phase's flow
   /// (FlowWorkspace::constraint_stabilisation): zeta_n' + 2 a zeta_n + a^2 h_n = 0 and, sticking,
   /// zeta_t' + a zeta_t = 0, a = contact_stabilisation. The phase's start imposes h_n = zeta_n = 0
