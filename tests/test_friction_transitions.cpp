@@ -225,6 +225,7 @@ TEST(Release, AnInputJumpReleasesAtTheBreakpoint) {
   ASSERT_EQ(traj.events.size(), 1u);
   EXPECT_EQ(traj.events[0].guards().at(0).kind, GuardKind::Release);
   EXPECT_EQ(traj.events[0].t, 0.5);
+  EXPECT_TRUE(traj.events[0].input_jump);
   EXPECT_FALSE(traj.segments.back().mode[0].closed());
   EXPECT_NEAR(traj.final_state()[1], g / 8.0, 1e-10);
   EXPECT_NEAR(traj.final_state()[3], g / 2.0, 1e-10);

@@ -301,6 +301,7 @@ TEST(JumpGains, AReleaseByAnInputJumpHasAFixedTime) {
   ref.trajectory = sim.run(x0, 0.0, 0.8, law);
   ASSERT_EQ(ref.trajectory.events.size(), 1u);
   ASSERT_EQ(ref.trajectory.events[0].t, 0.5);
+  EXPECT_TRUE(ref.trajectory.events[0].input_jump);
   JumpGainSolver<scenes::PointMass> solver(ref.scene);
   const auto& gain = solver.compute(ref.trajectory.events[0], ref.trajectory.input);
   EXPECT_TRUE(gain.info[0].immediate);
@@ -311,7 +312,7 @@ TEST(JumpGains, AReleaseByAnInputJumpHasAFixedTime) {
   EXPECT_TRUE(kinds.count("release"));
   // No activation orders at a fixed time: the conewise gain refuses the event and says why.
   expect_invalid([&] { ConewiseJumpGain<scenes::PointMass> c(ref.scene, ref.trajectory.events[0], ref.trajectory.input); },
-                 {"where the input jumps", "JumpGainSolver"});
+                 {"fired by a jump of the input", "JumpGainSolver"});
 }
 
 // Without the input-rate term the release of Example 3 has gamma_dot = Dgamma_x f = 0 (lambda_n

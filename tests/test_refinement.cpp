@@ -539,34 +539,51 @@ TEST(ScheduleRefinement, AReleaseFromStickLeavesNoTangentialForceAndResimulatesI
                  {"window must be >= 0"});
 }
 
-// RELEASE AT AN INPUT JUMP (RefinementOptions::releases_at_input_jumps): PushAndLift's stance
-// need not unload the mass under its last input; the flight's first input lifts it (u_z >= m g).
-// The optimum then keeps pushing sideways up to the release with lambda_n > 0 there, costs less
-// than the release by the guard, and the event-driven re-simulation finds the release at the
-// input's breakpoint, on time to the last bit.
+// RELEASE AT AN INPUT JUMP (RefinementOptions::releases_at_input_jumps). The point mass sticks on
+// the table, then lifts off; the cost 10 (u_x - 2)^2 + (u_z - 10)^2 wants a sideways push, which
+// the friction cone allows in the stance only while the table carries the mass:
+// |u_x| <= mu (m g - u_z). The stance's optimum is lambda_n = (2 w mu - (10 - m g)) / (w mu^2 + 1)
+// = 2.72 N (w = 10, mu = 0.2), u_x = mu lambda_n. By the guard, lambda_n(x-, u-) = 0 makes the
+// stance's last element unload the mass and stop pushing; at an input jump it pushes up to the
+// release, the flight's first input lifts the mass (u_z >= m g), and the event-driven
+// re-simulation finds the release at the input's breakpoint, on time to the last bit.
+struct SidewaysPushThenLift {
+  template <class T>
+  T running_cost(const VecT<T, 4>&, const VecT<T, 2>& u) const {
+    return T(10.0) * (u[0] - T(2.0)) * (u[0] - T(2.0)) + (u[1] - T(10.0)) * (u[1] - T(10.0));
+  }
+};
+
 TEST(ScheduleRefinement, AReleaseAtAnInputJumpKeepsTheStanceLoadedToItsEnd) {
   const ScheduleGuess<PointMass> g = push_and_lift_guess();
   const OcpHorizon<PointMass> h = from_rest_for_one_second();
-  const RefinementResult<PointMass> by_guard = refine_schedule(frictional_mass(), PushAndLift{}, h, g, push_and_lift_options());
+  const RefinementResult<PointMass> by_guard =
+      refine_schedule(frictional_mass(), SidewaysPushThenLift{}, h, g, push_and_lift_options());
   RefinementOptions o = push_and_lift_options();
   o.releases_at_input_jumps = true;
-  const RefinementResult<PointMass> r = refine_schedule(frictional_mass(), PushAndLift{}, h, g, o);
+  const RefinementResult<PointMass> r = refine_schedule(frictional_mass(), SidewaysPushThenLift{}, h, g, o);
   ASSERT_TRUE(by_guard.converged) << by_guard.message;
   ASSERT_TRUE(r.converged) << r.message;
   EXPECT_LE(r.mode_validity_violation, 1e-9);
-  EXPECT_LT(r.objective, by_guard.objective - 1.0) << "the jump frees the push at the release";
-  const double t_release = r.event_times[0];
   const scenes::PointMassParameters par = scenes::PointMassToTheTarget::parameters();
+  const double w = 10.0, lambda_opt = (2 * w * par.mu - (10.0 - par.mass * par.gravity)) / (w * par.mu * par.mu + 1);
+  const double t_release = r.event_times[0];
   const Vec<4> x_minus = r.trajectory.state(0, t_release);
   const Vec<2> u_minus = r.trajectory.input(t_release - 1e-9, x_minus, r.schedule.phases[0]);
   const Vec<2> u_plus = r.trajectory.input(t_release + 1e-9, x_minus, r.schedule.phases[1]);
-  EXPECT_GT(par.mass * par.gravity - u_minus[1], 0.5) << "lambda_n before the jump";
-  EXPECT_GE(u_plus[1], par.mass * par.gravity - 1e-6) << "the flight's first input lifts the mass";
-  EXPECT_GT(u_minus[0], 0.5) << "the sideways push is kept up to the release";
+  EXPECT_NEAR(par.mass * par.gravity - u_minus[1], lambda_opt, 1e-6) << "lambda_n before the jump";
+  EXPECT_NEAR(u_minus[0], par.mu * lambda_opt, 1e-6) << "the sideways push up to the release";
+  EXPECT_NEAR(u_plus[1], 10.0, 1e-6) << "the flight's first input lifts the mass";
+  const Vec<2> u_guard = by_guard.trajectory.input(by_guard.event_times[0] - 1e-9, x_minus, r.schedule.phases[0]);
+  EXPECT_NEAR(u_guard[1], par.mass * par.gravity, 1e-6) << "by the guard the last element unloads the mass";
+  EXPECT_LT(r.objective, by_guard.objective - 0.1);
   EXPECT_LE(r.phase_resim_max_error, 1e-8);
   EXPECT_TRUE(r.phase_resimulation[0].event_guards_match) << r.phase_resimulation[0].note;
   EXPECT_TRUE(r.phase_resimulation[0].next_mode_matches);
   EXPECT_LE(std::abs(r.phase_resimulation[0].event_time_error), 1e-12);
+  // A fixed-time event for the jump gains (Event::input_jump); by the guard, a crossing.
+  EXPECT_TRUE(r.trajectory.events[0].input_jump);
+  EXPECT_FALSE(by_guard.trajectory.events[0].input_jump);
 }
 
 // RELEASE CONSISTENCY (refinement_nlp.hpp): the input may jump at the release, so the flight's
@@ -617,16 +634,18 @@ TEST(PhaseResimulation, ASlipOnsetAtTheReleaseOfTheSameContactIsNotAnotherEvent)
     return run;
   };
   PhaseResimulation both;
-  detail::judge_boundary(run_with({{Guard{0, GuardKind::SlipOnset}}, {Guard{0, GuardKind::Release}}}, flight), schedule,
+  detail::judge_boundary(frictional_mass(), run_with({{Guard{0, GuardKind::SlipOnset}}, {Guard{0, GuardKind::Release}}}, flight), schedule,
                          flight, x, 0, 0.5, 1e-9, both);
   EXPECT_TRUE(both.event_guards_match) << both.note;
   EXPECT_TRUE(both.next_mode_matches);
   EXPECT_EQ(both.x_plus_error, 0.0);
   PhaseResimulation slip_only;
-  detail::judge_boundary(run_with({{Guard{0, GuardKind::SlipOnset}}}, slip), schedule, flight, x, 0, 0.5, 1e-9, slip_only);
+  detail::judge_boundary(frictional_mass(), run_with({{Guard{0, GuardKind::SlipOnset}}}, slip), schedule, flight, x, 0, 0.5, 1e-9, slip_only);
   EXPECT_FALSE(slip_only.event_guards_match);
   EXPECT_FALSE(slip_only.next_mode_matches);
   EXPECT_NE(slip_only.note.find("other guards (slip-onset 0; the schedule's: release 0)"), std::string::npos) << slip_only.note;
+  EXPECT_NE(slip_only.note.find("after it the simulator is in another mode (table:slip"), std::string::npos) << slip_only.note;
+  EXPECT_NE(slip_only.note.find("; the schedule's: table:open)"), std::string::npos) << slip_only.note;
 }
 
 /// A push the table's friction cannot hold: the cost wants u = (20, 0) N throughout while the

@@ -98,12 +98,9 @@ ConewiseJumpGain<S>::ConewiseJumpGain(const S& scene, const Event<S>& event, con
   root_ = std::make_unique<Node>();
   root_->x = event.transitions.front().x_before;
   root_->mode = event.transitions.front().mode_before;
-  {  // an event at an input jump has a fixed time: no activation orders (jump_gain.hpp)
-    const GuardCrossing<S>& c = gains_->crossing(law, event.t, root_->x, root_->mode, guards_.front());
-    SALTUS_REQUIRE(!(c.gamma < -options.gains.chain_time_tolerance * c.rate_scale), "conewise gain: the event at t = ",
-                   event.t, " happens where the input jumps (its first guard is ", c.gamma,
-                   " < 0 at the event, not crossing): its time is fixed and its gain linear (JumpGainSolver)");
-  }
+  SALTUS_REQUIRE(!event.input_jump, "conewise gain: the event at t = ", event.t,
+                 " was fired by a jump of the input (Event::input_jump): its time is fixed and its gain linear "
+                 "(JumpGainSolver)");
   const auto start = std::chrono::steady_clock::now();
   classify(*root_);
   // Every guard of the event crosses at x- (it fired): none may be dropped at the root.

@@ -50,12 +50,13 @@
 //    the first mode to the last. Using C.37 with gamma_dot_k there would be wrong (the guard does
 //    not cross zero, it is below it).
 // An event without guards (the initial impact at t0 of a simulation started in contact) has a
-// fixed time: dt = 0, G_z = Dg, G_v = 0. So does an event whose first guard is already clearly
-// below zero at the event (under the input after it): a release where a piecewise-constant input
-// jumps at a breakpoint (the simulator fires it there, Simulator::run). The guard does not cross
-// zero, it jumps below it with the input, and nearby motions release at the same instant while
-// the force before the jump stays positive: dt = 0 (C.22 does not apply; its gamma_dot would
-// divide a value that is not a crossing's).
+// fixed time: dt = 0, G_z = Dg, G_v = 0. So does an event fired by an input jump
+// (Event::input_jump): a release where a piecewise-constant input jumps at a breakpoint so that
+// the contact would pull under the input after it (the simulator fires it there, Simulator::run).
+// The guard does not cross zero, it jumps below it with the input, and nearby motions release at
+// the same instant while the force before the jump stays positive: dt = 0 (C.22 does not apply;
+// its gamma_dot would divide a value that is not a crossing's). An event located by its crossing
+// a round-off before a jump is a crossing, as before.
 //
 // Coincident guards. A transition fired by several guards at once is conewise in general
 // (conewise_gain.hpp). When the guards' first-order crossing-time shifts are the same linear

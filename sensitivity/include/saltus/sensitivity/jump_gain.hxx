@@ -56,10 +56,11 @@ auto JumpGainSolver<S>::compute(const Event<S>& event, const InputLaw<S>& law, c
       info.gamma = c.gamma;
       info.gamma_dot = c.gamma_dot;
       info.rate_scale = c.rate_scale;
-      // Clearly below zero: the transition does not move with the state. After another one it is
-      // immediate (dt_k = dt_{k-1}); as the event's first, its time is that of an input jump (a
-      // release at a breakpoint: the guard jumped below zero with the input), dt = 0.
-      info.immediate = info.gamma < -options_.chain_time_tolerance * info.rate_scale;
+      // The first transition of an event fired by an input jump (Event::input_jump) has the
+      // breakpoint's time, dt = 0; a later one clearly below zero when the previous one ends is
+      // immediate (dt_k = dt_{k-1}). Either does not move with the state.
+      info.immediate = first_guarded ? event.input_jump
+                                     : info.gamma < -options_.chain_time_tolerance * info.rate_scale;
       if (!info.immediate && tr.guards.size() != 1) {
         // Guards that fire together in every nearby motion (their first-order crossing-time
         // shifts are the same function of (z-, v), see "Coincident guards" in jump_gain.hpp)

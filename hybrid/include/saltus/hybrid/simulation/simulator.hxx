@@ -142,6 +142,7 @@ HybridTrajectory<S> Simulator<S>::run_impl(const State& x0, std::optional<Mode<n
     const long rhs_before = sys.rhs_evaluations();
     const State x_begin = x;
     SegmentEndOf<S> end;
+    std::vector<Guard> jumped;  // force guards made due by an input jump at a breakpoint
     while (true) {
       // Integrate up to the next breakpoint of the input, or t_final.
       double t_stop = t_final;
@@ -162,8 +163,13 @@ HybridTrajectory<S> Simulator<S>::run_impl(const State& x0, std::optional<Mode<n
       if (end.at_guard || t_stop == t_final) break;
       // At a breakpoint the input may jump so that the mode is no longer consistent under the
       // input after it (a thrust that outgrows the weight: lambda_n < 0 at once, with no root
-      // inside a step). A guard due there under that input is an event at the breakpoint.
-      if (!transitions_.guards_due(sys, t, x).empty()) {
+      // inside a step). A force guard (release, slip onset) due under that input is an event at
+      // the breakpoint; the state's guards (gaps, slip velocities) do not jump and are left to
+      // the integrator's location (two corners landing together just after a breakpoint stay one
+      // simultaneous event).
+      jumped = transitions_.guards_due(sys, t, x);
+      std::erase_if(jumped, [](const Guard& g) { return g.kind == GuardKind::Touchdown || g.kind == GuardKind::Stop; });
+      if (!jumped.empty()) {
         end.at_guard = true;
         break;
       }
@@ -176,10 +182,12 @@ HybridTrajectory<S> Simulator<S>::run_impl(const State& x0, std::optional<Mode<n
 
     // A segmented law sees the post-event segment while the event is resolved (input_law.hpp).
     if (segment) *segment = static_cast<int>(traj.segments.size());
-    std::vector<Guard> fired;
+    const bool input_jump = !jumped.empty();
+    std::vector<Guard> fired = std::move(jumped);
     for (int k = 0; k < sys.guards().count; ++k)
       if (end.fired[k]) fired.push_back(sys.guards()[k]);
     Event<S> ev = transitions_.resolve(sys, t, x, mode, fired);
+    ev.input_jump = input_jump;
     for (const auto& tr : ev.transitions) {
       if (tr.selection_solutions > 1) ++traj.statistics.ambiguous_selections;
       if (tr.sliding_contact >= 0) ++traj.statistics.sliding_events;

@@ -224,9 +224,21 @@ void TransitionResolver<S>::apply_impact(ModeSystem<S>& sys, double t, State& x,
     if (options_.rest_velocity > 0 && -kin.contacts[g.contact].zeta_n < options_.rest_velocity)
       inelastic[g.contact] = true;
   }
+  const double approach = -velocity_tolerance(x);  // before the impulse
   const auto& r = impact_->solve(x, in_problem, inelastic);
   tr.impact = r.impulse_mode.any();
   tr.impulse_mode = r.impulse_mode;
+  // An open contact within the gap tolerance that takes an impulse touched down at this instant
+  // too (a corner that reached the surface a round-off before a breakpoint, where the integrator
+  // restarts, so that its crossing was not located): the transition names its guard, so that the
+  // event is the simultaneous one it physically is (its gain conewise, not another contact's).
+  for (int i = 0; i < nc; ++i) {
+    const bool named = std::any_of(tr.guards.begin(), tr.guards.end(), [&](const Guard& g) { return g.contact == i; });
+    if (mode[i].closed() || named || r.impulse_mode[i].role == ImpulseRole::None || !(kin.contacts[i].zeta_n < approach))
+      continue;
+    const auto after = std::find_if(tr.guards.begin(), tr.guards.end(), [&](const Guard& g) { return g.contact > i; });
+    tr.guards.insert(after, Guard{i, GuardKind::Touchdown});
+  }
   tr.impulse = r.impulse;
   x = r.x_plus;
   // Contacts left at zero normal velocity: choose their mode at the acceleration level.

@@ -63,6 +63,10 @@ struct Event {
   VecT<double, 2 * S::nq> x_minus, x_plus;
   Mode<S::nc> mode_before, mode_after;
   std::vector<Transition<S>> transitions;  ///< in the order applied (a chain has several)
+  /// Fired by a jump of the input at a breakpoint (SimulationOptions::breakpoints: a force guard,
+  /// release or slip onset, due under the input after it), not by a guard crossing zero: its time
+  /// is the breakpoint's whatever the state (a fixed-time event for the jump gains).
+  bool input_jump = false;
 
   bool impact() const {
     for (const auto& tr : transitions)

@@ -125,7 +125,7 @@ inline std::set<std::pair<int, int>> without_friction_guards_of_released(std::se
 /// without_friction_guards_of_released), the mode after them against phase p + 1's, and the state
 /// after them (x+ of the last one, else the state at t1) against the reference's x+.
 template <Scene S>
-void judge_boundary(const HybridTrajectory<S>& run, const ModeSchedule<S::nc>& schedule, const Mode<S::nc>& next,
+void judge_boundary(const S& scene, const HybridTrajectory<S>& run, const ModeSchedule<S::nc>& schedule, const Mode<S::nc>& next,
                     const VecT<double, 2 * S::nq>& x_plus, int p, double t1, double tolerance, PhaseResimulation& r) {
   std::set<std::pair<int, int>> found;
   int last_at_boundary = -1;
@@ -144,10 +144,9 @@ void judge_boundary(const HybridTrajectory<S>& run, const ModeSchedule<S::nc>& s
                          without_friction_guards_of_released(guard_set(schedule.events[static_cast<std::size_t>(p)].guards));
   // the mode after the boundary's events: the event's own (a run that ends at the event has no
   // segment after it), else the mode of the segment at t1
-  r.next_mode_matches =
-      same_branches(last_at_boundary >= 0 ? run.events[static_cast<std::size_t>(last_at_boundary)].mode_after
-                                          : run.segments[static_cast<std::size_t>(run.segment_at(t1))].mode,
-                    next);
+  const Mode<S::nc>& simulated_next = last_at_boundary >= 0 ? run.events[static_cast<std::size_t>(last_at_boundary)].mode_after
+                                                             : run.segments[static_cast<std::size_t>(run.segment_at(t1))].mode;
+  r.next_mode_matches = same_branches(simulated_next, next);
   std::ostringstream why;
   if (last_at_boundary < 0) {
     why << "no event within " << tolerance << " s of the phase's end";
@@ -166,7 +165,9 @@ void judge_boundary(const HybridTrajectory<S>& run, const ModeSchedule<S::nc>& s
     why << "the simulator's event at the phase's end has other guards (" << list(found) << "; the schedule's: "
         << list(guard_set(schedule.events[static_cast<std::size_t>(p)].guards)) << ")";
   }
-  if (!r.next_mode_matches) why << (why.tellp() > 0 ? ", " : "") << "after it the simulator is in another mode";
+  if (!r.next_mode_matches)
+    why << (why.tellp() > 0 ? ", " : "") << "after it the simulator is in another mode (" << describe(scene, simulated_next)
+        << "; the schedule's: " << describe(scene, next) << ")";
   if (why.tellp() > 0) r.note += std::string(r.note.empty() ? "" : "; ") + why.str();
 }
 
@@ -239,7 +240,7 @@ PhaseResimulation resimulate_phase(const S& scene, const HybridTrajectory<S>& tr
     if (!final_window) continue;
     if (last) r.event_time_error = std::numeric_limits<double>::quiet_NaN();
     else
-      judge_boundary(run, schedule, traj.segments[static_cast<std::size_t>(p + 1)].mode,
+      judge_boundary(scene, run, schedule, traj.segments[static_cast<std::size_t>(p + 1)].mode,
                      traj.events[static_cast<std::size_t>(p)].x_plus, p, t1, tolerance, r);
   }
   if (!unplanned.empty()) r.note = unplanned_note(unplanned) + (r.note.empty() ? "" : "; " + r.note);

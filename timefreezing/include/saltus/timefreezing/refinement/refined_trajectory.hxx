@@ -8,6 +8,9 @@
 
 #include <Eigen/LU>
 
+#include <algorithm>
+#include <cmath>
+#include <limits>
 #include <memory>
 
 namespace saltus::timefreezing {
@@ -70,6 +73,24 @@ InputLaw<S> refined_input_law(const ScheduleRefinementNlp<S, Ocp>& nlp, const Ei
   };
 }
 
+/// Whether the refined event ev is a release at an input jump (Event::input_jump: a fixed-time
+/// event for the jump gains): RefinementOptions::releases_at_input_jumps, and a released contact
+/// still carries a normal force under the ending phase's last input, lambda_n(x-, u-) > 1e-6
+/// max(1, the largest |lambda_n| there). A release whose force reached zero is a crossing.
+template <Scene S, class Ocp>
+bool released_by_input_jump(const S& scene, const ScheduleRefinementNlp<S, Ocp>& nlp, const HybridTrajectory<S>& traj,
+                            const Event<S>& ev) {
+  if (!nlp.options().releases_at_input_jumps || ev.impact()) return false;
+  const auto u_minus = traj.input(std::nextafter(ev.t, -std::numeric_limits<double>::infinity()), ev.x_minus, ev.mode_before);
+  FlowWorkspace<S> ws;
+  evaluate_flow(scene, ev.mode_before, ev.x_minus, u_minus, ws);
+  double scale = 1.0;
+  for (int i = 0; i < S::nc; ++i) scale = std::max(scale, std::abs(ws.force[i].normal));
+  for (const Guard& g : ev.guards())
+    if (g.kind == GuardKind::Release && ws.force[g.contact].normal > 1e-6 * scale) return true;
+  return false;
+}
+
 /// Assembles RefinementResult::trajectory from a solution x of nlp (refinement.hpp).
 template <Scene S, class Ocp>
 HybridTrajectory<S> refined_trajectory(const S& scene, const ScheduleRefinementNlp<S, Ocp>& nlp,
@@ -111,6 +132,7 @@ HybridTrajectory<S> refined_trajectory(const S& scene, const ScheduleRefinementN
       tr.impulse = nlp.impulses(x, p);
     }
     ev.transitions.push_back(tr);
+    ev.input_jump = released_by_input_jump(scene, nlp, traj, ev);
     traj.events.push_back(std::move(ev));
   }
   traj.set_final_state(x.template segment<nx>(nlp.phase_end_index(nlp.phase_count() - 1)));

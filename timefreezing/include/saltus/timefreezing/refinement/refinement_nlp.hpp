@@ -228,6 +228,7 @@ class ScheduleRefinementNlp final : public Mpcc {
   int phase_end_index(int p) const { return stage_index(first_element(p) + elements_in(p) - 1, tableau_.stages - 1); }
   const ModeSchedule<nc>& schedule() const { return schedule_; }
   const Ocp& ocp() const { return ocp_; }
+  const RefinementOptions& options() const { return options_; }
   const S& scene() const { return scene_; }
   const RadauIIA& tableau() const { return tableau_; }
   const std::vector<ImpliedRow>& implied_rows() const { return implied_; }
