@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """Figures of the main job's report (examples/demo.sh): PNGs made with matplotlib and one offline
-page, report/index.html, that shows them with a caption each and the flagship's summary table.
+page, report/index.html, that shows them with a caption each and the flagships' summary tables.
 
     python3 examples/plot_report.py [REPORT_DIR] [--scene NAME ...]     (default: report/)
 
@@ -11,6 +11,7 @@ Reads what the example programs write into REPORT_DIR (trajectory_io.hpp's forma
   <scene>_forces.csv   the contact forces along it (contact_forces_csv.hpp): t, segment, <contact>_n,
                 <contact>_t0..
   plank_box_ocp.json   the plank-box pipeline's report (discovery, refinement, analysis)
+  hopper_ocp.json      the hopper-over-three-holes pipeline's report (the same stages)
   hopper_gains.json    the hopper hop's jump gains per event
 and writes REPORT_DIR/figures/*.png and REPORT_DIR/index.html. The scenes are the main job's unless
 --scene names others (a user's own trajectory files, written by write_trajectory_files and
@@ -30,7 +31,8 @@ import matplotlib
 matplotlib.use("Agg")  # files only, no display
 import matplotlib.pyplot as plt  # noqa: E402
 
-SCENES = ["bouncing_ball", "guiding_example", "hopper", "spatial_box", "plank_box", "plank_box_refined"]
+SCENES = ["bouncing_ball", "guiding_example", "hopper", "spatial_box", "plank_box", "plank_box_refined",
+          "hopper_refined"]
 # scenes/plank_box.hpp: box 0.3 x 0.1 m, plank 1 m hinged at its left end (origin).
 BOX_LENGTH, BOX_HEIGHT, PLANK_LENGTH = 0.3, 0.1, 1.0
 # scenes/hopper.hpp: thigh and shank 0.2 m; scenes/hopper_holes.hpp: holes at 0.5, 1.5, 2.5.
@@ -201,8 +203,8 @@ def leg(s):
 
 
 def plot_hopper(report, figures, columns, events, holes=False):
-    """Hip, knee and foot paths, the leg drawn at the events."""
-    fig, ax = plt.subplots(figsize=(8, 4.5))
+    """Hip, knee and foot paths, the leg drawn at the events (holes: the hopper over three holes)."""
+    fig, ax = plt.subplots(figsize=(12 if holes else 8, 4.5))
     samples = [sample_at(columns, time) for time in columns["t"]]
     paths = list(zip(*[leg(s) for s in samples]))
     for path, name in zip(paths, ["hip", "knee", "foot"]):
@@ -210,8 +212,9 @@ def plot_hopper(report, figures, columns, events, holes=False):
     for k, e in enumerate(events):
         hip, knee, foot = leg(sample_at(columns, e["t"]))
         ax.plot([hip[0], knee[0], foot[0]], [hip[1], knee[1], foot[1]], "k-o", ms=3, lw=1.5)
-        ax.annotate(f'{e["t"]:.3f} s: {event_label(e)}', hip, fontsize=7, xytext=(8, 8 + 10 * k),
-                    textcoords="offset points", arrowprops={"arrowstyle": "-", "color": "0.6"})
+        if not holes:  # a dozen events over 3 m: the leg drawings alone, the times are in the states figure
+            ax.annotate(f'{e["t"]:.3f} s: {event_label(e)}', hip, fontsize=7, xytext=(8, 8 + 10 * k),
+                        textcoords="offset points", arrowprops={"arrowstyle": "-", "color": "0.6"})
     xmin = min(p[0] for p in paths[2]) - 0.1
     xmax = max(p[0] for p in paths[0]) + 0.1
     ax.axhline(0.0, color="0.3", lw=1)
@@ -225,6 +228,12 @@ def plot_hopper(report, figures, columns, events, holes=False):
     ax.set_xlabel("x [m]")
     ax.set_ylabel("z [m]")
     ax.legend(fontsize=7, loc="upper right")
+    if holes:
+        ax.set_title("hopper over three holes, refined reference: hip, knee and foot paths; the leg at each event")
+        return save(fig, figures, "hopper_refined_motion.png"), (
+            "hopper over three holes (T = 2.5 s, from rest at x = 0 to rest at x = 3): the refined optimal reference "
+            "(discovery by the time-freezing homotopy, then the mode-schedule refinement); hip, knee and foot paths, "
+            "the leg drawn at every touchdown and release, the holes shaded.")
     ax.set_title("hopper: hip, knee and foot paths; the leg at each event")
     return save(fig, figures, "hopper_motion.png"), "hopper: one hop (touchdown, stance, push-off); hip, knee and foot paths, the leg drawn at each event."
 
@@ -271,6 +280,37 @@ def plot_plank_box_analysis(report, figures):
         if made:
             out.append(made)
     return out, d
+
+
+def plot_hopper_analysis(report, figures):
+    """The refined hopper reference's jump gains and its Monte Carlo runs (hopper_ocp.json)."""
+    path = os.path.join(report, "hopper_ocp.json")
+    if not os.path.exists(path):
+        return [], None
+    d = load_json(path)
+    a = d.get("analysis")
+    if not a or "events" not in a:
+        return [], d
+    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(10, 3.4), gridspec_kw={"width_ratios": [2, 1]})
+    labels = [f'{e["t"]:.3f}' for e in a["events"]]
+    norms = [e.get("saltation_norm", float("nan")) for e in a["events"]]
+    ax1.bar(labels, norms, color="tab:blue")
+    ax1.set_yscale("log")
+    ax1.set_xlabel("event time [s] (releases and touchdowns in turn)")
+    ax1.set_ylabel("|G_z| (saltation matrix)")
+    ax1.tick_params(axis="x", labelsize=7, rotation=45)
+    ax1.set_title("jump gain per event")
+    m = a.get("monte_carlo", {})
+    keys = [k for k in ("runs", "kept_event_sequence", "shrank", "failed") if k in m]
+    ax2.bar(keys, [m[k] for k in keys], color="tab:green")
+    ax2.set_title(f'{a.get("verdict", "")}, a(T) = {a.get("upper_bound", float("nan")):.3g}; '
+                  f'{"agrees" if a.get("agree") else "does not agree"}', fontsize=8)
+    ax2.tick_params(axis="x", labelsize=7)
+    caption = ("hopper over three holes, refined reference: the norm of each event's saltation matrix (about 1 at the "
+               "releases, 30 to 1e5 at the touchdowns, where the stance's contact force meets the flight's free fall), "
+               "and the LQR tracking design's Monte Carlo runs (kept the event sequence, shrank, failed) beside the "
+               "stability check's verdict.")
+    return [(save(fig, figures, "hopper_refined_analysis.png"), caption)], d
 
 
 def finish(fig, ax, figures, name, xlabel, ylabel):
@@ -346,15 +386,17 @@ def summary_rows(d):
     return [(k, v) for k, v in rows if v is not None]
 
 
-def write_index(report, figures_made, missing, table):
+def write_index(report, figures_made, missing, tables):
     def fmt(v):
         return f"{v:.4g}" if isinstance(v, float) else html.escape(str(v))
     parts = ["<!DOCTYPE html><html><head><meta charset='utf-8'><title>Saltus report</title>",
              "<style>body{font-family:sans-serif;max-width:60em;margin:auto}figure{margin:1.5em 0}"
              "img{max-width:100%}td,th{padding:2px 8px;border-bottom:1px solid #ddd;text-align:left}</style>",
              "</head><body><h1>Saltus: the main job's report</h1>"]
-    if table:
-        parts.append("<h2>Plank-box flat landing: discovery, refinement, analysis</h2><table>")
+    for title, table in tables:
+        if not table:
+            continue
+        parts.append(f"<h2>{html.escape(title)}: discovery, refinement, analysis</h2><table>")
         parts += [f"<tr><th>{html.escape(k)}</th><td>{fmt(v)}</td></tr>" for k, v in table]
         parts.append("</table>")
     parts.append("<h2>Figures</h2>")
@@ -397,6 +439,8 @@ def main(argv):
             made.append(plot_plank_box(report, figures, scene, columns, events))
         if scene == "hopper":
             made.append(plot_hopper(report, figures, columns, events))
+        if scene == "hopper_refined":
+            made.append(plot_hopper(report, figures, columns, events, holes=True))
     gains = plot_hopper_gains(report, figures)
     if gains:
         made.append(gains)
@@ -404,7 +448,10 @@ def main(argv):
     made += analysis
     if plank is None:
         missing.append("plank_box_ocp.json")
-    write_index(report, made, missing, summary_rows(plank))
+    hopper_analysis, hopper = plot_hopper_analysis(report, figures)
+    made += hopper_analysis
+    write_index(report, made, missing, [("Plank-box flat landing", summary_rows(plank)),
+                                        ("Hopper over three holes", summary_rows(hopper))])
     for name, _ in made:
         if not os.path.getsize(os.path.join(figures, name)) > 0:
             raise SystemExit(f"plot_report: {name} is empty")
