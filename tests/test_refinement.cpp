@@ -584,6 +584,16 @@ TEST(ScheduleRefinement, AReleaseAtAnInputJumpKeepsTheStanceLoadedToItsEnd) {
   // A fixed-time event for the jump gains (Event::input_jump); by the guard, a crossing.
   EXPECT_TRUE(r.trajectory.events[0].input_jump);
   EXPECT_FALSE(by_guard.trajectory.events[0].input_jump);
+  // With releases at input jumps the stance load is flat, lambda_n >= stance_load up to the release
+  // (by the guard a hump that falls to 0 there): 3 N is above the free optimum's 2.72 N, so the
+  // whole stance, its end included, carries 3 N.
+  o.stance_load = 3.0;
+  const RefinementResult<PointMass> loaded = refine_schedule(frictional_mass(), SidewaysPushThenLift{}, h, g, o);
+  ASSERT_TRUE(loaded.converged) << loaded.message;
+  const double t_loaded = loaded.event_times[0];
+  const Vec<2> u_loaded = loaded.trajectory.input(t_loaded - 1e-9, loaded.trajectory.state(0, t_loaded), loaded.schedule.phases[0]);
+  EXPECT_NEAR(par.mass * par.gravity - u_loaded[1], 3.0, 1e-6);
+  EXPECT_NEAR(u_loaded[0], par.mu * 3.0, 1e-6);
 }
 
 // RELEASE CONSISTENCY (refinement_nlp.hpp): the input may jump at the release, so the flight's

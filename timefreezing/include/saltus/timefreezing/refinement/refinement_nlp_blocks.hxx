@@ -80,12 +80,16 @@ bool ScheduleRefinementNlp<S, Ocp>::released_at_start(int p, int i) const {
 
 /// The lower bound of closed contact i's lambda_n in phase p at phase fraction theta [N]:
 /// RefinementOptions::normal_force_margin when the schedule keeps the contact closed past the
-/// phase's end, RefinementOptions::stance_load 4 theta (1 - theta) when it releases it there.
+/// phase's end, RefinementOptions::stance_load 4 theta (1 - theta) when it releases it there (by the
+/// guard lambda_n = 0), stance_load itself when it releases it at an input jump
+/// (RefinementOptions::releases_at_input_jumps: the force need not fall to 0 at the end, and a
+/// stance that starts at a touchdown with lambda_n = 0 may open again at once under its input).
 template <Scene S, class Ocp>
 double ScheduleRefinementNlp<S, Ocp>::normal_margin(int p, int i, double theta) const {
   const std::size_t next = static_cast<std::size_t>(p) + 1;
   const bool kept = next == schedule_.phases.size() || schedule_.phases[next][i].closed();
-  return kept ? options_.normal_force_margin : options_.stance_load * 4.0 * theta * (1.0 - theta);
+  if (kept) return options_.normal_force_margin;
+  return options_.releases_at_input_jumps ? options_.stance_load : options_.stance_load * 4.0 * theta * (1.0 - theta);
 }
 
 template <Scene S, class Ocp>

@@ -138,6 +138,9 @@ struct RefinementOptions {
   /// before a release may be a grazing one, its foot barely loaded (the hopper's stance before its
   /// last flight: lambda_n 0.13 N 5 ms before the release against the body's weight of 60 N), whose
   /// friction cone the event-driven re-simulation leaves between stage points (docs/refinement.md).
+  /// With releases_at_input_jumps the row is lambda_n - stance_load >= 0 over the whole phase (the
+  /// force need not fall to 0 at a release by an input jump; a stance that starts at a touchdown
+  /// with lambda_n = 0 may open again at once in the simulator, measured on the hopper).
   /// mode_validity_violation reads the rows as imposed. 0: none.
   double stance_load = 0.0;
   /// [m], >= 0. An open contact's row inside its phase is h_n - flight_clearance b(s) >= 0, s in
