@@ -36,7 +36,7 @@ auto JumpGainSolver<S>::compute(const Event<S>& event, const InputLaw<S>& law, c
   Zv_ = incoming_v;
   dz_.setZero();
   dv_.setZero();
-  g.dt_dz.setZero();  // stays 0 for a fixed-time event (no guard, or one already below zero)
+  g.dt_dz.setZero();  // stays 0 for a fixed-time event (no guard, or fired by an input jump)
   g.dt_dv.setZero();
   bool first_guarded = true;
   for (std::size_t k = 0; k < event.transitions.size(); ++k) {
