@@ -134,4 +134,26 @@ python=/usr/bin/python3
 [ -x "$python" ] || python=python3
 "$python" "$here/examples/plot_report.py" "$SALTUS_REPORT_DIR"
 echo
+echo "== summary =="
+python3 - "$SALTUS_REPORT_DIR" <<'PY'
+import json, os, sys
+rows = [("scene", "stage", "objective", "events", "verdict", "Monte Carlo", "seconds")]
+for scene, name in (("plank_box_ocp.json", "plank-box flat landing"), ("hopper_ocp.json", "hopper over three holes")):
+    path = os.path.join(sys.argv[1], scene)
+    if not os.path.exists(path):
+        rows.append((name, "no report", "", "", "", "", ""))
+        continue
+    d = json.load(open(path))
+    r, a = d.get("refinement") or {}, d.get("analysis") or {}
+    m = a.get("monte_carlo") or {}
+    events = len((r.get("event_times") or [])) if r else len(d.get("events", []))
+    mc = f'{m.get("kept_event_sequence", "?")}/{m.get("runs", "?")} kept, {"agree" if a.get("agree") else "no agreement"}' if m else ""
+    seconds = (d.get("discovery_seconds") or 0) + (r.get("refinement_seconds") or 0)
+    rows.append((name, d.get("stage", "")[:40], f'{d.get("objective", float("nan")):.4g}', str(events),
+                 a.get("verdict", ""), mc, f"{seconds:.0f} (discovery + refinement)"))
+widths = [max(len(str(row[k])) for row in rows) for k in range(len(rows[0]))]
+for row in rows:
+    print("  ".join(str(v).ljust(w) for v, w in zip(row, widths)))
+PY
+echo
 echo "main job done in $(( $(date +%s) - start )) s; report files in $SALTUS_REPORT_DIR"
