@@ -38,6 +38,9 @@ void bind_simulation(py::module_& m) {
   py::class_<PyEvent>(m, "Event", "An event: the guards that fired at t [s], the state and mode before and after.")
       .def_readonly("t", &PyEvent::t)
       .def_readonly("impact", &PyEvent::impact, "an impulse was applied (v jumps)")
+      .def_readonly("input_jump", &PyEvent::input_jump,
+                    "a jump of the input at a breakpoint fired the event (a release or slip onset whose time is "
+                    "fixed, not a crossing: its jump gain is linear with dt = 0)")
       .def_readonly("guards", &PyEvent::guards,
                     "list of (contact index, contact name, kind): kind 'touchdown', 'release', 'stop' or 'slip-onset'")
       .def_readonly("mode_before", &PyEvent::mode_before)

@@ -120,6 +120,25 @@ def test_python_input_law_matches_the_cpp_reference():
     np.testing.assert_allclose(traj.final_state, ref.final_state, rtol=1e-8, atol=1e-8)
 
 
+def test_a_release_by_an_input_jump_is_marked_and_exact():
+    """A point mass at rest on the table under a thrust g/2 that jumps to 2 g at the breakpoint 0.5:
+    the contact would pull under the new input, so it releases AT the breakpoint (input_jump, a
+    fixed-time event), and the mass rises with y'' = g: y(1) = g/8, y'(1) = g/2 (closed forms)."""
+    options = tight()
+    options.breakpoints = [0.5]
+    traj = saltus.simulate(saltus.PointMass(), [0.0, 0.0, 0.0, 0.0], 0.0, 1.0,
+                           input=lambda t, x: np.array([0.0, 0.5 * G if t < 0.5 else 2.0 * G]), options=options)
+    assert len(traj.events) == 1
+    release = traj.events[0]
+    assert release.t == 0.5 and release.input_jump and not release.impact
+    assert release.guards == [(0, "table", "release")]
+    assert traj.final_state[1] == pytest.approx(G / 8.0, abs=1e-10)
+    assert traj.final_state[3] == pytest.approx(G / 2.0, abs=1e-10)
+    assert json.loads(traj.to_json())["events"][0]["input_jump"] is True
+    ball = saltus.simulate(saltus.BouncingBall(restitution=0.5), np.array([1.0, 0.0]), 0.0, 1.0)
+    assert not ball.events[0].input_jump  # a touchdown is a crossing
+
+
 def test_constant_input_and_python_callable_agree():
     scene = saltus.PointMass(friction="planar", mu=0.5)
     x0 = [0.0, 0.3, 2.0, 0.0]

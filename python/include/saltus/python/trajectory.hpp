@@ -85,6 +85,7 @@ struct PySegment {
 struct PyEvent {
   double t = 0.0;
   bool impact = false;
+  bool input_jump = false;  ///< Event::input_jump
   std::vector<py::tuple> guards;  ///< (contact index, contact name, guard kind)
   std::string mode_before, mode_after;
   std::vector<std::string> contact_modes_before, contact_modes_after;
@@ -130,6 +131,7 @@ PyEvent event_of(const PyTrajectory<S>& t, int i) {
   PyEvent out;
   out.t = ev.t;
   out.impact = ev.impact();
+  out.input_jump = ev.input_jump;
   for (const Guard& g : ev.guards())
     out.guards.push_back(py::make_tuple(g.contact, t.scene->contact(g.contact).name, to_string(g.kind)));
   out.mode_before = describe(*t.scene, ev.mode_before);

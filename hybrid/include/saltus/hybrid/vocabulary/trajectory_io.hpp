@@ -59,8 +59,10 @@ void write_csv(std::ostream& os, const HybridTrajectory<S>& traj, double dt, con
 ///   status           "completed", "zeno" or "max-events"
 ///   segments         [{mode, t_begin, t_end, steps}]: mode as describe() writes it, the
 ///                    interval in s, steps the pieces of its dense output
-///   events           [{t, impact, guards: [{contact, kind}], mode_before, mode_after, x_minus,
-///                    x_plus, impulses}]: contact by its scene name, kind as to_string(GuardKind),
+///   events           [{t, impact, input_jump, guards: [{contact, kind}], mode_before, mode_after,
+///                    x_minus, x_plus, impulses}]: input_jump true where a jump of the input at a
+///                    breakpoint fired the event (Event::input_jump: its time is fixed, not a
+///                    crossing), contact by its scene name, kind as to_string(GuardKind),
 ///                    x- and x+ of size 2 nq (q then v); impulses [{contact, normal, tangent}] of the
 ///                    contacts that took one, per impact of the event's chain in the order applied
 ///                    (N s; tangent in the contact's tangent coordinates, as many entries as it
@@ -101,6 +103,7 @@ nlohmann::ordered_json to_json(const HybridTrajectory<S>& traj, const S& scene) 
       }
     events.push_back({{"t", ev.t},
                       {"impact", ev.impact()},
+                      {"input_jump", ev.input_jump},
                       {"guards", std::move(guards)},
                       {"mode_before", describe(scene, ev.mode_before)},
                       {"mode_after", describe(scene, ev.mode_after)},
