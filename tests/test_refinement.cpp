@@ -18,6 +18,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <sstream>
 #include <string>
@@ -594,6 +595,54 @@ TEST(ScheduleRefinement, AReleaseAtAnInputJumpKeepsTheStanceLoadedToItsEnd) {
   const Vec<2> u_loaded = loaded.trajectory.input(t_loaded - 1e-9, loaded.trajectory.state(0, t_loaded), loaded.schedule.phases[0]);
   EXPECT_NEAR(par.mass * par.gravity - u_loaded[1], 3.0, 1e-6);
   EXPECT_NEAR(u_loaded[0], par.mu * 3.0, 1e-6);
+}
+
+// SLIP SPEED MARGIN (RefinementOptions::slip_speed_margin). The point mass slides backward on the
+// table (v_x = -1 m/s at t = 0, slip-) for at least 0.7 s, then lifts off (T = 2 s);
+// SidewaysPushThenLift's cost wants u_x = 2 N, a push against the slide that would stop it within
+// half a second. The slip- phase cannot stop (the schedule has no stop event), so without a margin the optimum brings the
+// slide to rest and holds it there with its sign row active (a perturbed motion would stick: the
+// degenerate slide of the plank-box flat landing); with a 0.1 m/s margin the slide keeps at least
+// that speed, the row active at 0.1, up to the release, and the motion is still exact.
+TEST(ScheduleRefinement, ASlipSpeedMarginKeepsTheSlideAwayFromRest) {
+  ScheduleGuess<PointMass> g;
+  g.schedule.phases = {closed_mode(-1), open_mode()};
+  g.schedule.events = {guards_between(frictional_mass(), g.schedule.phases[0], g.schedule.phases[1])};
+  g.event_times = {1.0};
+  g.state = [](int p, double t) {
+    return p == 0 ? Vec<4>(-0.5 * t, 0, -0.5, 0) : Vec<4>(-0.5, 0.5 * (t - 1) * (t - 1), 0, t - 1);
+  };
+  g.input = [](double) { return Vec<2>(0, 10); };
+  OcpHorizon<PointMass> h = from_rest_for_one_second();
+  h.x0 << 0, 0, -1, 0;
+  h.final_time = 2.0;
+  RefinementOptions o = short_schedule_options(0.7);  // the slide lasts at least 0.7 s
+  // As the plank-box flagship: the table carries at least 1 N up to a release at an input jump
+  // (unloaded, the cheapest slide has lambda_n = 0, no friction, and the simulator's contact
+  // opens and closes at once under it).
+  o.releases_at_input_jumps = true;
+  o.stance_load = 1.0;
+  const auto slowest_slide = [](const RefinementResult<PointMass>& r) {  // min of -v_x over the slide's elements
+    double slowest = 1e9;
+    for (double t : r.element_times)
+      if (t <= r.event_times[0]) slowest = std::min(slowest, -r.trajectory.state(0, t)[2]);
+    return slowest;
+  };
+  const RefinementResult<PointMass> to_rest = refine_schedule(frictional_mass(), SidewaysPushThenLift{}, h, g, o);
+  ASSERT_TRUE(to_rest.converged) << to_rest.message;
+  EXPECT_LT(slowest_slide(to_rest), 1e-6);
+  o.slip_speed_margin = 0.1;
+  const RefinementResult<PointMass> kept = refine_schedule(frictional_mass(), SidewaysPushThenLift{}, h, g, o);
+  ASSERT_TRUE(kept.converged) << kept.message;
+  EXPECT_LE(kept.mode_validity_violation, 1e-9);
+  EXPECT_NEAR(slowest_slide(kept), 0.1, 1e-6);
+  EXPECT_GT(kept.objective, to_rest.objective);
+  EXPECT_LE(kept.phase_resim_max_error, 1e-8) << kept.stage;
+  std::printf("slide to rest: objective %.6f; with a 0.1 m/s margin %.6f, re-simulated to %.2g\n", to_rest.objective,
+              kept.objective, kept.phase_resim_max_error);
+  o.slip_speed_margin = -0.1;
+  expect_invalid([&] { (void)refine_schedule(frictional_mass(), SidewaysPushThenLift{}, h, g, o); },
+                 {"slip_speed_margin", ">= 0"});
 }
 
 // RELEASE CONSISTENCY (refinement_nlp.hpp): the input may jump at the release, so the flight's

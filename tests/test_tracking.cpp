@@ -11,6 +11,7 @@
 #include <saltus/sensitivity/prediction_check.hpp>
 #include <saltus/sensitivity/tracking.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <random>
@@ -294,6 +295,46 @@ TEST(Tracking, VerdictsAgreeWithMonteCarloOnThePointMass) {
     std::printf("  over time: max |log(simulated / first order)| = %.3g at %zu times\n", worst,
                 mc.deviation_times.size());
   }
+}
+
+// A reference whose input jumps (HybridTrajectory::input_breakpoints): the point mass slides on
+// the frictionless table at 1 m/s under a thrust g/2 that jumps to 2 g at t = 0.5, where the
+// contact releases (Event::input_jump) and the mass rises with y'' = g. A tracking controller's
+// plant, simulated with options that do not name the jump, steps to it all the same
+// (ReferenceSpreadingController::breakpoints): its release is the reference's fixed-time event, at
+// 0.5 to the last bit, and the Monte Carlo deviations are the first-order ones. (Measured without
+// the reference's breakpoint: the plant released 1.1e-16 s before 0.5, as a guard crossing.)
+TEST(Tracking, ThePlantStepsToTheReferencesInputJumps) {
+  constexpr double g = references::g;
+  references::Reference<PointMass> ref{"slide, then lift at an input jump", PointMass{}, {}, {}};
+  ref.options.breakpoints = {0.5};
+  const auto thrust = open_loop<PointMass>([](double t) { return Vec<2>(0.0, t < 0.5 ? 0.5 * g : 2.0 * g); });
+  ref.trajectory = Simulator<PointMass>(ref.scene, ref.options).run(Vec<4>(0, 0, 1, 0), 0.0, 1.0, thrust);
+  ASSERT_EQ(ref.trajectory.events.size(), 1u);
+  EXPECT_TRUE(ref.trajectory.events[0].input_jump);
+  EXPECT_EQ(ref.trajectory.input_breakpoints, std::vector<double>{0.5});
+
+  LinearisedSystem<PointMass> ol(ref.scene, ref.trajectory, signal_options<PointMass>(ref.options));
+  const GainSchedule<PointMass> K = lqr_design(ol, LqrWeights<PointMass>{}).gains;
+  const ReferenceSpreadingController<PointMass> controller(ol.reference(), K);
+  const std::vector<double> steps_to = controller.breakpoints();
+  EXPECT_TRUE(std::binary_search(steps_to.begin(), steps_to.end(), 0.5));
+
+  SimulationOptions plant;  // no breakpoint of its own; monte_carlo() adds the controller's
+  plant.breakpoints = steps_to;
+  const Vec<4> d(1.0, 0.0, 0.5, 0.0);  // along the table: the mass stays on it until the jump
+  const auto run = Simulator<PointMass>(ref.scene, plant).run(Vec<4>(1e-4 * d), 0.0, 1.0, controller.law());
+  ASSERT_EQ(run.events.size(), 1u);
+  EXPECT_EQ(run.events[0].t, 0.5);
+  EXPECT_TRUE(run.events[0].input_jump);
+
+  MonteCarloOptions<PointMass> mc;
+  mc.runs = 8;
+  mc.threads = 1;
+  mc.scale = Vec<4>(1, 0, 1, 0);
+  const MonteCarloReport m = monte_carlo(ref.scene, SimulationOptions{}, controller, ClosedLoopLinearisation<PointMass>(ol, K), mc);
+  EXPECT_EQ(m.kept_event_sequence, mc.runs);
+  EXPECT_LT(m.max_log_discrepancy, 1e-6);
 }
 
 // The plank-box landing flat (a simultaneous impact of both bottom corners) tracked by a PD on

@@ -29,7 +29,9 @@ LinearisedSystem<S>::LinearisedSystem(const S& scene, const HybridTrajectory<S>&
       }
       ConewiseGainOptions c;
       c.gains = options.gains;
-      c.simulation = options.simulation;
+      c.simulation = options.simulation;  // with the reference's input jumps (no step straddles one)
+      c.simulation.breakpoints.insert(c.simulation.breakpoints.end(), traj.input_breakpoints.begin(),
+                                      traj.input_breakpoints.end());
       conewise_[i] = std::make_unique<ConewiseJumpGain<S>>(scene, ev, traj.input, c);
       gains_[i].G_z.setConstant(std::numeric_limits<double>::quiet_NaN());
       gains_[i].G_v.setConstant(std::numeric_limits<double>::quiet_NaN());

@@ -196,11 +196,14 @@ class ReferenceSpreadingController {
 
   const ExtendedReference<S>& reference() const { return reference_; }
   const GainSchedule<S>& gains() const { return gains_; }
-  /// The schedule's sample times of every segment, sorted and without repeats: the law's kinks in
-  /// t (linear interpolation of K). Give them to SimulationOptions::breakpoints so that no step
-  /// of the plant's integration straddles one (a kink inside a step makes the error control cut
-  /// the step down; measured on the hopper's LQR at 1 ms samples: 2.8 s per run without, see
-  /// tracking.hpp). monte_carlo() adds them itself.
+  /// The schedule's sample times of every segment and the reference's input breakpoints
+  /// (HybridTrajectory::input_breakpoints), sorted and without repeats: the law's kinks and jumps
+  /// in t (linear interpolation of K; u_i(t) piecewise constant). Give them to
+  /// SimulationOptions::breakpoints so that no step of the plant's integration straddles one (a
+  /// kink inside a step makes the error control cut the step down; measured on the hopper's LQR at
+  /// 1 ms samples: 2.8 s per run without, see tracking.hpp; a jump inside a step that releases a
+  /// contact is found as a guard crossing a round-off before the jump instead of the fixed-time
+  /// event it is, Event::input_jump). monte_carlo() adds them itself.
   std::vector<double> breakpoints() const;
 
   /// u = u_i(t) + K_i(t) (x - x_i(t)) on reference segment i (no phase logic); x_i and u_i are

@@ -428,6 +428,8 @@ std::vector<double> ReferenceSpreadingController<S>::breakpoints() const {
   std::vector<double> out;
   for (int i = 0; i < gains_.segment_count(); ++i)
     if (gains_.times(i).size() > 1) out.insert(out.end(), gains_.times(i).begin(), gains_.times(i).end());
+  const std::vector<double>& jumps = reference_.reference().input_breakpoints;  // u_i(t) jumps there
+  out.insert(out.end(), jumps.begin(), jumps.end());
   std::sort(out.begin(), out.end());
   out.erase(std::unique(out.begin(), out.end()), out.end());
   return out;

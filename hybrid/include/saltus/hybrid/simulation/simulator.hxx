@@ -102,6 +102,11 @@ HybridTrajectory<S> Simulator<S>::run_impl(const State& x0, std::optional<Mode<n
   SALTUS_REQUIRE(static_cast<bool>(input), "the input law is empty");
   HybridTrajectory<S> traj;
   traj.input = input;
+  for (double b : options_.breakpoints)
+    if (b > t0 && b < t_final) traj.input_breakpoints.push_back(b);
+  std::sort(traj.input_breakpoints.begin(), traj.input_breakpoints.end());
+  traj.input_breakpoints.erase(std::unique(traj.input_breakpoints.begin(), traj.input_breakpoints.end()),
+                               traj.input_breakpoints.end());
   ModeSystem<S> sys(scene_, input);
   touchdown_times_.clear();
   touchdown_contacts_.clear();

@@ -112,6 +112,13 @@ class HybridTrajectory {
   std::vector<Segment<S>> segments;
   std::vector<Event<S>> events;
   InputLaw<S> input;  ///< u(t, x, mode)
+  /// s, sorted: the times where `input` may jump or kink in t (a piecewise-constant optimal input's
+  /// element boundaries; the SimulationOptions::breakpoints a simulation ran with, those inside its
+  /// interval). Whoever simulates along this reference (the Monte Carlo plant under a tracking
+  /// controller, ReferenceSpreadingController::breakpoints; the conewise gains' re-resolution)
+  /// stops its steps there too: an input jump that a step straddles is located as a guard crossing
+  /// to the event tolerance instead of being the fixed-time event it is (Event::input_jump).
+  std::vector<double> input_breakpoints;
   SimulationStatus status = SimulationStatus::Completed;
   /// s: the predicted accumulation time (status Zeno, or the last accumulation the run was
   /// continued past, see zeno_completions; NaN otherwise), extrapolated from the touchdown times

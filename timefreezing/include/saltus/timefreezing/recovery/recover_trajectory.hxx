@@ -37,6 +37,9 @@ class TrajectoryRecovery {
   /// flowing element extends the segment or starts the next one after a mode change.
   HybridTrajectory<S> run(const ImportedReference<S>& samples) {
     traj_.input = [samples](double t, const State&, const ModeT&) { return samples.input(t); };
+    for (std::size_t k = 0; k + 1 < samples.t.size(); ++k)  // a repeated time: the control interval's jump
+      if (samples.t[k] == samples.t[k + 1] && (traj_.input_breakpoints.empty() || traj_.input_breakpoints.back() != samples.t[k]))
+        traj_.input_breakpoints.push_back(samples.t[k]);
     seg_.t_begin = seg_.t_end = clock(points_[0]);
     current_ = mode_at(points_[0]);
     for (int e = 0; e < elements_;) {

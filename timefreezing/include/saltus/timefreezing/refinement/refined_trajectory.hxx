@@ -99,6 +99,7 @@ HybridTrajectory<S> refined_trajectory(const S& scene, const ScheduleRefinementN
   const int ns = nlp.stages();
   HybridTrajectory<S> traj;
   traj.input = refined_input_law(nlp, x, element_times);
+  traj.input_breakpoints = element_times;  // the input is constant on each element
   for (int p = 0; p < nlp.phase_count(); ++p) {
     Segment<S> seg;
     seg.mode = nlp.schedule().phases[static_cast<std::size_t>(p)];

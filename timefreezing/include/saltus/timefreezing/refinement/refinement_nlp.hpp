@@ -31,7 +31,9 @@
 //                               releases it there)
 //     sticking planar contact:  mu lambda_n - lambda_t,  mu lambda_n + lambda_t   (in the cone;
 //                               mu times 1 - RefinementOptions::stick_cone_margin, default 1)
-//     slipping planar contact:  s zeta_t                  (the slip keeps its sign s)
+//     slipping planar contact:  s zeta_t                  (the slip keeps its sign s; minus
+//                               RefinementOptions::slip_speed_margin, ramped to 0 at a slip
+//                               onset or a stop of the contact)
 // With these and the events below, the refined motion satisfies the complementarity conditions of
 // contact and Coulomb friction EXACTLY at every stage point, by construction: each contact is in
 // one branch (open: lambda = 0 by the flow; closed: gap = 0 by the phase start and the flow), and
@@ -80,8 +82,8 @@
 // terminal_violation) include them.
 //
 // EVENT ENDS. At a phase's last stage point the guard of an event replaces the validity row it
-// makes active (touchdown: gap = 0 for gap >= 0; release: lambda_n = 0 for lambda_n >= 0 and the
-// cone; stop: zeta_t = 0 for s zeta_t >= 0; slip onset: the cone); at the next phase's start point
+// makes active (touchdown: gap = 0 for gap >= 0; release: lambda_n = 0 for lambda_n >= 0 and a
+// stick's cone, a slide keeping its sign row; stop: zeta_t = 0 for s zeta_t >= 0; slip onset: the cone); at the next phase's start point
 // (its first element's start under its input) the rows that continuity or the impulse rows already
 // fix go (after a slip onset the slip sign, after an impact the slip sign of the contacts taking an
 // impulse and the gap of the contacts it throws off; after a release the gap, whose row there is
@@ -346,6 +348,7 @@ class ScheduleRefinementNlp final : public Mpcc {
   template <class T>
   void write_validity(int p, double theta, const FlowWorkspace<S, T>& ws, VecT<T, stage_outputs>& out) const;
   double normal_margin(int p, int i, double theta) const;
+  double slip_margin(int p, int i, double theta) const;
   double clearance(int p, int i, double theta) const;
   bool released_at_start(int p, int i) const;  // contact i closed in phase p - 1, opened by a release
 

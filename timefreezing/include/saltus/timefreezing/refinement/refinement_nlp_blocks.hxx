@@ -7,6 +7,8 @@
 #include <saltus/hybrid/dynamics/jump_map.hxx>
 #include <saltus/timefreezing/refinement/refinement_nlp.hpp>
 
+#include <algorithm>
+
 namespace saltus::timefreezing {
 
 template <Scene S, class Ocp>
@@ -37,7 +39,7 @@ void ScheduleRefinementNlp<S, Ocp>::write_validity(int p, double theta, const Fl
     out[k++] = ws.force[i].normal - T(normal_margin(p, i, theta));
     if (scene_.contact(i).tangents() == 0) continue;
     if (c.mode == ContactMode::Slip) {
-      out[k++] = T(c.slip_direction[0]) * ws.kin.contacts[i].zeta_t[0];
+      out[k++] = T(c.slip_direction[0]) * ws.kin.contacts[i].zeta_t[0] - T(slip_margin(p, i, theta));
       continue;
     }
     const double inside = 1.0 - options_.stick_cone_margin;  // RefinementOptions::stick_cone_margin
@@ -90,6 +92,20 @@ double ScheduleRefinementNlp<S, Ocp>::normal_margin(int p, int i, double theta) 
   const bool kept = next == schedule_.phases.size() || schedule_.phases[next][i].closed();
   if (kept) return options_.normal_force_margin;
   return options_.releases_at_input_jumps ? options_.stance_load : options_.stance_load * 4.0 * theta * (1.0 - theta);
+}
+
+/// The lower bound of slipping contact i's speed s zeta_t in phase p at phase fraction theta [m/s]:
+/// RefinementOptions::slip_speed_margin, ramped linearly from 0 over the first quarter of the phase
+/// when a slip onset of i starts it (the slide starts from rest) and to 0 over the last quarter
+/// when a stop of i ends it.
+template <Scene S, class Ocp>
+double ScheduleRefinementNlp<S, Ocp>::slip_margin(int p, int i, double theta) const {
+  if (options_.slip_speed_margin == 0.0) return 0.0;
+  const std::size_t q = static_cast<std::size_t>(p);
+  double w = 1.0;
+  if (p > 0 && schedule_.events[q - 1].has(i, GuardKind::SlipOnset)) w = std::min(w, 4.0 * theta);
+  if (q < schedule_.events.size() && schedule_.events[q].has(i, GuardKind::Stop)) w = std::min(w, 4.0 * (1.0 - theta));
+  return options_.slip_speed_margin * w;
 }
 
 template <Scene S, class Ocp>

@@ -48,6 +48,8 @@ inline void RefinementOptions::validate() const {
                  "refinement: min_phase_duration must be >= 0, got ", min_phase_duration);
   SALTUS_REQUIRE(stick_cone_margin >= 0.0 && stick_cone_margin < 1.0,
                  "refinement: stick_cone_margin must lie in [0, 1), got ", stick_cone_margin);
+  SALTUS_REQUIRE(std::isfinite(slip_speed_margin) && slip_speed_margin >= 0.0,
+                 "refinement: slip_speed_margin must be finite and >= 0 [m/s], got ", slip_speed_margin);
   SALTUS_REQUIRE(std::isfinite(normal_force_margin) && normal_force_margin >= 0.0,
                  "refinement: normal_force_margin must be finite and >= 0 [N], got ", normal_force_margin);
   SALTUS_REQUIRE(std::isfinite(stance_load) && stance_load >= 0.0,

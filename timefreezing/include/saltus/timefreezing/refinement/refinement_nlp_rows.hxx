@@ -147,7 +147,11 @@ void ScheduleRefinementNlp<S, Ocp>::restrict_event_ends() {
       if (p + 1 < P) {
         const ScheduleEvent& after = schedule_.events[static_cast<std::size_t>(p)];
         const bool released_by_guard = after.has(i, GuardKind::Release) && !options_.releases_at_input_jumps;
-        if (after.has(i, GuardKind::Touchdown) || released_by_guard) drop(v.at_end, first, last);
+        // A release replaces lambda_n >= 0 and a stick's cone (0 >= 0 at lambda_n = 0); a slide's sign
+        // row stays (RefinementOptions::slip_speed_margin holds up to the release).
+        const bool slide = mode[i].closed() && mode[i].mode == ContactMode::Slip;
+        if (after.has(i, GuardKind::Touchdown)) drop(v.at_end, first, last);
+        else if (released_by_guard) drop(v.at_end, first, slide ? first + 1 : last);
         if ((after.has(i, GuardKind::Stop) || after.has(i, GuardKind::SlipOnset)) && frictional) drop(v.at_end, first + 1, last);
       }
     }
