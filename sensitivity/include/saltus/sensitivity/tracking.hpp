@@ -15,14 +15,7 @@
 // differ from zero by O(1) in velocity, so any feedback would act with an O(1) input for an
 // O(eps) time and move the post-event state at first order, which the conewise gain (built with
 // the reference's input law in the intermediate modes, conewise_gain.hpp) does not contain. The
-// phase ends when the plant's mode is the reference's post-event mode. The same intermediate phase
-// covers a friction micro-event of the plant ahead of a reference event that opens or closes a
-// contact (the plant's mode keeps the segment's open and closed contacts, the post-event mode does
-// not): a release from stick whose perturbed force leaves the cone a microsecond before lambda_n
-// reaches 0 reaches the plant as a slip onset and then the release (measured on the refined
-// hopper: before, the controller counted the slip onset as the release and tracked the stance
-// after the flight during that flight). There, too, the controller applies u_i(t) alone (measured:
-// with the segment's feedback law instead, no run of the hopper's batch kept its events).
+// phase ends when the plant's mode is the reference's post-event mode.
 // Beyond the extended interval of its segment the controller holds the reference at the
 // extension's end. The integrator's trial stages reach there (a step that crosses the plant's
 // event evaluates the pre-event law past it, up to a step length; the error control judges
@@ -373,14 +366,6 @@ struct MonteCarloOptions {
   /// Applied to every drawn d before use (e.g. to keep a contact closed: zero the gap's row and
   /// project the velocity onto the constraint); null: d as drawn.
   std::function<Vec<nx>(const Vec<nx>&)> project;
-  /// true: every perturbed start x(t0) + eps d is projected onto the contacts closed in the
-  /// reference's first segment (ConstraintProjection: gaps, normal and sticking tangential
-  /// velocities to zero, in the kinetic metric), so that the plant starts in the reference's
-  /// first mode. A `project` that keeps those contacts does so to first order only: the gap's
-  /// curvature leaves a gap of order eps^2 (1e-7 m on the hopper's stance at eps = 1e-4, |d| ~ 3),
-  /// and the plant starts in flight and lands microseconds later (measured: 65 of the hopper's
-  /// 200 runs, then stalled the integrator). The change of the start is O(eps^2).
-  bool keep_initial_contacts = false;
   Mat<nx, nx> weight = Mat<nx, nx>::Identity();  ///< W (SPD) of the initial deviation |eps d|_W
   std::optional<Mat<nx, nx>> output_weight;       ///< W_out (PSD) of the final error; by default W
   std::uint64_t seed = 20261130;

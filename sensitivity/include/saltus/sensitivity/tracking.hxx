@@ -1,7 +1,6 @@
 // Definitions of tracking.hpp (see there for the math).
 #pragma once
 
-#include <saltus/hybrid/dynamics/constraints.hpp>
 #include <saltus/hybrid/simulation/simulator.hpp>
 #include <saltus/sensitivity/detail/dense.hpp>
 #include <saltus/sensitivity/detail/ode.hxx>
@@ -364,22 +363,10 @@ auto ReferenceSpreadingController<S>::next_phase(const Phase& before, const Mode
                                         " events): no segment to compare with (the plant's mode after it: ",
                                         detail::describe_contact_modes(mode), "; the segment's: ",
                                         detail::describe_contact_modes(reference_.reference().segments[j].mode), ")"));
-  const Mode<nc>& here = reference_.reference().segments[j].mode;
-  const Mode<nc>& next = reference_.reference().segments[j + 1].mode;
   if (before.intermediate || simultaneous_[j]) {
-    if (mode == next) return Phase{j + 1, false};
+    if (mode == reference_.reference().segments[j + 1].mode) return Phase{j + 1, false};
     return Phase{j, true};
   }
-  // A friction micro-event ahead of a reference event that opens or closes a contact (a slip onset
-  // a microsecond before a release from stick, as the perturbed force's ratio crosses the cone
-  // before lambda_n reaches 0): the plant keeps the segment's contacts, so the reference event is
-  // still ahead; the intermediate phase lasts until the plant's mode is the post-event one.
-  const auto same_contacts = [](const Mode<nc>& a, const Mode<nc>& b) {
-    for (int c = 0; c < nc; ++c)
-      if (a[c].closed() != b[c].closed()) return false;
-    return true;
-  };
-  if (!(mode == next) && same_contacts(mode, here) && !same_contacts(next, here)) return Phase{j, true};
   return Phase{j + 1, false};
 }
 
@@ -942,12 +929,7 @@ MonteCarloReport monte_carlo(const S& scene, const SimulationOptions& simulation
       }
     } count{out, failed_so_far, kept_so_far};
     try {
-      State xs = x0 + options.size * d[r];
-      if (options.keep_initial_contacts) {
-        ConstraintProjection<S> projection;
-        projection.max_iterations = 20;
-        projection.project(scene, ref.segments.front().mode, xs);
-      }
+      const State xs = x0 + options.size * d[r];
       const HybridTrajectory<S> traj = simulators[worker]->run(xs, t0, T, controller.law());
       if (traj.status != SimulationStatus::Completed) {
         out.failed = true;
