@@ -69,8 +69,9 @@ struct PlankBoxFlatLanding {
   /// and 41 of 100 perturbed closed-loop runs left the reference's events; with them all 100 keep
   /// them and shrink, objective 39.54 against 40.88), and the slide at least 0.05 m/s fast
   /// (slip_speed_margin: without it the slide comes to rest exactly at the lift-off, 46 of 100
-  /// perturbed runs stop a few microseconds before it, and their deviations are 1.33 times the
-  /// first-order ones; with it all 100 agree to 0.9 %, objective 39.70; docs/refinement.md,
+  /// perturbed runs end 1.33 times the first-order deviation, and those simulated alone had
+  /// stopped a few microseconds before the lift-off; with it all 100 agree to 0.9 %, objective
+  /// 39.70; docs/refinement.md,
   /// "Plank-box"). Measured
   /// (the schedule "land flat, slide, lift off", one thread): the per-phase re-simulation's
   /// distance shrinks like h^5 (Radau IIA, n_s = 3) with a large constant in the slide (the

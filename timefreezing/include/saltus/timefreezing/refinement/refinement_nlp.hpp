@@ -83,7 +83,8 @@
 //
 // EVENT ENDS. At a phase's last stage point the guard of an event replaces the validity row it
 // makes active (touchdown: gap = 0 for gap >= 0; release: lambda_n = 0 for lambda_n >= 0 and a
-// stick's cone, a slide keeping its sign row; stop: zeta_t = 0 for s zeta_t >= 0; slip onset: the cone); at the next phase's start point
+// stick's cone, a slide keeping its sign row; stop: zeta_t = 0 for s zeta_t >= 0; slip onset: the
+// cone); at the next phase's start point
 // (its first element's start under its input) the rows that continuity or the impulse rows already
 // fix go (after a slip onset the slip sign, after an impact the slip sign of the contacts taking an
 // impulse and the gap of the contacts it throws off; after a release the gap, whose row there is

@@ -128,8 +128,8 @@ struct RefinementOptions {
   /// describes it. w is 1, ramped linearly to 0 over the first quarter of a phase that a slip onset
   /// of the contact starts (the slide starts from rest) and over the last quarter of one that its
   /// stop ends. Without it the plank-box flat landing's optimal slide reaches rest exactly at its
-  /// lift-off: 46 of 100 perturbed runs stopped a few microseconds before the release, and their
-  /// deviations were 1.33 times the first-order ones (docs/refinement.md). mode_validity_violation
+  /// lift-off: 46 of 100 perturbed runs ended 1.33 times the first-order deviation, and those
+  /// simulated alone had stopped a few microseconds before the release (docs/refinement.md). mode_validity_violation
   /// reads the rows as imposed. 0: the sign itself.
   double slip_speed_margin = 0.0;
   /// [N], >= 0. A closed contact that the schedule does not release at its phase's end (it stays
