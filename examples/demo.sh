@@ -10,6 +10,9 @@
 #   SALTUS_JOBS=N   parallel build jobs (default: nproc)
 set -euo pipefail
 here=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+# ccache (when installed): paths relative to the clone and no working directory in the hash, so that
+# a fresh clone at another path on the same machine hits the cache of an earlier one.
+export CCACHE_BASEDIR="$here" CCACHE_NOHASHDIR=1
 build="$here/build"
 start=$(date +%s)
 bash "$here/.ci/install-deps.sh"

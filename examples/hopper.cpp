@@ -25,8 +25,8 @@
 // "refinement_seconds", "solve_seconds", "discovery", "refinement", "analysis"} (refinement_io.hpp,
 // reference_analysis_io.hpp) and writes the refined reference's files (report/hopper_refined_*).
 // Exit status 0 only when the reference is refined; the analysis's outcome is reported, not
-// reflected in it. About 6 minutes on one thread: discovery 61 s, refinement 136 s, the analysis
-// 144 s, most of it in Monte Carlo runs that stall (docs/refinement.md, "Hopper over three holes").
+// reflected in it. About 6 minutes on one thread: discovery and refinement about 200 s, the
+// analysis about 90 s, most of it the Monte Carlo runs (docs/refinement.md, "Hopper over three holes").
 #include <saltus/hybrid/reference/resimulation.hpp>
 #include <saltus/hybrid/dynamics/contact_forces_csv.hpp>
 #include <saltus/hybrid/vocabulary/trajectory_report.hpp>

@@ -5,6 +5,9 @@
 #   CXX (and CC)       the compiler of a new build directory (default, when CXX is unset: clang++)
 set -euo pipefail
 here=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+# ccache (when installed): paths relative to the clone and no working directory in the hash, so that
+# a fresh clone at another path on the same machine hits the cache of an earlier one.
+export CCACHE_BASEDIR="$here" CCACHE_NOHASHDIR=1
 build=${1:-"$here/build"}
 shift || true
 # A new build directory is configured with clang unless CXX is set: on this project's 2-core

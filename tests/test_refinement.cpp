@@ -952,28 +952,60 @@ TEST(ScheduleRefinement, AFlightClearanceLiftsAFlightThatSkimsTheGround) {
                  {"flight_clearance"});
 }
 
+/// SlideToOne through its forced flight refined twice, without and with one landing row that
+/// `set(o, value)` turns on (options short_schedule_options(0.2)); both must converge. Then a
+/// negative value must be refused naming `option` (and `bound`, when given).
+struct ForcedFlightPair {
+  RefinementResult<PointMass> plain, with;
+};
+template <class SetOption>
+ForcedFlightPair forced_flight_with(SetOption set, double value, const char* option, const char* bound = nullptr) {
+  const ScheduleGuess<PointMass> g = forced_flight_guess();
+  RefinementOptions o = short_schedule_options(0.2);
+  const auto refine = [&] { return refine_schedule(PointMass{}, SlideToOne{}, from_rest_for_one_second(), g, o); };
+  ForcedFlightPair out{refine(), {}};
+  set(o, value);
+  out.with = refine();
+  EXPECT_TRUE(out.plain.converged && out.with.converged) << out.plain.message << "; " << out.with.message;
+  EXPECT_LE(out.with.mode_validity_violation, 1e-9);
+  EXPECT_GT(out.with.objective, out.plain.objective + 0.1);  // the row is active and costs
+  EXPECT_LE(out.with.phase_resim_max_error, 1e-8);
+  set(o, -1.0);
+  if (bound) expect_invalid([&] { (void)refine(); }, {option, bound});
+  else expect_invalid([&] { (void)refine(); }, {option});
+  return out;
+}
+
+// SlideToOne through a forced flight lands on the table under the weight alone (lambda_n = m g
+// right after the impact, the cheapest thrust); with touchdown_load = 12 N the stance after the
+// touchdown starts with lambda_n >= 12 N (the row active at the post-impact state: the thrust
+// pushes down) and pays for it, the re-simulation still agrees. A negative load is refused by name.
+TEST(ScheduleRefinement, ATouchdownLoadMakesTheStanceStartLoaded) {
+  const auto load_after_touchdown = [](const RefinementResult<PointMass>& r) {
+    const auto& seg = r.trajectory.segments[2];
+    FlowWorkspace<PointMass> ws;
+    evaluate_flow(PointMass{}, seg.mode, r.trajectory.state(2, seg.t_begin), r.trajectory.input_at(2, seg.t_begin), ws);
+    return ws.force[0].normal;
+  };
+  const ForcedFlightPair r =
+      forced_flight_with([](RefinementOptions& o, double v) { o.touchdown_load = v; }, 12.0, "touchdown_load");
+  ASSERT_TRUE(r.plain.converged && r.with.converged);
+  EXPECT_LT(load_after_touchdown(r.plain), 11.0);
+  EXPECT_NEAR(load_after_touchdown(r.with), 12.0, 1e-6);
+}
+
 // SlideToOne through a forced flight lands with the downward speed its low flight gives; with
 // touchdown_speed = 1.5 m/s the touchdown comes in at least that fast (the row active: the
 // flight rises higher, or is pushed down, and pays for it). A negative speed is refused by name.
 TEST(ScheduleRefinement, ATouchdownSpeedMakesTheLandingComeInFast) {
-  const ScheduleGuess<PointMass> g = forced_flight_guess();
-  RefinementOptions o = short_schedule_options(0.2);
   const auto approach_speed = [](const RefinementResult<PointMass>& r) {
     return -r.trajectory.state(1, r.trajectory.segments[1].t_end)[3];  // -zeta_n(x-) = -v_z
   };
-  const RefinementResult<PointMass> slow = refine_schedule(PointMass{}, SlideToOne{}, from_rest_for_one_second(), g, o);
-  ASSERT_TRUE(slow.converged) << slow.message;
-  EXPECT_LT(approach_speed(slow), 1.0);
-  o.touchdown_speed = 1.5;
-  const RefinementResult<PointMass> fast = refine_schedule(PointMass{}, SlideToOne{}, from_rest_for_one_second(), g, o);
-  ASSERT_TRUE(fast.converged) << fast.message;
-  EXPECT_LE(fast.mode_validity_violation, 1e-9);
-  EXPECT_NEAR(approach_speed(fast), 1.5, 1e-8);
-  EXPECT_GT(fast.objective, slow.objective + 0.1);
-  EXPECT_LE(fast.phase_resim_max_error, 1e-8);
-  o.touchdown_speed = -1.0;
-  expect_invalid([&] { (void)refine_schedule(PointMass{}, SlideToOne{}, from_rest_for_one_second(), g, o); },
-                 {"touchdown_speed", ">= 0"});
+  const ForcedFlightPair r =
+      forced_flight_with([](RefinementOptions& o, double v) { o.touchdown_speed = v; }, 1.5, "touchdown_speed", ">= 0");
+  ASSERT_TRUE(r.plain.converged && r.with.converged);
+  EXPECT_LT(approach_speed(r.plain), 1.0);
+  EXPECT_NEAR(approach_speed(r.with), 1.5, 1e-8);
 }
 
 }  // namespace

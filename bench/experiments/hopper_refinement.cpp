@@ -15,6 +15,7 @@
 //   min_phase_duration=<s>         RefinementOptions::min_phase_duration
 //   flight_clearance=<m>           RefinementOptions::flight_clearance
 //   stance_load=<N>                RefinementOptions::stance_load
+//   touchdown_load=<N>             RefinementOptions::touchdown_load
 //   touchdown_speed=<m/s>          RefinementOptions::touchdown_speed
 //   releases_at_input_jumps=<0|1>  RefinementOptions::releases_at_input_jumps
 //   contact_stabilisation=<1/s>    RefinementOptions::contact_stabilisation
@@ -179,6 +180,10 @@ int main(int argc, char** argv) {
     }
     if (name == "stance_load") {  // RefinementOptions::stance_load [N]
       options.stance_load = std::atof(value.c_str());
+      continue;
+    }
+    if (name == "touchdown_load") {  // RefinementOptions::touchdown_load [N]
+      options.touchdown_load = std::atof(value.c_str());
       continue;
     }
     if (name == "flight_clearance") {  // RefinementOptions::flight_clearance [m]

@@ -34,6 +34,7 @@ ReferenceAnalysisOptions<Hopper> stance_start_lqr_analysis(const Hopper& hopper,
   o.monte_carlo.runs = runs;
   o.monte_carlo.threads = 1;
   o.monte_carlo.project = [E](const Vec<8>& d) { return Vec<8>(E * (E.transpose() * d)); };
+  o.monte_carlo.keep_initial_contacts = true;  // the gap's curvature: hopper_tracking.hpp
   o.progress = progress;
   return o;
 }

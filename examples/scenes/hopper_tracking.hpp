@@ -16,7 +16,11 @@ namespace saltus::scenes {
 /// `runs` Monte Carlo runs (one thread) from deviations of the initial state that keep the first
 /// stance: the foot on the ground and at rest, i.e. the 5-dimensional null space of the rows of
 /// the gap, the normal velocity and the tangential velocity at the reference's start (its SVD),
-/// the Monte Carlo deviations projected on it. One progress line per stage to `progress` (not
+/// the Monte Carlo deviations projected on it, and each perturbed start then projected onto the
+/// stance itself (MonteCarloOptions::keep_initial_contacts: the null space keeps the foot on the
+/// ground to first order, and the gap's curvature would leave it about 1e-7 m above, in flight;
+/// measured on the refined reference's batch of 200: 28 runs kept the events without, 51 with).
+/// One progress line per stage to `progress` (not
 /// owned; null: none). Preconditions, not checked: the reference starts at rest with the foot
 /// closed (the velocity rows use the contact Jacobians alone, exact at rest; the analysis' runs fail
 /// with a named unplanned event otherwise). Throws InvalidArgument for runs < 0, an input weight

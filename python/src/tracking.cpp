@@ -44,7 +44,7 @@ PyMonteCarlo merge(std::vector<PyMonteCarlo> parts) {
 }
 
 py::tuple run_state(const MonteCarloRun& r) {
-  return py::make_tuple(r.failed, r.reason, r.kept_event_sequence, r.events, r.observed, r.predicted);
+  return py::make_tuple(r.failed, r.reason, r.kept_event_sequence, r.events, r.observed, r.predicted, r.departure);
 }
 
 MonteCarloRun run_from(const py::handle& h) {
@@ -56,6 +56,7 @@ MonteCarloRun run_from(const py::handle& h) {
   r.events = t[3].cast<int>();
   r.observed = t[4].cast<double>();
   r.predicted = t[5].cast<double>();
+  r.departure = t[6].cast<std::string>();
   return r;
 }
 
@@ -126,6 +127,8 @@ void bind_tracking(py::module_& m) {
       .def_property_readonly("failed", [](const MC& r) { return r.report.failed; })
       .def_property_readonly("kept_event_sequence", [](const MC& r) { return r.report.kept_event_sequence; })
       .def_property_readonly("failure_reasons", [](const MC& r) { return r.report.failure_reasons; })
+      .def_property_readonly("departures", [](const MC& r) { return r.report.departures; },
+                             "where the completed runs that did not keep the event sequence left it, with counts")
       .def_property_readonly("observed_rate_max", [](const MC& r) { return r.report.observed_rate_max; })
       .def_property_readonly("observed_rate_median", [](const MC& r) { return r.report.observed_rate_median; })
       .def_property_readonly("predicted_rate_max", [](const MC& r) { return r.report.predicted_rate_max; })

@@ -30,7 +30,7 @@ def test_monte_carlo_on_two_workers_equals_one_process(client):
     np.testing.assert_array_equal(remote.observed, local.observed)
     np.testing.assert_array_equal(remote.predicted, local.predicted)
     for name in ["failed", "kept_event_sequence", "observed_rate_max", "observed_rate_median", "predicted_rate_max",
-                 "max_log_discrepancy", "grew", "shrank"]:
+                 "max_log_discrepancy", "grew", "shrank", "departures"]:
         assert getattr(remote, name) == getattr(local, name), name
     # both worker processes took part: each built the case (its per-process cache) to run a chunk
     built = client.run(lambda: __import__("saltus.distributed").distributed._build.cache_info().currsize)

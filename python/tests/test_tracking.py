@@ -39,6 +39,7 @@ def test_monte_carlo_agrees_with_the_check(lqr):
     mc = lqr.monte_carlo(runs=24, threads=1)
     assert mc.runs == 24 and mc.failed == 0 and mc.kept_event_sequence == 24
     assert mc.shrank == 24
+    assert mc.departures == []  # every run kept the events: none left them
     assert mc.observed_rate_max <= report.upper_rate + 1e-3
     # the first-order regime: observed and predicted amplifications agree within 5 %
     assert mc.max_log_discrepancy < 0.05
@@ -67,7 +68,7 @@ def test_chunks_merge_into_the_whole_batch(lqr):
     np.testing.assert_array_equal(merged.observed, whole.observed)
     np.testing.assert_array_equal(merged.predicted, whole.predicted)
     for name in ["runs", "failed", "kept_event_sequence", "observed_rate_max", "observed_rate_median",
-                 "predicted_rate_max", "max_log_discrepancy", "grew", "shrank"]:
+                 "predicted_rate_max", "max_log_discrepancy", "grew", "shrank", "failure_reasons", "departures"]:
         assert getattr(merged, name) == getattr(whole, name), name
     # a chunk runs the batch's own perturbations, not a fresh draw
     assert parts[1].observed[0] == whole.observed[0] and parts[0].observed[0] == whole.observed[12]

@@ -5,12 +5,14 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <cstdlib>
 #include <exception>
 #include <limits>
 #include <map>
 #include <mutex>
 #include <string>
 #include <thread>
+#include <tuple>
 #include <vector>
 
 namespace saltus {
@@ -28,9 +30,11 @@ void summarise_monte_carlo(MonteCarloReport& report, double horizon) {
   report.runs = static_cast<int>(report.run.size());
   report.failed = report.kept_event_sequence = report.grew = report.shrank = 0;
   report.failure_reasons.clear();
+  report.departures.clear();
   report.max_log_discrepancy = 0.0;
   report.observed_rate_median = 0.0;
   std::map<std::string, int> reasons;
+  std::map<std::string, std::tuple<int, double, double>> departures;  // count, first and last time
   std::vector<double> rates;
   report.observed_rate_max = report.predicted_rate_max = -std::numeric_limits<double>::infinity();
   for (const MonteCarloRun& r : report.run) {
@@ -39,7 +43,17 @@ void summarise_monte_carlo(MonteCarloReport& report, double horizon) {
       ++reasons[r.reason];
       continue;
     }
-    if (!r.kept_event_sequence) continue;
+    if (!r.kept_event_sequence) {
+      // Distinct up to the time "(t = ... s)" at the end of the text.
+      const std::size_t at = r.departure.rfind(" (t = ");
+      auto& [count, first, last] = departures[r.departure.substr(0, at)];
+      const double t = at == std::string::npos ? std::numeric_limits<double>::quiet_NaN()
+                                                : std::strtod(r.departure.c_str() + at + 6, nullptr);
+      if (count++ == 0) first = last = t;
+      first = std::min(first, t);
+      last = std::max(last, t);
+      continue;
+    }
     ++report.kept_event_sequence;
     const double rate = std::log(r.observed) / horizon;
     rates.push_back(rate);
@@ -59,6 +73,12 @@ void summarise_monte_carlo(MonteCarloReport& report, double horizon) {
         std::numeric_limits<double>::quiet_NaN();
   if (!std::isfinite(report.predicted_rate_max)) report.predicted_rate_max = std::numeric_limits<double>::quiet_NaN();
   for (const auto& [reason, count] : reasons) report.failure_reasons.push_back(detail::concat(count, " x ", reason));
+  for (const auto& [departure, seen] : departures) {
+    const auto& [count, first, last] = seen;
+    report.departures.push_back(std::isnan(first) ? detail::concat(count, " x ", departure)
+                                : first == last   ? detail::concat(count, " x ", departure, " (t = ", first, " s)")
+                                                  : detail::concat(count, " x ", departure, " (t = ", first, " .. ", last, " s)"));
+  }
 }
 
 namespace detail {

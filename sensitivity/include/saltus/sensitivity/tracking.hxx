@@ -1,6 +1,7 @@
 // Definitions of tracking.hpp (see there for the math).
 #pragma once
 
+#include <saltus/hybrid/dynamics/constraints.hpp>
 #include <saltus/hybrid/simulation/simulator.hpp>
 #include <saltus/sensitivity/detail/dense.hpp>
 #include <saltus/sensitivity/detail/ode.hxx>
@@ -355,7 +356,8 @@ std::string describe_contact_modes(const Mode<NC>& mode) {
 }  // namespace detail
 
 template <Scene S>
-auto ReferenceSpreadingController<S>::next_phase(const Phase& before, const Mode<nc>& mode) const -> Phase {
+auto ReferenceSpreadingController<S>::next_phase(const Phase& before, const Mode<nc>& mode_before,
+                                                 const Mode<nc>& mode) const -> Phase {
   const int j = before.segment;
   if (j + 1 >= reference_.segment_count())
     throw UnplannedEvent(detail::concat("reference spreading: the plant has an event after reference segment ", j,
@@ -363,10 +365,21 @@ auto ReferenceSpreadingController<S>::next_phase(const Phase& before, const Mode
                                         " events): no segment to compare with (the plant's mode after it: ",
                                         detail::describe_contact_modes(mode), "; the segment's: ",
                                         detail::describe_contact_modes(reference_.reference().segments[j].mode), ")"));
+  const Mode<nc>& here = reference_.reference().segments[j].mode;
+  const Mode<nc>& next = reference_.reference().segments[j + 1].mode;
   if (before.intermediate || simultaneous_[j]) {
-    if (mode == reference_.reference().segments[j + 1].mode) return Phase{j + 1, false};
+    if (mode == next) return Phase{j + 1, false};
     return Phase{j, true};
   }
+  if (mode == next) return Phase{j + 1, false};
+  // A micro-event ahead of a reference event that opens or closes a contact (file comment).
+  const auto same_closed_contacts = [](const Mode<nc>& a, const Mode<nc>& b) {
+    for (int c = 0; c < nc; ++c)
+      if (a[c].closed() != b[c].closed()) return false;
+    return true;
+  };
+  if (same_closed_contacts(mode_before, here) && same_closed_contacts(mode, here) && !same_closed_contacts(next, here))
+    return Phase{j, false, true};
   return Phase{j + 1, false};
 }
 
@@ -387,13 +400,13 @@ SegmentedInputLaw<S> ReferenceSpreadingController<S>::law() const {
     // Phases of the plant segments before k are final: their modes were the ones integrated.
     while (static_cast<int>(h.phase.size()) < k) {
       const std::size_t j = h.phase.size();
-      h.phase.push_back(next_phase(h.phase[j - 1], h.mode[j]));
+      h.phase.push_back(next_phase(h.phase[j - 1], h.mode[j - 1], h.mode[j]));
     }
     const Phase p = k == 0 ? h.phase[0]
                     : k < static_cast<int>(h.phase.size()) ? h.phase[k]
-                                                           : next_phase(h.phase[k - 1], mode);
+                                                           : next_phase(h.phase[k - 1], h.mode[k - 1], mode);
     h.mode[k] = mode;
-    if (p.intermediate)  // ante-event feedforward (file comment)
+    if (p.intermediate || p.micro_event_ahead)  // ante-event feedforward (file comment)
       return reference_.input(p.segment, std::clamp(t, reference_.reached_before(p.segment),
                                                      reference_.reached_after(p.segment)));
     return input(p.segment, t, x);
@@ -888,12 +901,21 @@ MonteCarloReport monte_carlo(const S& scene, const SimulationOptions& simulation
   report.runs = options.runs;
   report.run.resize(options.runs);
   report.deviation_times = times;
-  std::vector<State> d(options.runs);
+  // The starts x0 + eps d; with keep_initial_contacts projected onto the first mode, and d the
+  // projected start's deviation over eps (what the prediction and the normalisation then use).
+  std::vector<State> d(options.runs), start(options.runs);
   std::mt19937_64 rng(options.seed);
   std::normal_distribution<double> normal;
+  ConstraintProjection<S> projection;
+  projection.max_iterations = 20;
   for (int r = 0; r < options.runs; ++r) {
     for (int j = 0; j < nx; ++j) d[r][j] = options.scale[j] * normal(rng);
     if (options.project) d[r] = options.project(d[r]);
+    start[r] = x0 + options.size * d[r];
+    if (options.keep_initial_contacts) {
+      projection.project(scene, ref.segments.front().mode, start[r]);
+      d[r] = (start[r] - x0) / options.size;
+    }
     SALTUS_REQUIRE(d[r].allFinite() && (Lt * d[r]).norm() > 0, "monte_carlo: perturbation ", r, " is zero or not finite");
     try {
       report.run[r].predicted = (C * cl.propagate(d[r], T)).norm() / (Lt * d[r]).norm();
@@ -929,8 +951,7 @@ MonteCarloReport monte_carlo(const S& scene, const SimulationOptions& simulation
       }
     } count{out, failed_so_far, kept_so_far};
     try {
-      const State xs = x0 + options.size * d[r];
-      const HybridTrajectory<S> traj = simulators[worker]->run(xs, t0, T, controller.law());
+      const HybridTrajectory<S> traj = simulators[worker]->run(start[r], t0, T, controller.law());
       if (traj.status != SimulationStatus::Completed) {
         out.failed = true;
         out.reason = detail::concat("simulation ended with status ", to_string(traj.status));
@@ -944,9 +965,16 @@ MonteCarloReport monte_carlo(const S& scene, const SimulationOptions& simulation
       std::vector<int> phase_segments(static_cast<std::size_t>(traj.segment_count()), 0);
       for (int k = 1; k < traj.segment_count(); ++k) {
         const Phase before = phase;
-        phase = controller.next_phase(phase, traj.segments[k].mode);
+        phase = controller.next_phase(phase, traj.segments[k - 1].mode, traj.segments[k].mode);
         phase_segments[static_cast<std::size_t>(k)] = phase.segment;
-        if (!phase.intermediate && !(traj.segments[k].mode == ref.segments[phase.segment].mode)) kept = false;
+        if (kept && !phase.intermediate && !phase.micro_event_ahead &&
+            !(traj.segments[k].mode == ref.segments[phase.segment].mode)) {
+          kept = false;
+          out.departure = detail::concat("the plant's event into ", detail::describe_contact_modes(traj.segments[k].mode),
+                                         " where reference segment ", phase.segment, " has ",
+                                         detail::describe_contact_modes(ref.segments[phase.segment].mode),
+                                         " (t = ", traj.events[k - 1].t, " s)");
+        }
         // The controller held the reference beyond an extension (tracking.hpp): not a valid run.
         const double te = traj.events[k - 1].t;
         if (te > extended.reached_after(before.segment) || te < extended.reached_before(phase.segment)) {
@@ -957,7 +985,10 @@ MonteCarloReport monte_carlo(const S& scene, const SimulationOptions& simulation
           return;
         }
       }
-      out.kept_event_sequence = kept && !phase.intermediate && phase.segment == last;
+      out.kept_event_sequence = kept && !phase.intermediate && !phase.micro_event_ahead && phase.segment == last;
+      if (kept && !out.kept_event_sequence)
+        out.departure = phase.segment != last ? detail::concat("ended in reference segment ", phase.segment, " of 0 .. ", last)
+                                              : std::string("ended between the micro-events of a reference event");
       const State e = traj.final_state() - controller.reference().state(phase.segment, T);
       out.observed = (C * e).norm() / (Lt * (options.size * d[r])).norm();
       if (!times.empty())

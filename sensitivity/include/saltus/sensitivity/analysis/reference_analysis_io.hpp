@@ -23,7 +23,8 @@ namespace saltus {
 ///   predicted_rate       log(upper_bound) / (T - t0), 1/s
 ///   peak_amplification   the largest sampled a(t) (upper bound)
 ///   check_seconds        the closed loop's linearisation and the check
-///   monte_carlo          {runs, kept_event_sequence, failed, failure_reasons, grew, shrank (kept
+///   monte_carlo          {runs, kept_event_sequence, failed, failure_reasons, departures (of the
+///                        completed runs that left the event sequence, MonteCarloReport), grew, shrank (kept
 ///                        runs whose observed amplification is > 1, < 1), observed_rate_max (max
 ///                        over kept runs of log(observed) / (T - t0), 1/s), predicted_rate_max (the
 ///                        same of each run's first-order amplification), max_log_discrepancy (max
@@ -80,6 +81,7 @@ nlohmann::ordered_json to_json(const ReferenceAnalysis<S>& analysis) {
                         {"kept_event_sequence", m.kept_event_sequence},
                         {"failed", m.failed},
                         {"failure_reasons", m.failure_reasons},
+                        {"departures", m.departures},
                         {"grew", m.grew},
                         {"shrank", m.shrank},
                         {"observed_rate_max", m.observed_rate_max},

@@ -85,13 +85,17 @@ bool ScheduleRefinementNlp<S, Ocp>::released_at_start(int p, int i) const {
 /// phase's end, RefinementOptions::stance_load 4 theta (1 - theta) when it releases it there (by the
 /// guard lambda_n = 0), stance_load itself when it releases it at an input jump
 /// (RefinementOptions::releases_at_input_jumps: the force need not fall to 0 at the end, and a
-/// stance that starts at a touchdown with lambda_n = 0 may open again at once under its input).
+/// stance that starts at a touchdown with lambda_n = 0 may open again at once under its input);
+/// at least RefinementOptions::touchdown_load (1 - 4 theta) when a touchdown of i starts the phase.
 template <Scene S, class Ocp>
 double ScheduleRefinementNlp<S, Ocp>::normal_margin(int p, int i, double theta) const {
   const std::size_t next = static_cast<std::size_t>(p) + 1;
   const bool kept = next == schedule_.phases.size() || schedule_.phases[next][i].closed();
-  if (kept) return options_.normal_force_margin;
-  return options_.releases_at_input_jumps ? options_.stance_load : options_.stance_load * 4.0 * theta * (1.0 - theta);
+  const double bound = kept                               ? options_.normal_force_margin
+                       : options_.releases_at_input_jumps ? options_.stance_load
+                                                          : options_.stance_load * 4.0 * theta * (1.0 - theta);
+  const bool landed = p > 0 && schedule_.events[static_cast<std::size_t>(p - 1)].has(i, GuardKind::Touchdown);
+  return landed ? std::max(bound, options_.touchdown_load * (1.0 - 4.0 * theta)) : bound;
 }
 
 /// The lower bound of slipping contact i's speed s zeta_t in phase p at phase fraction theta [m/s]:

@@ -54,6 +54,8 @@ inline void RefinementOptions::validate() const {
                  "refinement: normal_force_margin must be finite and >= 0 [N], got ", normal_force_margin);
   SALTUS_REQUIRE(std::isfinite(stance_load) && stance_load >= 0.0,
                  "refinement: stance_load must be finite and >= 0 [N], got ", stance_load);
+  SALTUS_REQUIRE(std::isfinite(touchdown_load) && touchdown_load >= 0.0,
+                 "refinement: touchdown_load must be finite and >= 0 [N], got ", touchdown_load);
   SALTUS_REQUIRE(std::isfinite(touchdown_speed) && touchdown_speed >= 0.0,
                  "refinement: touchdown_speed must be finite and >= 0 [m/s], got ", touchdown_speed);
   SALTUS_REQUIRE(std::isfinite(flight_clearance) && flight_clearance >= 0.0,

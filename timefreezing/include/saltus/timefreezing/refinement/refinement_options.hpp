@@ -153,6 +153,15 @@ struct RefinementOptions {
   /// with lambda_n = 0 may open again at once in the simulator, measured on the hopper).
   /// mode_validity_violation reads the rows as imposed. 0: none.
   double stance_load = 0.0;
+  /// [N], >= 0. A contact that a touchdown closes starts its stance loaded: its lambda_n row in
+  /// that phase is lambda_n - max(b, touchdown_load (1 - 4 s)) >= 0 over the first quarter of the
+  /// phase (s the phase fraction, b the bound of the options above), so that lambda_n >=
+  /// touchdown_load at the post-impact state. Without it the cheapest landing may put the foot
+  /// down with no load (the hopper's touchdown at 1.9123 s: lambda_n = 1.7e-7 N right after the
+  /// impact), and every perturbed run of a tracking design either lifts the foot again at once or
+  /// leaves the friction cone there (docs/refinement.md). mode_validity_violation reads the rows
+  /// as imposed. 0: none.
+  double touchdown_load = 0.0;
   /// [m], >= 0. An open contact's row inside its phase is h_n - flight_clearance b(s) >= 0, s in
   /// [0, 1] the fraction of the phase and b a hump of peak 1 that is 0 at the phase's ends (a
   /// lift-off starts and a touchdown ends at h_n = 0): b = 4 s (1 - s), or (256/27) s^3 (1 - s) when
