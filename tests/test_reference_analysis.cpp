@@ -95,7 +95,7 @@ TEST(ReferenceAnalysis, JsonKeepsTheKeysOfEachCompletedStage) {
   EXPECT_EQ(j["events"][0]["t"].get<double>(), ref.trajectory.events[0].t);
   EXPECT_EQ(j["events"][0]["guards"].get<int>(), 1);
   EXPECT_EQ(keys(j["monte_carlo"]),
-            (std::vector<std::string>{"runs", "kept_event_sequence", "failed", "failure_reasons", "grew", "shrank",
+            (std::vector<std::string>{"runs", "kept_event_sequence", "failed", "failure_reasons", "departures", "grew", "shrank",
                                       "observed_rate_max", "predicted_rate_max", "max_log_discrepancy",
                                       "perturbation_size", "simulation_seconds", "seconds", "threads",
                                       "amplifications"}));
