@@ -13,7 +13,8 @@
 namespace saltus::scenes {
 namespace {
 
-// The plank-box's discovery and refinement on a coarse grid (the short landing of the test above).
+// The plank-box's discovery and refinement on a coarse grid (the short landing that
+// tests/test_flagship_ocps.cpp solves in PlankBoxShortLanding.CoarseGridConvergesWithAFlatLandingAndALiftOff).
 // Discovery reads the first relaxed solution (sigma = 1e-2) with sigma-scaled tolerances
 // (DiscoveryOptions::reading, 0.1 sigma m and sigma m/s): "land flat, slide, lift off"; read with
 // the exact tolerances (the default) the same solution has no contact at all (the landed box rests 1e-4 m above the plank, creeping up at
