@@ -707,6 +707,46 @@ TEST(PhaseResimulation, ASlipOnsetAtTheReleaseOfTheSameContactIsNotAnotherEvent)
   EXPECT_NE(slip_only.note.find("; the schedule's: table:open)"), std::string::npos) << slip_only.note;
 }
 
+// A touchdown that the re-simulation reaches a hair before the reference's event, where the
+// reference's input jumps: the flight pushes the mass up with twice its weight (it still lands,
+// coming down at 2 m/s), the stance pushes nothing. The reference's event is put 1e-7 s after the
+// physical touchdown (the drift a refined reference may have), so the simulator's touchdown comes
+// before the input jump. Under the law of time the post-impact mode is selected with the flight's
+// push, under which a closed contact would pull (lambda_n = -m g): the mass bounces. The phase's
+// re-simulation gives the plant the stance's first input once it is in the stance's mode
+// (detail::boundary_input_law), and the stance holds, as in the reference.
+TEST(PhaseResimulation, AnEarlyTouchdownSelectsTheStanceWithTheStancesFirstInput) {
+  const PointMass mass = frictional_mass();
+  const double m = scenes::PointMassToTheTarget::parameters().mass, g = scenes::PointMassToTheTarget::parameters().gravity;
+  const Vec<2> push(0.0, 2.0 * m * g), none = Vec<2>::Zero();
+  const Vec<4> x0(0.0, 0.1, 0.0, -2.0);
+  Simulator<PointMass> sim(mass);
+  HybridTrajectory<PointMass> ref =
+      sim.run(x0, 0.0, 0.3, [&](double, const Vec<4>&, const Mode<1>& mode) { return mode[0].closed() ? none : push; });
+  ASSERT_EQ(ref.events.size(), 1u);
+  ASSERT_TRUE(ref.segments[1].mode[0].closed());
+  const double t1 = ref.events[0].t + 1e-7;
+  ref.events[0].t = ref.segments[0].t_end = ref.segments[1].t_begin = t1;
+  ref.input = [&](double t, const Vec<4>&, const Mode<1>&) { return t < t1 ? push : none; };
+  ModeSchedule<1> schedule;
+  schedule.phases = {open_mode(), ref.segments[1].mode};
+  schedule.events = {ScheduleEvent{{Guard{0, GuardKind::Touchdown}}}};
+  const std::vector<double> element_times{0.0, t1, 0.3};
+
+  SimulationOptions by_time;
+  by_time.breakpoints = element_times;
+  const HybridTrajectory<PointMass> bounced = Simulator<PointMass>(mass, by_time).run(x0, 0.0, t1 + 1e-3, ref.input);
+  ASSERT_FALSE(bounced.events.empty());
+  EXPECT_LT(bounced.events[0].t, t1);
+  EXPECT_FALSE(bounced.events[0].mode_after[0].closed()) << "under the law of time the touchdown bounces";
+
+  const PhaseResimulation r = detail::resimulate_phase(mass, ref, schedule, element_times, SimulationOptions{}, 0.0, 0);
+  EXPECT_TRUE(r.event_guards_match) << r.note;
+  EXPECT_TRUE(r.next_mode_matches) << r.note;
+  EXPECT_LT(std::abs(r.event_time_error + 1e-7), 1e-8);
+  EXPECT_LT(r.x_plus_error, 1e-6);
+}
+
 /// A push the table's friction cannot hold: the cost wants u = (20, 0) N throughout while the
 /// mass sticks on the table for the whole horizon, so the optimum pushes as hard as the cone lets
 /// it, |u_1| = (1 - margin) mu m g.
@@ -992,6 +1032,23 @@ TEST(ScheduleRefinement, ATouchdownLoadMakesTheStanceStartLoaded) {
   ASSERT_TRUE(r.plain.converged && r.with.converged);
   EXPECT_LT(load_after_touchdown(r.plain), 11.0);
   EXPECT_NEAR(load_after_touchdown(r.with), 12.0, 1e-6);
+
+  // The refined input follows the mode at the touchdown (refined_input_law): in the stance's mode
+  // a hair before the touchdown's time the stance's first input (the load holds under it), in the
+  // flight's mode a hair after it the flight's last; at the release it stays a law of time.
+  const HybridTrajectory<PointMass>& traj = r.with.trajectory;
+  const Mode<1> stance_before = traj.segments[0].mode, flight = traj.segments[1].mode, stance = traj.segments[2].mode;
+  const double t_touchdown = traj.segments[2].t_begin, t_release = traj.segments[1].t_begin;
+  const double before = t_touchdown - 1e-9, after = t_touchdown + 1e-9, inf = std::numeric_limits<double>::infinity();
+  const Vec<4> x = traj.events[1].x_minus;
+  const Vec<2> stance_first = traj.input(t_touchdown, x, stance), flight_last = traj.input(before, x, flight);
+  EXPECT_GT((stance_first - flight_last).norm(), 1e-6) << "the input jumps at the touchdown";
+  EXPECT_EQ((traj.input(before, x, stance) - stance_first).norm(), 0.0);
+  EXPECT_EQ((traj.input(after, x, flight) - flight_last).norm(), 0.0);
+  EXPECT_EQ((traj.input(t_touchdown, x, flight) - flight_last).norm(), 0.0);
+  const double just_before_release = std::nextafter(t_release, -inf);
+  EXPECT_EQ((traj.input(just_before_release, x, flight) - traj.input(just_before_release, x, stance_before)).norm(), 0.0);
+  EXPECT_EQ((traj.input(t_release, x, stance_before) - traj.input(t_release, x, flight)).norm(), 0.0);
 }
 
 // SlideToOne through a forced flight lands with the downward speed its low flight gives; with

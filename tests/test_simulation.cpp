@@ -168,6 +168,33 @@ TEST_P(Simulation, ContactAtZeroForceUnderAModeSwitchingLawSlidesThenRests) {
   EXPECT_NEAR(traj.input_at(0, 0.75)[1], g + 1.0 - 1.5, 1e-12);  // resting: the plain law
 }
 
+// A law that switches with the contact mode makes two modes consistent where the point mass
+// (m = 1) rests on, or lands on, the table: closed, no thrust (lambda_n = m g); open, a thrust of
+// 2 m g up (the mass leaves). A given initial mode is judged with its own input: the closed start
+// is accepted (under the open mode's input it would pull). At a touchdown (from 0.1 m, coming
+// down at 2 m/s: it lands under the upward thrust) the selection starts from the impact's
+// post-impact mode: the contact the impact closed stays closed (transition.hpp, "Mode-dependent
+// input laws"); starting from the flight's mode it bounced, under the flight's thrust.
+TEST_P(Simulation, AModeSwitchingLawKeepsTheContactAGivenModeOrAnImpactCloses) {
+  scenes::PointMass mass;
+  const InputLaw<scenes::PointMass> law = [](double, const Vec<4>&, const Mode<1>& mode) {
+    return Vec<2>(0.0, mode[0].closed() ? 0.0 : 2.0 * g);
+  };
+  Simulator<scenes::PointMass> sim(mass, tight());
+  Mode<1> closed;
+  closed[0] = ContactState::slip(Eigen::Vector2d::Zero());  // frictionless: closed
+  const auto resting = sim.run(Vec<4>::Zero(), closed, 0.0, 0.5, law);
+  EXPECT_TRUE(resting.events.empty());
+  EXPECT_TRUE(matrices_near(resting.final_state(), Vec<4>::Zero(), 0.0, 1e-12));
+
+  const auto landing = sim.run(Vec<4>(0.0, 0.1, 0.0, -2.0), 0.0, 0.5, law);
+  ASSERT_EQ(landing.events.size(), 1u);
+  EXPECT_EQ(landing.events[0].guards().at(0).kind, GuardKind::Touchdown);
+  EXPECT_NEAR(landing.events[0].t, (2.0 - std::sqrt(4.0 - 2.0 * g * 0.1)) / g, 1e-9);  // decelerated at g
+  EXPECT_TRUE(landing.segments.back().mode[0].closed());
+  EXPECT_TRUE(matrices_near(landing.final_state(), Vec<4>::Zero(), 0.0, 1e-9));
+}
+
 TEST_P(Simulation, PointMassOfExampleThreeImpactsSlidesAndLiftsOff) {
   scenes::PointMass mass;
   auto input = open_loop<scenes::PointMass>([](double t) { return Vec<2>(7.0, t < 1.0 ? 0.0 : 2 * g * (t - 1.0)); });

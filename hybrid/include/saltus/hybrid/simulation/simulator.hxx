@@ -118,6 +118,7 @@ HybridTrajectory<S> Simulator<S>::run_impl(const State& x0, std::optional<Mode<n
   State x = x0;
   Mode<nc> mode;
   if (mode0) {
+    sys.set_mode(*mode0);  // a law that switches with the contact mode is judged with the given mode's input
     check_initial_mode(x0, *mode0, sys.input(t0, x0));
     mode = *mode0;
   } else {

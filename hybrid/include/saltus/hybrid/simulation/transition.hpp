@@ -28,7 +28,16 @@
 // reference-spreading controller that turns its feedback on once the plant reaches a reference
 // mode) may make the mode chosen under the input of the mode being left inconsistent under its
 // own input, a release or a touchdown due at once, and the chain would cycle over events at one
-// instant. Where no mode is consistent because one contact at rest on the surface pulls when
+// instant. The selection starts from a mode and keeps the first one consistent under its own
+// input; such a law can make two modes consistent (a stance loaded under the stance's input, a
+// flight leaving the ground under the flight's). After an impact it starts from the impact's own
+// post-impact mode (the contacts it closed, closed): the impact has made the contact, a law that
+// switches with the mode applies its post-contact input from then on, and the contact opens
+// again only where it would pull under that input (the release guard's rule inside a stance).
+// Starting from the mode before the impact instead, a reference-spreading controller whose
+// stance starts loaded under the stance's input bounces wherever the flight's input would pull
+// the foot (the hopper's touchdowns, docs/refinement.md). A law that ignores the mode selects the
+// same mode from either start. Where no mode is consistent because one contact at rest on the surface pulls when
 // closed and is pushed in when open, the contact slides on the surface at (almost) zero force
 // under the equivalent control (ModeSystem::set_sliding, Filippov's sliding solution).
 //

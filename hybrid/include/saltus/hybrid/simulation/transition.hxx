@@ -241,12 +241,17 @@ void TransitionResolver<S>::apply_impact(ModeSystem<S>& sys, double t, State& x,
   }
   tr.impulse = r.impulse;
   x = r.x_plus;
-  // Contacts left at zero normal velocity: choose their mode at the acceleration level.
+  // Contacts left at zero normal velocity: choose their mode at the acceleration level, starting
+  // from the impact's own post-impact mode (file comment, "Mode-dependent input laws").
   std::array<bool, nc> candidates{}, all{};
-  for (int i = 0; i < nc; ++i) candidates[i] = r.post_mode[i].closed();
+  Mode<nc> after_impact = mode;
+  for (int i = 0; i < nc; ++i) {
+    candidates[i] = r.post_mode[i].closed();
+    if (candidates[i]) after_impact[i] = r.post_mode[i];
+  }
   all.fill(true);
-  sys.set_mode(mode);
-  mode = select_consistent(sys, t, x, mode, all, candidates, {}, tr.selection_solutions, tr.sliding_contact);
+  sys.set_mode(after_impact);
+  mode = select_consistent(sys, t, x, after_impact, all, candidates, {}, tr.selection_solutions, tr.sliding_contact);
 }
 
 template <Scene S>

@@ -5,6 +5,7 @@
 
 #include <saltus/hybrid/dynamics/constraints.hpp>
 #include <saltus/hybrid/vocabulary/guard.hpp>
+#include <saltus/timefreezing/refinement/refined_trajectory.hxx>  // detail::same_branches
 #include <saltus/timefreezing/refinement/refinement.hpp>
 
 #include <algorithm>
@@ -38,17 +39,6 @@ HybridTrajectory<S> run_from(Simulator<S>& sim, const VecT<double, 2 * S::nq>& x
   }
 }
 
-
-/// Whether two modes put every contact in the same branch (open, stick, slip with the same sign
-/// of the slip direction).
-template <int NC>
-bool same_branches(const Mode<NC>& a, const Mode<NC>& b) {
-  for (int i = 0; i < NC; ++i) {
-    if (a[i].mode != b[i].mode) return false;
-    if (a[i].mode == ContactMode::Slip && a[i].slip_direction.dot(b[i].slip_direction) <= 0.0) return false;
-  }
-  return true;
-}
 
 /// The state of `run` at t before any event at t: x- of the first event within `tolerance` of t
 /// (the simulator locates an event to its own tolerance, a hair before or after the node), else
@@ -184,6 +174,36 @@ double project_on_contacts(const S& scene, Mode<S::nc> manifold, const Mode<S::n
   return (x - unprojected).cwiseAbs().maxCoeff();
 }
 
+/// The optimal input as phase p's re-simulation applies it: the law of time (phase p's input, held
+/// before its start) on both sides of the phase's end, where a release (lambda_n = 0 at x-) or a
+/// slip onset happens because the next phase's input drives the force out of its cone; except
+/// before a touchdown: once the plant is in phase p + 1's mode before the phase's end, it gets
+/// phase p + 1's first input (the ex-post extension of reference spreading). The simulator
+/// locates an event to its own tolerance, and the re-simulation's drift (within the check's
+/// 1e-6) may bring a touchdown a hair before the reference's; under the law of time the
+/// transition would then select the post-impact mode with the flight's last input, under which
+/// a stance that starts loaded under its own first input may be inconsistent (the hopper's
+/// touchdowns: lambda_n = 68 N under the stance's first input, -21 N under the flight's last),
+/// and the simulator would bounce where the reference lands. Before a release the law of time
+/// stays: a stance whose force is zero over its last element (an optimum may put it there) may be
+/// released by the simulator at any node of that element with the same motion, and the flight's
+/// input from then on would lift it early; a late event keeps the law of time as well, an input
+/// jump at the phase's end may be what fires it (RefinementOptions::releases_at_input_jumps).
+template <Scene S>
+InputLaw<S> boundary_input_law(const HybridTrajectory<S>& traj, int p) {
+  const Segment<S>& seg = traj.segments[static_cast<std::size_t>(p)];
+  const double t0 = seg.t_begin, t1 = seg.t_end;
+  if (p + 1 >= static_cast<int>(traj.segments.size()) || !traj.events[static_cast<std::size_t>(p)].impact())
+    return [&traj, t0](double t, const VecT<double, 2 * S::nq>& x, const Mode<S::nc>& m) {
+      return traj.input(std::max(t, t0), x, m);
+    };
+  const Mode<S::nc> here = seg.mode, next = traj.segments[static_cast<std::size_t>(p + 1)].mode;
+  return [&traj, t0, t1, here, next](double t, const VecT<double, 2 * S::nq>& x, const Mode<S::nc>& m) {
+    if (t < t1 && same_branches(m, next) && !same_branches(m, here)) return traj.input(t1, x, m);
+    return traj.input(std::max(t, t0), x, m);
+  };
+}
+
 /// Phase p re-simulated window by window (resimulate_phases): each window from the reference's
 /// state at its start (the first from x+ of the event before it), projected onto the phase's
 /// closed contacts; the last window runs past the phase's end and judges the boundary.
@@ -203,11 +223,7 @@ PhaseResimulation resimulate_phase(const S& scene, const HybridTrajectory<S>& tr
     r.note = "the phase has zero duration";
     return r;
   }
-  // The optimal input on both sides of the phase's end: a release (lambda_n = 0 at x-) or a slip
-  // onset happens there because the next phase's input drives the force out of its cone.
-  const InputLaw<S> law = [&traj, t0](double t, const VecT<double, 2 * S::nq>& x, const Mode<S::nc>& m) {
-    return traj.input(std::max(t, t0), x, m);
-  };
+  const InputLaw<S> law = boundary_input_law(traj, p);
   SimulationOptions options = simulation;
   options.breakpoints = nodes;
   Simulator<S> sim(scene, options);
