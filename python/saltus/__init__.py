@@ -3,8 +3,9 @@
 The compiled module ``saltus._saltus`` binds the C++ library's scene library:
 
 Scenes (immutable, picklable)
-    ``BouncingBall``, ``PointMass`` (the guiding example), ``PlankBox``; ``nq``, ``nx = 2 nq``,
-    ``nu``, ``nc`` and ``contacts`` describe them.
+    ``BouncingBall``, ``PointMass`` (the guiding example), ``PlankBox``, ``Hopper`` (the
+    one-legged hopper), ``SpatialBox`` (a box on eight corner contacts); ``nq``, ``nx = 2 nq``,
+    ``nu``, ``nc``, ``contacts`` and ``gaps(q)`` describe them.
 Simulation
     ``simulate(scene, x0, t0, t_final, input=None, options=None)`` returns the scene's
     ``Trajectory``: ``segments`` (``Segment.times`` (n,) s, ``Segment.states`` (n, nx)),
@@ -18,7 +19,7 @@ Jump gains
     ``dt_dz``, ``dt_dv``. ``conewise_gain(trajectory, event)``: the conewise gain of a
     simultaneous event, ``pieces`` (``ConewisePiece.order``, ``G_z``, ``G_v``, ``cone_z``,
     ``cone_v``), ``evaluate(z, v)``.
-Linearisation, tracking and stability (PointMass, PlankBox)
+Linearisation, tracking and stability (the actuated scenes: PointMass, PlankBox, Hopper)
     ``linearise(reference)`` with ``predict(z0, times)`` (the first-order prediction, (n, nx))
     and ``state_transition(t1, t0)`` (nx, nx); ``lqr_design(lin, Q, R, Q_final)`` or
     ``constant_gains(lin, pd_gain(Kp, Kd))``, ``tracking(lin, gains)`` with
@@ -49,6 +50,7 @@ from ._saltus import (  # noqa: F401  (the public names)
     Error,
     Event,
     GrazingEvent,
+    Hopper,
     IntegratorKind,
     InternalError,
     InvalidArgument,
@@ -62,6 +64,7 @@ from ._saltus import (  # noqa: F401  (the public names)
     Segment,
     SimulationOptions,
     SimultaneousActivation,
+    SpatialBox,
     StabilityReport,
     UnplannedEvent,
     conewise_gain,
@@ -77,7 +80,7 @@ from ._saltus import (  # noqa: F401  (the public names)
 )
 
 __all__ = [
-    "BouncingBall", "PointMass", "PlankBox", "SimulationOptions", "IntegratorKind",
+    "BouncingBall", "PointMass", "PlankBox", "Hopper", "SpatialBox", "SimulationOptions", "IntegratorKind",
     "simulate", "polish", "references", "Segment", "Event",
     "jump_gains", "JumpGain", "conewise_gain", "ConewisePiece",
     "linearise", "lqr_design", "constant_gains", "pd_gain", "tracking", "optimal_control",

@@ -60,6 +60,8 @@ void bind_jump_gains(py::module_& m) {
   bind_jump_gains_of<scenes::BouncingBall>(m, "BouncingBall", doc, conewise_doc);
   bind_jump_gains_of<scenes::PointMass>(m, "PointMass");
   bind_jump_gains_of<scenes::PlankBox>(m, "PlankBox");
+  bind_jump_gains_of<scenes::Hopper>(m, "Hopper");
+  bind_jump_gains_of<scenes::SpatialBox>(m, "SpatialBox");
 }
 
 }  // namespace saltus::python

@@ -2,6 +2,10 @@
 // properties out; they pickle through their parameters) and the simulation options.
 #include "common.hpp"
 
+#include <algorithm>
+#include <array>
+#include <iterator>
+
 namespace saltus::python {
 
 namespace {
@@ -45,8 +49,46 @@ void scene_common(Cls& cls) {
             }
             return out;
           },
-          "the contacts in index order: dicts with name, friction ('none', 'planar', 'spatial'), mu, restitution");
+          "the contacts in index order: dicts with name, friction ('none', 'planar', 'spatial'), mu, restitution")
+      .def(
+          "gaps",
+          [](const S& s, const Eigen::VectorXd& q) {
+            SALTUS_REQUIRE(q.size() == S::nq, "q has size ", q.size(), ", expected nq = ", S::nq, scene_label<S>());
+            SALTUS_REQUIRE(q.allFinite(), "q is not finite");
+            const Vec<S::nq> qs = q;
+            Eigen::VectorXd out(S::nc);
+            for (int i = 0; i < S::nc; ++i) out[i] = s.template gap<double>(i, qs);
+            return out;
+          },
+          py::arg("q"), "(nc,) the normal distance [m] of each contact at the configuration q (nq,): >= 0 when open");
 }
+
+/// A parameter struct of doubles pickled as a tuple, in the order of `fields`.
+template <class P, std::size_t N>
+py::tuple to_tuple(const P& p, double P::*const (&fields)[N]) {
+  py::tuple t(N);
+  for (std::size_t k = 0; k < N; ++k) t[k] = p.*fields[k];
+  return t;
+}
+
+template <class P, std::size_t N>
+P from_tuple(const py::tuple& t, double P::*const (&fields)[N]) {
+  SALTUS_REQUIRE(t.size() == N, "pickled parameters: ", t.size(), " values, expected ", N);
+  P p;
+  for (std::size_t k = 0; k < N; ++k) p.*fields[k] = t[k].cast<double>();
+  return p;
+}
+
+using HopperParameters = scenes::HopperParameters;
+constexpr double HopperParameters::*hopper_fields[] = {
+    &HopperParameters::base_mass,     &HopperParameters::thigh_mass,    &HopperParameters::shank_mass,
+    &HopperParameters::thigh_length,  &HopperParameters::shank_length,  &HopperParameters::thigh_com,
+    &HopperParameters::shank_com,     &HopperParameters::thigh_inertia, &HopperParameters::shank_inertia,
+    &HopperParameters::gravity,       &HopperParameters::mu,            &HopperParameters::restitution};
+constexpr const char* hopper_names[] = {"base_mass",    "thigh_mass", "shank_mass",    "thigh_length",
+                                        "shank_length", "thigh_com",  "shank_com",     "thigh_inertia",
+                                        "shank_inertia", "gravity",   "mu",            "restitution"};
+static_assert(std::size(hopper_fields) == std::size(hopper_names));
 
 }  // namespace
 
@@ -223,6 +265,91 @@ void bind_scenes(py::module_& m) {
             return PlankBox(p);
           }));
   scene_common<PlankBox>(plank);
+
+  // ---- Hopper: the one-legged hopping robot Capler (time-freezing paper, Section 6) ----------
+  using scenes::Hopper;
+  py::class_<Hopper> hopper(m, "Hopper",
+                            "The planar one-legged hopper (time-freezing paper, Section 6): a base at the hip that "
+                            "translates without rotating, a thigh and a shank driven at the hip and the knee; q = (x "
+                            "[m], z [m] of the hip, phi_hip [rad] (thigh from the downward vertical), phi_knee [rad] "
+                            "(shank relative to the thigh)), u = (tau_hip, tau_knee) [N m]; one contact 'foot' "
+                            "(planar Coulomb friction).");
+  {
+    const HopperParameters d{};
+    hopper
+        .def(py::init([](double base_mass, double thigh_mass, double shank_mass, double thigh_length,
+                         double shank_length, double thigh_com, double shank_com, double thigh_inertia,
+                         double shank_inertia, double gravity, double mu, double restitution) {
+               return Hopper({base_mass, thigh_mass, shank_mass, thigh_length, shank_length, thigh_com, shank_com,
+                              thigh_inertia, shank_inertia, gravity, mu, restitution});
+             }),
+             py::arg("base_mass") = d.base_mass, py::arg("thigh_mass") = d.thigh_mass,
+             py::arg("shank_mass") = d.shank_mass, py::arg("thigh_length") = d.thigh_length,
+             py::arg("shank_length") = d.shank_length, py::arg("thigh_com") = d.thigh_com,
+             py::arg("shank_com") = d.shank_com, py::arg("thigh_inertia") = d.thigh_inertia,
+             py::arg("shank_inertia") = d.shank_inertia, py::arg("gravity") = d.gravity, py::arg("mu") = d.mu,
+             py::arg("restitution") = d.restitution,
+             "masses [kg], lengths (hip to knee, knee to foot) and centres of mass (from the hip along the thigh, "
+             "from the knee along the shank) [m], inertias about the centres of mass [kg m^2], gravity [m/s^2], the "
+             "foot's mu and restitution e_n; defaults: the model data of the time-freezing paper's hopper")
+        .def_property_readonly("total_mass", &Hopper::total_mass, "kg")
+        .def(
+            "foot",
+            [](const Hopper& s, const Eigen::VectorXd& q) {
+              SALTUS_REQUIRE(q.size() == Hopper::nq, "q has size ", q.size(), ", expected nq = ", Hopper::nq,
+                             " for the scene hopper");
+              return Eigen::Vector2d(s.foot<double>(Vec<Hopper::nq>(q)));
+            },
+            py::arg("q"), "the foot's position (x, z) [m] at the configuration q (nq = 4,)")
+        .def("__repr__",
+             [](const Hopper& s) {
+               const auto& p = s.parameters();
+               return py::str("Hopper(total_mass={!r}, mu={!r}, restitution={!r})")
+                   .format(s.total_mass(), p.mu, p.restitution);
+             })
+        .def(py::pickle([](const Hopper& s) { return to_tuple(s.parameters(), hopper_fields); },
+                        [](const py::tuple& t) { return Hopper(from_tuple<HopperParameters>(t, hopper_fields)); }));
+    for (std::size_t k = 0; k < std::size(hopper_names); ++k)
+      hopper.def_property_readonly(hopper_names[k], [f = hopper_fields[k]](const Hopper& s) { return s.parameters().*f; });
+  }
+  scene_common<Hopper>(hopper);
+
+  // ---- SpatialBox: a rigid box in space above flat ground, eight corner contacts --------------
+  using scenes::SpatialBox;
+  py::class_<SpatialBox> box(m, "SpatialBox",
+                             "A rigid box above flat ground: q = (x, y, z [m] of the centre, roll, pitch, yaw [rad], "
+                             "Z-Y-X Euler angles), no input (nu = 0); eight contacts 'corner0'..'corner7' (spatial "
+                             "Coulomb friction), corners 0-3 the bottom face. Euler angles are singular at pitch = "
+                             "+-pi/2 (NonSpdMassMatrix).");
+  box.def(py::init([](double mass, const std::vector<double>& size, double gravity, double mu, double restitution) {
+            SALTUS_REQUIRE(size.size() == 3, "size has ", size.size(), " entries, expected 3 edge lengths [m]");
+            return SpatialBox({mass, {size[0], size[1], size[2]}, gravity, mu, restitution});
+          }),
+          py::arg("mass") = 2.0, py::arg("size") = std::vector<double>{0.4, 0.3, 0.2}, py::arg("gravity") = 9.81,
+          py::arg("mu") = 0.5, py::arg("restitution") = 0.0,
+          "mass [kg], size: edge lengths along the body x, y, z [m], gravity [m/s^2], mu (every corner), "
+          "restitution e_n")
+      .def_property_readonly("mass", [](const SpatialBox& s) { return s.parameters().mass; })
+      .def_property_readonly("size", [](const SpatialBox& s) { return s.parameters().size; })
+      .def_property_readonly("gravity", [](const SpatialBox& s) { return s.parameters().gravity; })
+      .def_property_readonly("mu", [](const SpatialBox& s) { return s.parameters().mu; })
+      .def_property_readonly("restitution", [](const SpatialBox& s) { return s.parameters().restitution; })
+      .def("__repr__",
+           [](const SpatialBox& s) {
+             const auto& p = s.parameters();
+             return py::str("SpatialBox(mass={!r}, size={!r}, gravity={!r}, mu={!r}, restitution={!r})")
+                 .format(p.mass, p.size, p.gravity, p.mu, p.restitution);
+           })
+      .def(py::pickle(
+          [](const SpatialBox& s) {
+            const auto& p = s.parameters();
+            return py::make_tuple(p.mass, p.size, p.gravity, p.mu, p.restitution);
+          },
+          [](const py::tuple& t) {
+            return SpatialBox({t[0].cast<double>(), t[1].cast<std::array<double, 3>>(), t[2].cast<double>(),
+                               t[3].cast<double>(), t[4].cast<double>()});
+          }));
+  scene_common<SpatialBox>(box);
 }
 
 }  // namespace saltus::python

@@ -1,6 +1,7 @@
 // The module's simulation unit: the classes Segment and Event, simulate() and the trajectory
 // classes of the scene library's scenes (saltus/python/trajectory.hpp), and the scene library's
-// canonical reference motions (saltus.references: C++ input laws).
+// canonical reference motions (saltus.references: C++ input laws). The hopper and the spatial box
+// are bound like the others: simulate, their trajectories, polish.
 #include "common.hpp"
 #include "scenes/references.hpp"
 
@@ -62,6 +63,8 @@ void bind_simulation(py::module_& m) {
       "state below a contact), saltus.NumericalFailure, saltus.ContactProblemFailure, saltus.NonSpdMassMatrix.");
   bind_trajectory<scenes::PointMass>(m, "PointMass");
   bind_trajectory<scenes::PlankBox>(m, "PlankBox");
+  bind_trajectory<scenes::Hopper>(m, "Hopper");
+  bind_trajectory<scenes::SpatialBox>(m, "SpatialBox");
 
   py::module_ refs = m.def_submodule("references", "The scene library's canonical reference motions (C++ input laws).");
   refs.def(
@@ -76,6 +79,16 @@ void bind_simulation(py::module_& m) {
   refs.def(
       "point_mass_hop", [](double t_final) { return from_reference(references::point_mass_hop(t_final)); },
       py::arg("t_final") = 2.0, "PointMass, a periodic hop of period 1 s (release, flight, touchdown).");
+  refs.def(
+      "hopper", [] { return from_reference(references::hopper()); },
+      "Hopper dropped from 5 cm (foot height) with the legs bent (phi_hip 0.4, phi_knee -0.8 rad) at 2 m/s forwards "
+      "under the open-loop torques (0, -10 t) N m: touchdown into slip, lift-off 5 ms later, touchdown into slip, "
+      "slip->stick.");
+  refs.def(
+      "hopper_push_off", [] { return from_reference(references::hopper_push_off()); },
+      "Hopper under a joint-space PD law (a feedback law): dropped from 5 cm crouched (hip 0.4, knee -0.8 rad; kp 40, "
+      "kd 2) at 0.3 m/s forwards it lands into stick; around t = 0.3 s the targets and gains blend (tanh, 10 ms) to a "
+      "stiff push (hip 0.15, knee -0.3; kp 150, kd 3): stick->slip, then lift-off (release).");
   refs.def(
       "plank_box", [] { return from_reference(references::plank_box()); },
       "PlankBox: the tilted box's right corner lands and slips, then its left corner lands and both stick.");

@@ -1,6 +1,7 @@
 // Tracking designs along a reference with impacts, their stability check and the Monte Carlo
-// validation (sensitivity/tracking.hpp), for the point mass (the guiding example: Example 3's
-// impact, sliding and release; the periodic hop) and the plank-box:
+// validation (sensitivity/tracking.hpp), for the actuated scenes: the point mass (the guiding
+// example: Example 3's impact, sliding and release; the periodic hop), the plank-box and the hopper
+// (the unactuated bouncing ball and spatial box, nu = 0, have nothing to design):
 //   lin = saltus.linearise(reference)                      LinearisedSystem (reference spreading, jump gains)
 //   K = saltus.lqr_design(lin, Q, R, Q_final)              a GainSchedule (or saltus.constant_gains(lin, K))
 //   design = saltus.tracking(lin, K)                       controller + closed-loop linearisation
@@ -202,6 +203,7 @@ void bind_tracking(py::module_& m) {
 
   bind_scene_tracking<scenes::PointMass>(m, "PointMass");
   bind_scene_tracking<scenes::PlankBox>(m, "PlankBox");
+  bind_scene_tracking<scenes::Hopper>(m, "Hopper");
 }
 
 }  // namespace saltus::python

@@ -8,6 +8,7 @@
 #include <saltus/sensitivity/linearisation.hpp>
 #include <saltus/sensitivity/tracking.hpp>
 
+#include <limits>
 #include <mutex>
 #include <random>
 
@@ -44,6 +45,17 @@ std::vector<Vec<NX>> draw(int first, int count, const Vec<NX>& scale, std::uint6
   for (auto& dr : d)
     for (int j = 0; j < NX; ++j) dr[j] = scale[j] * normal(rng);
   return d;
+}
+
+/// A random seed from Python: an integer (int, NumPy integer) in [0, 2^64). @throws
+/// InvalidArgument (where pybind11's conversion would give a TypeError listing the overloads).
+inline std::uint64_t to_seed(const py::object& seed) {
+  PyObject* index = PyNumber_Index(seed.ptr());
+  if (!index) PyErr_Clear();
+  const auto i = py::reinterpret_steal<py::object>(index);
+  SALTUS_REQUIRE(index && i >= py::int_(0) && i <= py::int_(std::numeric_limits<std::uint64_t>::max()),
+                 "seed must be an integer in [0, 2^64), got ", py::repr(seed).cast<std::string>());
+  return i.cast<std::uint64_t>();
 }
 
 template <Scene S>
@@ -83,6 +95,7 @@ template <Scene S>
 Mat<S::nu, 2 * S::nq> to_gain(const Eigen::MatrixXd& K) {
   SALTUS_REQUIRE(K.rows() == S::nu && K.cols() == 2 * S::nq, "the gain has shape (", K.rows(), ", ", K.cols(),
                  "), expected (nu, nx) = (", S::nu, ", ", 2 * S::nq, ")");
+  SALTUS_REQUIRE(K.allFinite(), "the gain K is not finite");
   return K;
 }
 
@@ -108,13 +121,27 @@ StabilityOptions<S> stability_options(const std::optional<Eigen::MatrixXd>& weig
   return o;
 }
 
+/// The horizon t_final given to check_stability or monte_carlo (None: the reference's end, which
+/// the C++ calls take a negative value for): a given one must be finite and inside the reference,
+/// so that a negative number is not silently read as "the end". @throws InvalidArgument.
+template <Scene S>
+double horizon(const PyTracking<S>& tr, const std::optional<double>& t_final, const char* who) {
+  if (!t_final) return -1.0;
+  const LinearisedSystem<S>& ol = *tr.linearisation->system;
+  const double t0 = ol.t_begin(0), t_end = ol.t_end(ol.segment_count() - 1);
+  SALTUS_REQUIRE(std::isfinite(*t_final) && *t_final > t0 && *t_final <= t_end, who,
+                 ": t_final must be a time in the reference (", t0, ", ", t_end, "] s, got ", *t_final);
+  return *t_final;
+}
+
 template <Scene S>
 StabilityReport check(PyTracking<S>& tr, const std::optional<Eigen::MatrixXd>& weight,
                       const std::optional<Eigen::MatrixXd>& output_weight, std::optional<double> t_final) {
   const StabilityOptions<S> o = stability_options<S>(weight, output_weight);
+  const double T = horizon(tr, t_final, "check_stability");
   py::gil_scoped_release release;
   std::lock_guard<std::mutex> lock(tr.mutex);
-  return check_stability(*tr.closed_loop, o, t_final.value_or(-1.0));
+  return check_stability(*tr.closed_loop, o, T);
 }
 
 template <Scene S>
@@ -127,14 +154,16 @@ PeriodicStabilityReport check_periodic(PyTracking<S>& tr, double period, const s
 
 template <Scene S>
 PyMonteCarlo monte_carlo_chunk(PyTracking<S>& tr, int runs, double size, const std::optional<Eigen::VectorXd>& scale,
-                               std::uint64_t seed, int threads, std::optional<double> t_final, int first,
+                               const py::object& seed_int, int threads, std::optional<double> t_final, int first,
                                std::optional<int> count, const std::optional<Eigen::MatrixXd>& weight,
                                const std::optional<Eigen::MatrixXd>& output_weight) {
   constexpr int nx = 2 * S::nq;
   SALTUS_REQUIRE(runs >= 1, "monte_carlo: runs must be >= 1, got ", runs);
+  const std::uint64_t seed = to_seed(seed_int);
   const int n = count.value_or(runs - first);
   SALTUS_REQUIRE(first >= 0 && n >= 1 && first + n <= runs, "monte_carlo: the chunk [", first, ", ", first + n,
                  ") is not a non-empty part of the batch [0, ", runs, ")");
+  SALTUS_REQUIRE(threads >= 0, "monte_carlo: threads must be >= 0 (0: all cores), got ", threads);
   MonteCarloOptions<S> o;
   o.runs = n;
   o.size = size;
@@ -146,7 +175,7 @@ PyMonteCarlo monte_carlo_chunk(PyTracking<S>& tr, int runs, double size, const s
   o.threads = threads;
   o.weight = to_square<nx>(weight, o.weight, "weight");
   if (output_weight) o.output_weight = to_square<nx>(output_weight, o.weight, "output_weight");
-  if (t_final) o.t_final = *t_final;
+  o.t_final = horizon(tr, t_final, "monte_carlo");
   // The batch's directions d_first .. d_{first+n-1}: the library draws its own n and hands each to
   // `project` in order, which returns the batch's instead.
   auto d = std::make_shared<std::vector<Vec<nx>>>(draw<nx>(first, n, o.scale, seed));
@@ -183,7 +212,12 @@ void bind_scene_tracking(py::module_& m, const std::string& scene_name) {
           "gain", [](const Schedule& s, int i, double t) { return Eigen::MatrixXd(s(i, t)); }, py::arg("segment"),
           py::arg("t"), "K_i(t): (nu, nx)")
       .def(
-          "times", [](const Schedule& s, int i) { return s.times(i); }, py::arg("segment"),
+          "times",
+          [](const Schedule& s, int i) {
+            SALTUS_REQUIRE(i >= 0 && i < s.segment_count(), "segment ", i, " out of range [0, ", s.segment_count(), ")");
+            return s.times(i);
+          },
+          py::arg("segment"),
           "the sample times of segment i [s]");
 
   using L = PyLinearisation<S>;
@@ -193,7 +227,13 @@ void bind_scene_tracking(py::module_& m, const std::string& scene_name) {
       .def_property_readonly("reference", [](const L& l) { return l.reference; })
       .def_property_readonly("segment_count", [](const L& l) { return l.system->segment_count(); })
       .def(
-          "conewise", [](const L& l, int i) { return l.system->conewise(i); }, py::arg("event"),
+          "conewise",
+          [](const L& l, int i) {
+            const int n = static_cast<int>(l.reference->trajectory.events.size());
+            SALTUS_REQUIRE(i >= 0 && i < n, "event index ", i, " out of range [0, ", n, ")");
+            return l.system->conewise(i);
+          },
+          py::arg("event"),
           "event i is simultaneous: its gain is conewise (G_z, G_v of gains() are NaN there)")
       .def(
           "gains",
@@ -207,9 +247,11 @@ void bind_scene_tracking(py::module_& m, const std::string& scene_name) {
           "predict",
           [](const L& l, const Eigen::VectorXd& z0, const Eigen::VectorXd& times, const std::optional<Eigen::VectorXd>& v) {
             const Vec<nx> z = to_state<S>(z0, "z0");
+            SALTUS_REQUIRE(z.allFinite(), "predict: z0 is not finite");
             Vec<S::nu> vc = Vec<S::nu>::Zero();
             if (v) {
               SALTUS_REQUIRE(v->size() == S::nu, "v has size ", v->size(), ", expected nu = ", S::nu);
+              SALTUS_REQUIRE(v->allFinite(), "predict: v is not finite");
               vc = *v;
             }
             const auto& ref = l.reference->trajectory;
@@ -252,6 +294,11 @@ void bind_scene_tracking(py::module_& m, const std::string& scene_name) {
           "propagate",
           [](T& t, const Eigen::VectorXd& z0, double time) {
             const Vec<nx> z = to_state<S>(z0, "z0");
+            SALTUS_REQUIRE(z.allFinite(), "propagate: z0 is not finite");
+            const LinearisedSystem<S>& ol = *t.linearisation->system;
+            const double t0 = ol.t_begin(0), t_end = ol.t_end(ol.segment_count() - 1);
+            SALTUS_REQUIRE(time >= t0 && time <= t_end, "propagate: t = ", time, " is outside the reference [", t0,
+                           ", ", t_end, "]");
             std::lock_guard<std::mutex> lock(t.mutex);
             return Eigen::VectorXd(t.closed_loop->propagate(z, time));
           },
@@ -265,7 +312,7 @@ void bind_scene_tracking(py::module_& m, const std::string& scene_name) {
            "Stability of a periodic reference of the given period [s]: bounds on the spectral radius of the "
            "closed-loop monodromy. Returns a PeriodicStabilityReport.")
       .def("monte_carlo", &monte_carlo_chunk<S>, py::arg("runs") = 200, py::arg("size") = 1e-4,
-           py::arg("scale") = py::none(), py::arg("seed") = 20261130ULL, py::arg("threads") = 0,
+           py::arg("scale") = py::none(), py::arg("seed") = py::int_(20261130), py::arg("threads") = 0,
            py::arg("t_final") = py::none(), py::arg("first") = 0, py::arg("count") = py::none(),
            py::arg("weight") = py::none(), py::arg("output_weight") = py::none(),
            "Closed-loop simulations from x(t0) + size d, d_j ~ N(0, scale_j^2) (a batch of `runs` directions drawn "
@@ -274,15 +321,17 @@ void bind_scene_tracking(py::module_& m, const std::string& scene_name) {
            "MonteCarloReport.merge joins chunks.")
       .def(
           "perturbations",
-          [](const T&, int runs, const std::optional<Eigen::VectorXd>& scale, std::uint64_t seed) {
+          [](const T&, int runs, const std::optional<Eigen::VectorXd>& scale, const py::object& seed) {
+            SALTUS_REQUIRE(runs >= 1, "perturbations: runs must be >= 1, got ", runs);
             Vec<nx> s = Vec<nx>::Ones();
             if (scale) s = to_state<S>(*scale, "scale");
-            const auto d = draw<nx>(0, runs, s, seed);
+            SALTUS_REQUIRE(s.allFinite(), "perturbations: the scale must be finite");
+            const auto d = draw<nx>(0, runs, s, to_seed(seed));
             RowMatrix out(runs, nx);
             for (int r = 0; r < runs; ++r) out.row(r) = d[static_cast<std::size_t>(r)].transpose();
             return out;
           },
-          py::arg("runs"), py::arg("scale") = py::none(), py::arg("seed") = 20261130ULL,
+          py::arg("runs"), py::arg("scale") = py::none(), py::arg("seed") = py::int_(20261130),
           "the directions d (runs, nx) that monte_carlo draws");
 
   m.def("linearise", &linearise<S>, py::arg("reference"), py::arg("spreading") = 0.1, py::arg("feedback") = "signal");
