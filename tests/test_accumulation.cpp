@@ -14,6 +14,9 @@
 // summed here to round-off. The balls are decoupled, so two of them bounce each on its own contact;
 // started so that both accumulate at the same instant, their touchdowns alternate between the two
 // contacts, with no constant ratio between consecutive intervals nor between intervals two apart.
+// Bodies rocking between two supports (Housner's rocking block, a spoked wheel settling on two
+// spokes): their scene and closed form, with its derivation, in accumulation_scenes.hpp.
+#include "accumulation_scenes.hpp"
 #include "support.hpp"
 
 #include <saltus/hybrid/instantiate.hxx>
@@ -121,6 +124,7 @@ struct BouncingBox : Block {
 SALTUS_INSTANTIATE_SCENE(saltus::testing::SpringBalls)
 SALTUS_INSTANTIATE_SCENE(saltus::testing::BouncingBox)
 SALTUS_INSTANTIATE_SCENE(saltus::testing::Block)
+SALTUS_INSTANTIATE_SCENE(saltus::testing::SpokedWheel)
 
 namespace saltus::testing {
 namespace {
@@ -218,6 +222,157 @@ TEST(Accumulation, BoxBouncingOnItsCornersWithLowRestitutionEndsInAnAccumulation
     predicted.push_back(traj.zeno_time);
   }
   EXPECT_EQ(predicted[0], predicted[1]);
+}
+
+/// The times of the touchdown events of `traj` and, for each, the contacts that touched down.
+template <Scene S>
+std::vector<std::pair<double, std::vector<int>>> touchdowns(const HybridTrajectory<S>& traj) {
+  std::vector<std::pair<double, std::vector<int>>> out;
+  for (const auto& ev : traj.events) {
+    std::vector<int> contacts;
+    for (const Guard& g : ev.guards())
+      if (g.kind == GuardKind::Touchdown) contacts.push_back(g.contact);
+    if (!contacts.empty()) out.emplace_back(ev.t, contacts);
+  }
+  return out;
+}
+
+/// The closed form of the Block rocking on its bottom corners (accumulation_scenes.hpp): R the
+/// half-diagonal, alpha = atan(w / h), I_c = m (w^2 + h^2) / 12.
+PivotRocking block_rocking(const Block& block) {
+  return PivotRocking::of(1.0, (block.w * block.w + block.h * block.h) / 12, 0.5 * std::hypot(block.w, block.h),
+                          std::atan(block.w / block.h));
+}
+
+/// The closed form of the SpokedWheel rocking on two neighbouring spokes: R = L, alpha = pi / N.
+PivotRocking wheel_rocking(const SpokedWheel& wheel) {
+  return PivotRocking::of(wheel.m, wheel.I_c, wheel.L, SpokedWheel::alpha());
+}
+
+// The rocking block against Housner's closed form (PivotRocking, accumulation_scenes.hpp, which
+// derives it): the tall block (0.2 m x 0.6 m, mu = 2, e_n = 0) released at rest on its left corner
+// tilted by A = 0.05 rad lands on its right corner after the fall T(A) = 0.1247 s, then rocks with
+// impact speeds shrinking by Housner's r = 1 - (3/2) sin^2(alpha) = 0.85 (alpha = atan(1/3)); the
+// accumulation time t_1 + sum_k 2 T(A(r^k w_1)) = 1.4314569879362525 s (the nonlinear rocking
+// equation; the linearised one is off by 8e-4 s in the first fall alone). The touchdowns are
+// resolved to 1.8e-12 s with tight tolerances. Measured: zeno_bounces 12: error 9.1e-7 s, stated
+// uncertainty 2.3e-6 s; zeno_bounces 40: error 8e-13 s, uncertainty 3.2e-11 s.
+TEST(Accumulation, RockingBlockAccumulatesAtHousnersClosedForm) {
+  const Block block(0.2, 0.6, 2.0, 0.0);
+  const double A = 0.05;
+  const PivotRocking ref = block_rocking(block);
+  EXPECT_NEAR(ref.r, 1 - 1.5 * std::pow(std::sin(ref.alpha), 2), 1e-15);
+  const auto impacts = ref.rocking(ref.fall(A), ref.impact_speed(A));
+  {  // the quadrature has converged: 48 nodes agree with 64, and with mpmath's quad at 40 digits
+    PivotRocking coarse = ref;
+    coarse.set_nodes(48);
+    EXPECT_NEAR(coarse.rocking(coarse.fall(A), coarse.impact_speed(A)).t_inf, impacts.t_inf, 1e-15);
+    EXPECT_NEAR(impacts.t[1], 0.329895237759881, 1e-15);
+    EXPECT_NEAR(impacts.t_inf, 1.4314569879362525, 2e-15);
+  }
+  for (int bounces : {12, 40}) {
+    SimulationOptions o = tight();
+    o.zeno_bounces = bounces;
+    Simulator<Block> sim(block, o);
+    const auto traj = sim.run(block.resting_on_left_corner(A), 0.0, 2.0);
+    ASSERT_EQ(traj.status, SimulationStatus::Zeno) << "zeno_bounces " << bounces;
+    const auto td = touchdowns(traj);
+    ASSERT_GE(td.size(), 14u);
+    for (std::size_t k = 0; k < 14; ++k) {  // right, left, right, ...: the closed form's impacts
+      EXPECT_EQ(td[k].second, std::vector<int>{k % 2 == 0 ? 1 : 0}) << "touchdown " << k;
+      EXPECT_NEAR(td[k].first, impacts.t[k], 1e-11) << "touchdown " << k;
+    }
+    expect_within_its_uncertainty(traj, impacts.t_inf);
+    EXPECT_LT(traj.zeno_time_uncertainty, bounces == 12 ? 5e-6 : 1e-10);
+  }
+}
+
+// The spoked wheel (SpokedWheel: 6 spokes of 0.5 m, hub 1 kg, I_c = 0.05 kg m^2, mu = 2, e_n = 0)
+// standing on spoke 0 with its hub 0.1 rad behind the tip and turning forward at 1 rad/s vaults
+// over the tip and lands on spoke 1 after T_v = 0.4966 s (PivotRocking::vault) at w_1 = 2.284 rad/s;
+// its speed after the impact, r w_1 = 1.332 rad/s with r = (I_c + m L^2 cos(pi / 3)) / (I_c + m L^2)
+// = 7/12 (angular momentum about the new tip, accumulation_scenes.hpp), is below the vault speed
+// 2.093 rad/s, so it rocks between spokes 1 and 0, each impact sending it back with 7/12 of its
+// angular velocity, and settles on both: t_inf = 1.3454336785526817 s. Measured (tight tolerances):
+// touchdowns to 3.8e-13 s, the accumulation time to 3e-14 s against a stated uncertainty of 1.5e-12 s
+// (detected after 14 touchdowns for zeno_bounces 12 and 40 alike: near the gap tolerance 4 ratios
+// suffice).
+TEST(Accumulation, SpokedWheelSettlingOnTwoSpokesAccumulatesAtTheClosedForm) {
+  const SpokedWheel wheel(2.0, 0.0);
+  const double psi0 = -0.1, w0 = 1.0;
+  const PivotRocking ref = wheel_rocking(wheel);
+  EXPECT_NEAR(ref.r, 7.0 / 12.0, 1e-15);
+  const double w1 = ref.vault_impact_speed(psi0, w0);
+  ASSERT_LT(ref.r * w1, ref.vault_speed()) << "the wheel must rock after its first impact, not vault again";
+  const auto impacts = ref.rocking(ref.vault(psi0, w0), w1);
+  {  // the quadrature has converged: 48 nodes agree with 64, and with mpmath's quad at 40 digits
+    PivotRocking coarse = ref;
+    coarse.set_nodes(48);
+    EXPECT_NEAR(coarse.rocking(coarse.vault(psi0, w0), w1).t_inf, impacts.t_inf, 1e-15);
+    EXPECT_NEAR(impacts.t[0], 0.49661553652145112, 1e-15);
+    EXPECT_NEAR(impacts.t_inf, 1.3454336785526818, 2e-15);
+  }
+  for (int bounces : {12, 40}) {
+    SimulationOptions o = tight();
+    o.zeno_bounces = bounces;
+    Simulator<SpokedWheel> sim(wheel, o);
+    const auto traj = sim.run(wheel.standing_on_spoke_0(psi0, w0), 0.0, 3.0);
+    ASSERT_EQ(traj.status, SimulationStatus::Zeno) << "zeno_bounces " << bounces;
+    const auto td = touchdowns(traj);
+    ASSERT_GE(td.size(), 14u);
+    ASSERT_EQ(td.size(), traj.events.size()) << "every event is an impact";
+    for (std::size_t k = 0; k < 14; ++k) {  // spoke 1, spoke 0, spoke 1, ...: the closed form's impacts
+      EXPECT_EQ(td[k].second, std::vector<int>{k % 2 == 0 ? 1 : 0}) << "touchdown " << k;
+      EXPECT_NEAR(td[k].first, impacts.t[k], 1e-11) << "touchdown " << k;
+    }
+    for (const auto& ev : traj.events) {  // every impact: the angular velocity times r, the new tip sticking
+      EXPECT_NEAR(ev.x_plus[5] / ev.x_minus[5], ref.r, 1e-9) << "t = " << ev.t;
+      for (int i = 0; i < SpokedWheel::N; ++i)
+        EXPECT_EQ(ev.mode_after[i].mode, i == ev.guards().at(0).contact ? ContactMode::Stick : ContactMode::Open)
+            << "t = " << ev.t << ", spoke " << i;
+    }
+    expect_within_its_uncertainty(traj, impacts.t_inf);
+    EXPECT_LT(traj.zeno_time_uncertainty, 1e-10);
+  }
+}
+
+// Zeno completion of the spoked wheel above (the wheel in double support): carried past
+// its accumulation at the closed-form time (within the stated uncertainty), it stands at rest on
+// spokes 0 and 1, both sticking: the hub at (L sin(pi/6), L cos(pi/6)) above the middle of the tips
+// (spoke 0's tip at the origin, spoke 1's at 2 L sin(pi/6)), theta = -pi/6, v = 0.
+TEST(ZenoCompletion, SpokedWheelIsCarriedToRestInDoubleSupport) {
+  const SpokedWheel wheel(2.0, 0.0);
+  const double alpha = SpokedWheel::alpha(), psi0 = -0.1, w0 = 1.0;
+  const PivotRocking ref = wheel_rocking(wheel);
+  const auto impacts = ref.rocking(ref.vault(psi0, w0), ref.vault_impact_speed(psi0, w0));
+  for (int bounces : {12, 40}) {
+    SimulationOptions o = tight();
+    o.zeno_bounces = bounces;
+    o.zeno_completion = true;
+    Simulator<SpokedWheel> sim(wheel, o);
+    const auto traj = sim.run(wheel.standing_on_spoke_0(psi0, w0), 0.0, 3.0);
+    ASSERT_EQ(traj.status, SimulationStatus::Completed) << "zeno_bounces " << bounces;
+    ASSERT_EQ(traj.zeno_completions.size(), 1u);
+    const ZenoCompletion& z = traj.zeno_completions[0];
+    EXPECT_EQ(z.contacts, (std::vector<int>{0, 1}));
+    EXPECT_LE(std::abs(z.t - impacts.t_inf), z.uncertainty) << z.t << " vs " << impacts.t_inf;
+    EXPECT_LT(z.uncertainty, 1e-10);
+    EXPECT_TRUE(traj.events.at(z.event).transitions.front().zeno_completion);
+    EXPECT_EQ(describe(wheel, traj.segments.back().mode),
+              "spoke 0:stick spoke 1:stick spoke 2:open spoke 3:open spoke 4:open spoke 5:open");
+    const Vec<6> rest = traj.final_state();
+    EXPECT_NEAR(rest[0], wheel.L * std::sin(alpha), 1e-12);
+    EXPECT_NEAR(rest[1], wheel.L * std::cos(alpha), 1e-12);
+    EXPECT_NEAR(rest[2], -alpha, 1e-12);
+    EXPECT_LT(rest.tail<3>().cwiseAbs().maxCoeff(), 1e-12);
+    for (int i = 0; i < 2; ++i) EXPECT_NEAR(wheel.gap(i, Vec<3>(rest.head<3>())), 0.0, 1e-12) << "spoke " << i;
+    for (int i = 2; i < SpokedWheel::N; ++i) EXPECT_GT(wheel.gap(i, Vec<3>(rest.head<3>())), 0.4) << "spoke " << i;
+    EXPECT_EQ(traj.t_end(), 3.0);
+    for (const auto& seg : traj.segments)
+      for (const auto& piece : seg.x.pieces())
+        for (int i = 0; i < SpokedWheel::N; ++i)
+          EXPECT_GE(wheel.gap(i, Vec<3>(piece.value(piece.t1).head<3>())), -1e-9);
+  }
 }
 
 // Zeno completion of a simultaneous accumulation. The box dropped flat from H = 5 cm above its
