@@ -354,7 +354,8 @@ TEST(Tracking, ThePlantStepsToTheReferencesInputJumps) {
 }
 
 // The Monte Carlo summary counts the departures of completed runs that left the event sequence by
-// kind, with the range of their times; kept and failed runs carry none.
+// kind, with the range of their times; kept and failed runs carry none. The failures' reasons are
+// counted the same way.
 TEST(Tracking, MonteCarloSummaryCountsTheDeparturesByKind) {
   MonteCarloReport report;
   const auto run = [](bool failed, bool kept, std::string departure) {
@@ -375,6 +376,23 @@ TEST(Tracking, MonteCarloSummaryCountsTheDeparturesByKind) {
   ASSERT_EQ(report.departures.size(), 2u);
   EXPECT_EQ(report.departures[0], "1 x ended in reference segment 3 of 0 .. 4");
   EXPECT_EQ(report.departures[1], "2 x " + slip + " (t = 2.125 .. 2.25 s)");
+
+  // The failures likewise: distinct up to the first time they name (a word ending in "t" before
+  // " = " is not a time), with the range of their times.
+  const auto failed = [&](std::string reason) {
+    MonteCarloRun r = run(true, false, "");
+    r.reason = std::move(reason);
+    return r;
+  };
+  const std::string underflow = "integration of one segment: step size underflow at t = ";
+  report.run = {failed(underflow + "2.0020677 (stiff mode?)"), failed(underflow + "2.0020681 (stiff mode?)"),
+                failed(underflow + "2.2203 (stiff mode?)"), failed("events stall at t = 1.5: 17 events, the last at t = 1.5"),
+                failed("a limit = 3 reached"), failed("a limit = 3 reached")};
+  summarise_monte_carlo(report, 1.0);
+  EXPECT_EQ(report.failed, 6);
+  EXPECT_EQ(report.failure_reasons,
+            (std::vector<std::string>{"2 x a limit = 3 reached", "1 x events stall at t = 1.5: 17 events, the last at t = 1.5",
+                                      "3 x " + underflow + "2.0020677 .. 2.2203 (stiff mode?)"}));
 }
 
 // The controller's phase after a plant event (ReferenceSpreadingController::next_phase) on the

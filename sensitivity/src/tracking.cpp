@@ -10,9 +10,11 @@
 #include <limits>
 #include <map>
 #include <mutex>
+#include <sstream>
 #include <string>
 #include <thread>
 #include <tuple>
+#include <utility>
 #include <vector>
 
 namespace saltus {
@@ -26,6 +28,56 @@ const char* to_string(StabilityVerdict v) {
   return "?";
 }
 
+namespace {
+
+/// Texts that differ only in the time " t = <number>" they name (the first one), counted as one
+/// kind with the range of its times: "3 x events stall at t = 1.91 .. 1.93: ...". A text without
+/// a time is its own kind.
+class CountedByKind {
+ public:
+  void add(const std::string& text) {
+    std::size_t at = text.find("t = ");
+    while (at != std::string::npos && at > 0 && text[at - 1] != ' ' && text[at - 1] != '(') at = text.find("t = ", at + 1);
+    char* end = nullptr;
+    const double t = at == std::string::npos ? std::numeric_limits<double>::quiet_NaN()
+                                              : std::strtod(text.c_str() + at + 4, &end);
+    const bool timed = at != std::string::npos && end != text.c_str() + at + 4;
+    const std::size_t number_end = timed ? static_cast<std::size_t>(end - text.c_str()) : text.size();
+    Kind& kind = kinds_[timed ? std::make_pair(text.substr(0, at + 4), text.substr(number_end))
+                              : std::make_pair(text, std::string())];
+    kind.timed = timed;
+    if (kind.count++ == 0) kind.first = kind.last = t;
+    kind.first = std::min(kind.first, t);
+    kind.last = std::max(kind.last, t);
+  }
+  /// "count x text", the time replaced by "first .. last" (10 significant digits) when they differ.
+  std::vector<std::string> lines() const {
+    std::vector<std::string> out;
+    for (const auto& [key, kind] : kinds_) {
+      std::ostringstream line;
+      line.precision(10);
+      line << kind.count << " x " << key.first;
+      if (kind.timed) {
+        line << kind.first;
+        if (kind.last != kind.first) line << " .. " << kind.last;
+      }
+      line << key.second;
+      out.push_back(line.str());
+    }
+    return out;
+  }
+
+ private:
+  struct Kind {
+    int count = 0;
+    bool timed = false;
+    double first = 0.0, last = 0.0;
+  };
+  std::map<std::pair<std::string, std::string>, Kind> kinds_;  // the text before and after the time
+};
+
+}  // namespace
+
 void summarise_monte_carlo(MonteCarloReport& report, double horizon) {
   report.runs = static_cast<int>(report.run.size());
   report.failed = report.kept_event_sequence = report.grew = report.shrank = 0;
@@ -33,25 +85,17 @@ void summarise_monte_carlo(MonteCarloReport& report, double horizon) {
   report.departures.clear();
   report.max_log_discrepancy = 0.0;
   report.observed_rate_median = 0.0;
-  std::map<std::string, int> reasons;
-  std::map<std::string, std::tuple<int, double, double>> departures;  // count, first and last time
+  CountedByKind reasons, departures;
   std::vector<double> rates;
   report.observed_rate_max = report.predicted_rate_max = -std::numeric_limits<double>::infinity();
   for (const MonteCarloRun& r : report.run) {
     if (r.failed) {
       ++report.failed;
-      ++reasons[r.reason];
+      reasons.add(r.reason);
       continue;
     }
     if (!r.kept_event_sequence) {
-      // Distinct up to the time "(t = ... s)" at the end of the text.
-      const std::size_t at = r.departure.rfind(" (t = ");
-      auto& [count, first, last] = departures[r.departure.substr(0, at)];
-      const double t = at == std::string::npos ? std::numeric_limits<double>::quiet_NaN()
-                                                : std::strtod(r.departure.c_str() + at + 6, nullptr);
-      if (count++ == 0) first = last = t;
-      first = std::min(first, t);
-      last = std::max(last, t);
+      departures.add(r.departure);
       continue;
     }
     ++report.kept_event_sequence;
@@ -72,13 +116,8 @@ void summarise_monte_carlo(MonteCarloReport& report, double horizon) {
     report.observed_rate_max = report.observed_rate_median = report.max_log_discrepancy =
         std::numeric_limits<double>::quiet_NaN();
   if (!std::isfinite(report.predicted_rate_max)) report.predicted_rate_max = std::numeric_limits<double>::quiet_NaN();
-  for (const auto& [reason, count] : reasons) report.failure_reasons.push_back(detail::concat(count, " x ", reason));
-  for (const auto& [departure, seen] : departures) {
-    const auto& [count, first, last] = seen;
-    report.departures.push_back(std::isnan(first) ? detail::concat(count, " x ", departure)
-                                : first == last   ? detail::concat(count, " x ", departure, " (t = ", first, " s)")
-                                                  : detail::concat(count, " x ", departure, " (t = ", first, " .. ", last, " s)"));
-  }
+  report.failure_reasons = reasons.lines();
+  report.departures = departures.lines();
 }
 
 namespace detail {

@@ -433,7 +433,9 @@ struct MonteCarloRun {
 struct MonteCarloReport {
   int runs = 0, failed = 0, kept_event_sequence = 0;
   std::vector<MonteCarloRun> run;
-  std::vector<std::string> failure_reasons;  ///< distinct, with their counts in the text
+  /// Why the failed runs failed, distinct up to the time they name ("at t = ..."), each with its
+  /// count and the range of its times in the text ("65 x ... at t = 2.0020677 .. 2.0020681 ...")
+  std::vector<std::string> failure_reasons;
   /// The departures of the completed runs that did not keep the event sequence, distinct up to the
   /// time, each with its count and the range of its times in the text
   std::vector<std::string> departures;
