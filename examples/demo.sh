@@ -130,12 +130,15 @@ s = d["parallel_speedup"]
 print(f'Monte Carlo speed-up on {s["threads"]} threads: {s["speedup"]} ({s["one_thread_seconds"]} s -> {s["all_threads_seconds"]} s)')
 PY
 echo "wrote $SALTUS_REPORT_DIR/tracking_stability.json"
-# The figures and the page that shows them (Debian's python3 with python3-matplotlib).
+# The figures and the page that shows them (Debian's python3 with python3-matplotlib); plot_report.py
+# checks each figure it must draw (a PNG of its size, shown on the page) and fails on a broken one:
+# the summary below is still printed, and the main job's exit status is then 1.
 echo
 echo "== figures =="
 python=/usr/bin/python3
 [ -x "$python" ] || python=python3
-"$python" "$here/examples/plot_report.py" "$SALTUS_REPORT_DIR"
+figures_status=0
+"$python" "$here/examples/plot_report.py" "$SALTUS_REPORT_DIR" || figures_status=$?
 echo
 echo "== summary =="
 python3 - "$SALTUS_REPORT_DIR" <<'PY'
@@ -160,3 +163,4 @@ for row in rows:
 PY
 echo
 echo "main job done in $(( $(date +%s) - start )) s; report files in $SALTUS_REPORT_DIR"
+[ "$figures_status" = 0 ] || { echo "the figures are broken (plot_report.py above)"; exit 1; }
