@@ -10,8 +10,7 @@ flagship's analysis, and the pipelines' reports without the keys plot_report.py 
 REPORT_DIR holds what `bash examples/demo.sh` writes: plank_box_refined{.csv,.json,_forces.csv},
 hopper_refined{.csv,.json,_forces.csv}, plank_box_ocp.json and hopper_ocp.json. TRACKING_JSON is
 report/tracking_stability.json (default: REPORT_DIR's). The committed fixture was made from the
-runs of the main job's two pipelines at the state of the code that added it; tracking_stability.json
-from the table of docs/tracking.md (the same schema, `build/examples/tracking_stability --json`).
+runs of the main job's two pipelines and of `build/examples/tracking_stability --json`.
 """
 import csv
 import json
