@@ -5,7 +5,6 @@
 
 #include <saltus/hybrid/dynamics/constraints.hpp>
 #include <saltus/hybrid/vocabulary/guard.hpp>
-#include <saltus/timefreezing/refinement/refined_trajectory.hxx>  // detail::same_branches
 #include <saltus/timefreezing/refinement/refinement.hpp>
 
 #include <algorithm>
@@ -39,6 +38,17 @@ HybridTrajectory<S> run_from(Simulator<S>& sim, const VecT<double, 2 * S::nq>& x
   }
 }
 
+
+/// Whether two modes put every contact in the same branch (open, stick, slip with the same sign
+/// of the slip direction; a zero direction, a frictionless contact's closed mode, has no sign).
+template <int NC>
+bool same_branches(const Mode<NC>& a, const Mode<NC>& b) {
+  for (int i = 0; i < NC; ++i) {
+    if (a[i].mode != b[i].mode) return false;
+    if (a[i].mode == ContactMode::Slip && a[i].slip_direction.dot(b[i].slip_direction) < 0.0) return false;
+  }
+  return true;
+}
 
 /// The state of `run` at t before any event at t: x- of the first event within `tolerance` of t
 /// (the simulator locates an event to its own tolerance, a hair before or after the node), else
