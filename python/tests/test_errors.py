@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 import saltus
+from tolerances import tight
 
 
 def test_exception_hierarchy():
@@ -122,13 +123,6 @@ def test_exceptions_pickle_with_their_type_and_message():
 # ---- The analysis calls: conewise_gain, linearise, lqr_design, tracking, monte_carlo, OCPs ----
 
 NAN = math.nan
-
-
-def tight():
-    o = saltus.SimulationOptions()
-    o.relative_tolerance = 1e-12
-    o.absolute_tolerance = 1e-13
-    return o
 
 
 @pytest.fixture(scope="module")

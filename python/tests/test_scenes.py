@@ -11,16 +11,9 @@ import numpy as np
 import pytest
 
 import saltus
+from tolerances import tight
 
 G = 9.81
-
-
-def tight():
-    # references::tight() of the scene library (the C++ references are simulated with it)
-    o = saltus.SimulationOptions()
-    o.relative_tolerance = 1e-12
-    o.absolute_tolerance = 1e-13
-    return o
 
 
 # ---- Hopper ----------------------------------------------------------------------------------

@@ -8,15 +8,9 @@ import numpy as np
 import pytest
 
 import saltus
+from tolerances import tight
 
 G = 9.81
-
-
-def tight():
-    o = saltus.SimulationOptions()
-    o.relative_tolerance = 1e-12
-    o.absolute_tolerance = 1e-13
-    return o
 
 
 @pytest.fixture(scope="module")
