@@ -33,7 +33,7 @@ OPENBLAS_NUM_THREADS=1 "$build/examples/guiding_example" --json | tee "$SALTUS_R
 # The flagship pipeline of the plank-box flat landing, one thread (progress lines on stderr):
 # discovery by the time-freezing homotopy until its contact schedule settles, the mode-schedule
 # refinement (the exact reference), its re-simulations, then the analysis of the refined reference
-# (jump gains, an LQR tracking design, its stability check and 100 perturbed runs). About 3
+# (jump gains, an LQR tracking design, its stability check and 200 perturbed runs). About 3
 # minutes. The hopper over three holes runs the same chain from the paper's initialisation
 # (`build/examples/hopper --json`: discovery of its footholds, their refinement, the analysis with
 # 200 runs; about 6 minutes) on the other core, beside it: its progress lines go to

@@ -9,7 +9,7 @@
 // status 0 only when the reference is refined (converged and exact). The reference is then analysed (analyse_reference,
 // saltus/sensitivity/analysis/reference_analysis.hpp; the report's "analysis"): its re-simulation's
 // jump gains (conewise at the flat landing), an LQR tracking design along it with its stability
-// check (scenes/plank_box_tracking.hpp), and 100 perturbed closed-loop runs. The analysis's outcome
+// check (scenes/plank_box_tracking.hpp), and 200 perturbed closed-loop runs. The analysis's outcome
 // does not change the exit status; its failures are reported in it. The optimisation has two
 // stages: discovery (refinement/discovery.hpp: the time-freezing homotopy run until the contact
 // schedule read off consecutive relaxed solutions settles; key "discovery") and the
@@ -79,7 +79,7 @@ int optimal_flat_landing() {
     write_contact_forces_file(scene, refined->trajectory, "plank_box_refined", 0.005, report_directory(), stderr);
   }
   if (reference) {
-    ReferenceAnalysisOptions<scenes::PlankBox> analysis = scenes::plank_box_tracking(100);
+    ReferenceAnalysisOptions<scenes::PlankBox> analysis = scenes::plank_box_tracking(200);
     analysis.progress = &std::cerr;
     // Every run's deviation and its first-order prediction at 60 times (the report's figure).
     const double t0 = reference->t_begin(), T = reference->t_end();

@@ -116,6 +116,20 @@ class PainleveRod {
   ContactSpec end_;
 };
 
+// The rod of PainleveRod pushed at its centre by a force u = (horizontal, vertical) [N].
+class PushedRod : public PainleveRod {
+ public:
+  static constexpr int nu = 2;
+  using PainleveRod::PainleveRod;
+  template <class T>
+  MatT<T, nq, nu> input_matrix(const VecT<T, nq>&) const {
+    MatT<T, nq, nu> B = MatT<T, nq, nu>::Zero();
+    B(0, 0) = T(1);
+    B(1, 1) = T(1);
+    return B;
+  }
+};
+
 InputLaw<RockingBlock> no_input() {
   return [](double, const Vec<6>&, const Mode<2>&) { return Vec<0>(); };
 }
@@ -419,6 +433,79 @@ TEST(ModeSelection, PainleveIndeterminacyReportsBothSolutions) {
   Simulator<PainleveRod> sim(rod, SimulationOptions{});
   const auto traj = sim.run(x, 0.0, 0.01);
   EXPECT_EQ(traj.statistics.ambiguous_selections, 1);
+}
+
+// A contact at tangential rest whose Delassus matrix couples its normal and tangential rows: the
+// rod at theta = 45 degrees at rest, its end on the ground, mu = 4, pushed at its centre by
+// u = (-3, g + 1). Per unit mass D = [1 + 3c^2, -3cs; -3cs, 1 + 3s^2] = [2.5, -1.5; -1.5, 2.5]
+// and b = (u_y - g, u_x) = (1, -3). Three modes solve the acceleration-level problem:
+// open (lambda = 0, y = b), stick (lambda = -D^{-1} b = (1/2, 3/2), inside the cone), and slip
+// towards -x (lambda_t = mu lambda_n: (2.5 + 1.5 mu) lambda_n = 1, lambda_n = 2/7,
+// y_t = -1.5 lambda_n + 2.5 lambda_t - 3 = -4/7 < 0). The enumeration finds all three, and the
+// persistent choice keeps the mode the contact is in.
+TEST(ModeSelection, ACoupledContactAtTangentialRestReportsItsThreeModes) {
+  const PushedRod rod(4.0);
+  const double c = std::sqrt(0.5);
+  Vec<6> x;
+  x << 0.5 * c, 0.5 * c, M_PI / 4, 0.0, 0.0, 0.0;
+  const Vec<2> u(-3.0, g + 1.0);
+  ModeSelector<PushedRod> selector(rod);
+  const Mode<1> stick{ContactState::stick()}, open{ContactState::open()}, slip_back{ContactState::slip_planar(-1)};
+  const Mode<1> kept = selector.select(x, u, {true}, {}, &stick);
+  const auto& report = selector.uniqueness();
+  ASSERT_TRUE(report.checked);
+  ASSERT_EQ(report.solutions, 3);
+  std::array<bool, 3> seen{};
+  for (int k = 0; k < 3; ++k) {
+    seen[0] = seen[0] || report.modes[k] == open;
+    seen[1] = seen[1] || report.modes[k] == stick;
+    seen[2] = seen[2] || report.modes[k] == slip_back;
+  }
+  EXPECT_TRUE(seen[0] && seen[1] && seen[2]);
+  ASSERT_EQ(kept, stick) << "persistent: the contact stays in stick";
+  EXPECT_NEAR(selector.solution().lambda[0], 0.5, 1e-12);
+  EXPECT_NEAR(selector.solution().lambda[1], 1.5, 1e-12);
+  EXPECT_NEAR(selector.solution().y[0], 0.0, 1e-12);
+  EXPECT_EQ(selector.select(x, u, {true}, {}, &slip_back), slip_back);
+  EXPECT_NEAR(selector.solution().lambda[0], 2.0 / 7.0, 1e-12);
+  EXPECT_NEAR(selector.solution().lambda[1], 8.0 / 7.0, 1e-12);
+  EXPECT_NEAR(selector.solution().y[1], -4.0 / 7.0, 1e-12);
+  EXPECT_EQ(selector.select(x, u, {true}, {}, &open), open);
+  EXPECT_NEAR(selector.solution().y[0], 1.0, 1e-12);
+  // With mu = 1 the stick force (1/2, 3/2) leaves the cone and no slip holds: lift-off alone.
+  const PushedRod smooth(1.0);
+  ModeSelector<PushedRod> unique(smooth);
+  EXPECT_EQ(unique.select(x, u, {true}, {}, &stick), open);
+  EXPECT_TRUE(unique.uniqueness().checked);
+  EXPECT_EQ(unique.uniqueness().solutions, 1);
+}
+
+// The same rod dropped onto its end (e_n = 0, at 1 m/s) under the push u = (-6, g + 1): the impact
+// sticks (its impulse turns the rod at about -1 rad/s, which adds (L/2) theta'^2 (s, c) to b:
+// b = (1.37, -5.63), stick force (1.25, 3.0) inside the cone), and at the acceleration level the
+// end may stay in stick or lift off. The simulator keeps the impact's post-impact mode, stick, and
+// reports the ambiguity; the solver's choice lifts off.
+TEST(Simulation, AfterAnImpactIntoStickTheContactStaysWhereLiftOffIsPossibleToo) {
+  const PushedRod rod(4.0);
+  const double c = std::sqrt(0.5);
+  Vec<6> x0;
+  x0 << 0.5 * c, 0.5 * c + 0.01, M_PI / 4, 0.0, -1.0, 0.0;
+  const InputLaw<PushedRod> push = [](double, const Vec<6>&, const Mode<1>&) { return Vec<2>(-6.0, g + 1.0); };
+  SimulationOptions options;
+  Simulator<PushedRod> sim(rod, options);
+  const auto traj = sim.run(x0, 0.0, 0.05, push);
+  ASSERT_GE(traj.events.size(), 1u);
+  const auto& touchdown = traj.events.front();
+  ASSERT_TRUE(touchdown.impact());
+  EXPECT_EQ(touchdown.mode_after[0], ContactState::stick());
+  EXPECT_GT(touchdown.transitions.back().selection_solutions, 1);
+  EXPECT_GE(traj.statistics.ambiguous_selections, 1);
+  EXPECT_EQ(traj.events.size(), 1u) << "the end stays in stick";
+  options.selection.ambiguity = AmbiguityChoice::Solver;
+  Simulator<PushedRod> solver_sim(rod, options);
+  const auto solvers = solver_sim.run(x0, 0.0, 0.05, push);
+  ASSERT_GE(solvers.events.size(), 1u);
+  EXPECT_FALSE(solvers.events.front().mode_after[0] == ContactState::stick());
 }
 
 }  // namespace

@@ -22,19 +22,34 @@
 namespace saltus {
 
 /// Which solution select() takes when the acceleration-level problem has several (see
-/// SelectionUniqueness): the solver's (the default, so that a simulation's result does not depend
-/// on whether the enumeration ran; in Painleve's indeterminate case it is the lift-off, where
-/// Lemke's pivoting ends first), or the one with the most or the fewest closed contacts.
-enum class AmbiguityChoice { Solver, MostClosed, FewestClosed };
+/// SelectionUniqueness):
+/// - Persistent (the default): the contacts' current mode, select()'s `current` argument, when it
+///   is one of the solutions; else the solver's. This is the indicator rule of event-driven
+///   schemes (Pfeiffer & Glocker, Multibody Dynamics with Unilateral Contacts, 1996, ch. 6): a
+///   closed contact stays closed while its normal force is not negative and its stick while its
+///   friction is inside the cone. After an impact the current mode is the impact's post-impact
+///   mode: a foot that touched down into stick and may either stay or lift off at the
+///   acceleration level stays (the hopper's touchdowns, docs/simulation.md).
+/// - Solver: the pivoting or Coulomb solver's own (in Painleve's indeterminate case it is the
+///   lift-off, where Lemke's pivoting ends first).
+/// - MostClosed / FewestClosed: the solution with the most or the fewest closed contacts.
+/// Without a `current` mode Persistent is Solver.
+enum class AmbiguityChoice { Persistent, Solver, MostClosed, FewestClosed };
 
-/// What the last select() found about the uniqueness of its solution. Checked where every
-/// candidate contact is frictionless or already slipping: the problem is then a linear
-/// complementarity problem in the normal forces alone, y = A lambda + b, whose solutions are
-/// enumerated over the 2^m complementary index sets (m <= 12 rows): A_II lambda_I = -b_I,
-/// lambda_I >= 0, y_J >= 0. Solutions count as distinct when their modes differ (redundant
-/// contacts have many force distributions for one mode: not an ambiguity of the mode). A P-matrix A has exactly one; a non-P A (friction folded into the
-/// columns of a slipping contact, Painleve) can have none, two, or more. Problems with a contact
-/// at tangential rest (a cone complementarity problem) are not enumerated (checked = false).
+/// What the last select() found about the uniqueness of its solution: the modes of all solutions
+/// of the acceleration-level problem, enumerated over the combinations of the candidates' states
+/// (thesis 2.20-2.23). Per contact: open (lambda_n = 0, y_n >= 0) or closed (y_n = 0,
+/// lambda_n >= 0); a closed frictionless or already slipping contact (its friction folded into
+/// the columns, A.23) has nothing more to choose; a closed planar contact at tangential rest
+/// sticks (y_t = 0, |lambda_t| <= mu lambda_n) or slips either way (lambda_t = -s mu lambda_n,
+/// s y_t >= 0, s = +-1). Each combination is a square linear system in its unknown forces;
+/// degenerate combinations are skipped (their solutions belong to a neighbouring one). Checked
+/// where the problem has at most 12 rows, at most 4096 combinations and no spatial contact at
+/// tangential rest (a spatial stick-slip has a continuum of slip directions: checked = false).
+/// Solutions count as distinct when their modes differ (redundant contacts have many force
+/// distributions for one mode: not an ambiguity of the mode). A P-matrix problem without friction
+/// has exactly one; friction (a slipping contact folded into the columns, Painleve; a coupled
+/// Delassus matrix at tangential rest) can give none, two, or more.
 template <int NC>
 struct SelectionUniqueness {
   static constexpr int max_kept = 4;
@@ -52,7 +67,7 @@ struct ModeSelectionOptions {
   /// An acceleration below acceleration_tolerance * (acceleration scale) counts as zero.
   double acceleration_tolerance = 1e-9;
   double residual_tolerance = 1e-9;
-  AmbiguityChoice ambiguity = AmbiguityChoice::Solver;
+  AmbiguityChoice ambiguity = AmbiguityChoice::Persistent;
 };
 
 template <Scene S>
@@ -70,10 +85,12 @@ class ModeSelector {
 
   /// The mode of the contacts in `candidates` at (x, u); contacts not in it are open.
   /// `rest[i]` marks a candidate whose tangential velocity is to be taken as zero (the instant a
-  /// slip stops). Throws ContactProblemFailure when the acceleration-level problem has no solution
-  /// (Painleve's paradox: friction too large for the configuration).
+  /// slip stops). `current`, when given, is the contacts' mode before the selection, which
+  /// AmbiguityChoice::Persistent keeps when it is one of several solutions. Throws
+  /// ContactProblemFailure when the acceleration-level problem has no solution (Painleve's
+  /// paradox: friction too large for the configuration).
   Mode<nc> select(const VecT<double, nx>& x, const VecT<double, nu>& u, const std::array<bool, nc>& candidates,
-                  const std::array<bool, nc>& rest = {});
+                  const std::array<bool, nc>& rest = {}, const Mode<nc>* current = nullptr);
 
   const Solution& solution() const { return solution_; }
   /// Uniqueness of the last select()'s solution (see SelectionUniqueness).
@@ -89,7 +106,22 @@ class ModeSelector {
   Coulomb coulomb_;
   DelassusAssembly<S> assembly_;
   SelectionUniqueness<nc> uniqueness_;
+  // The last problem's layout: the problem index of each contact (-1: not a candidate) and the
+  // slip direction of a contact already slipping; the zero bands of forces and accelerations.
+  std::array<int, nc> index_{};
+  std::array<Eigen::Vector2d, nc> slip_dir_{};
+  double force_tolerance_ = 0.0, acceleration_tolerance_ = 0.0;
 
+  using Vector = typename Problem::Vector;
+  void assemble(const VecT<double, nx>& x, const VecT<double, nu>& u, const std::array<bool, nc>& candidates,
+                const std::array<bool, nc>& rest);
+  Mode<nc> mode_of(const Vector& lambda, const Vector& y) const;
+  /// Enumerates the solutions (SelectionUniqueness) and puts the one AmbiguityChoice takes into
+  /// solution_.
+  void enumerate_solutions(const Mode<nc>* current, const std::array<bool, nc>& candidates);
+  /// Solves one combination of contact states (per problem contact: 0 open, 1 closed or stick,
+  /// 2 slip +, 3 slip -); false when degenerate or infeasible.
+  bool solve_combination(const std::array<int, contact_bound(nc)>& state, Vector& lambda, Vector& y) const;
 };
 
 }  // namespace saltus

@@ -268,7 +268,7 @@ auto TransitionResolver<S>::select_consistent(ModeSystem<S>& sys, double t, cons
   visited[0] = base;
   Input u = law(t, x, base);
   for (int k = 0; k < max_rounds; ++k) {
-    const Mode<nc> selected = selector_.select(x, u, candidates, rest);
+    const Mode<nc> selected = selector_.select(x, u, candidates, rest, &visited[k]);
     solutions = selector_.uniqueness().solutions;
     Mode<nc> next = visited[k];
     for (int i = 0; i < nc; ++i)
