@@ -36,7 +36,7 @@ OPENBLAS_NUM_THREADS=1 "$build/examples/guiding_example" --json | tee "$SALTUS_R
 # (jump gains, an LQR tracking design, its stability check and 200 perturbed runs). About 3
 # minutes. The hopper over three holes runs the same chain from the paper's initialisation
 # (`build/examples/hopper --json`: discovery of its footholds, their refinement, the analysis with
-# 200 runs; about 6 minutes) on the other core, beside it: its progress lines go to
+# 200 runs; about 5 minutes) on the other core, beside it: its progress lines go to
 # report/hopper_progress.log (docs/refinement.md, "Hopper over three holes").
 ocp_summary() {
   python3 - "$1" <<'PY'

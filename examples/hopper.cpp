@@ -15,7 +15,8 @@
 //   discovery    the hole continuation, then the time-freezing homotopy for two steps (sigma = 1,
 //                0.1), the footsteps read off its relaxed motion (scenes/hopper_holes_refinement.hpp);
 //   refinement   the smooth multi-phase OCP of those footsteps' schedule on the hopper's own flows,
-//                guards and jump maps, the mesh refined to local error 2e-7 (refinement.hpp);
+//                guards and jump maps, Radau IIA n_s = 4, the mesh refined to local error 2e-7
+//                (refinement.hpp);
 //   analysis     the refined reference's jump gains, an LQR reference-spreading design, its
 //                stability check and 200 perturbed closed-loop runs (scenes/hopper_tracking.hpp).
 // It prints {"converged", "stage" ("refined", "converged, checks failed: ..." naming the failed
@@ -25,8 +26,8 @@
 // "refinement_seconds", "solve_seconds", "discovery", "refinement", "analysis"} (refinement_io.hpp,
 // reference_analysis_io.hpp) and writes the refined reference's files (report/hopper_refined_*).
 // Exit status 0 only when the reference is refined; the analysis's outcome is reported, not
-// reflected in it. About 6 minutes on one thread: discovery and refinement about 200 s, the
-// analysis about 90 s, most of it the Monte Carlo runs (docs/refinement.md, "Hopper over three holes").
+// reflected in it. About 5 minutes on one thread: discovery and refinement about 210 s, the
+// analysis about 70 s, most of it the Monte Carlo runs (docs/refinement.md, "Hopper over three holes").
 #include <saltus/hybrid/reference/resimulation.hpp>
 #include <saltus/hybrid/dynamics/contact_forces_csv.hpp>
 #include <saltus/hybrid/vocabulary/trajectory_report.hpp>

@@ -24,7 +24,7 @@ timefreezing::DiscoveryOptions hopper_discovery_options(int steps, std::ostream*
 timefreezing::RefinementOptions hopper_refinement_options(std::ostream* progress) {
   timefreezing::RefinementOptions o;
   o.grid.max_element_duration = 0.05;
-  o.grid.stages = 3;
+  o.grid.stages = 4;
   o.ipopt.max_iter = 3000;
   o.edits.max_edits = 0;
   o.stick_cone_margin = 0.05;

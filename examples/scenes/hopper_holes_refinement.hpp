@@ -27,7 +27,10 @@ namespace saltus::scenes {
 /// micro_flight_gap the same 1.5 cm. One progress line per stage and step to `progress` (not owned).
 timefreezing::DiscoveryOptions hopper_discovery_options(int steps, std::ostream* progress);
 
-/// The refinement's settings on the hopper: Radau IIA n_s = 3 on elements of at most 0.05 s,
+/// The refinement's settings on the hopper: Radau IIA n_s = 4 on elements of at most 0.05 s (n_s
+/// = 3 reaches lower optima, 87.4 .. 89.5, on 840 .. 1070 elements, but its per-phase
+/// re-simulation stays above 1e-6 down to a local error of 8e-8 and takes two to three times as
+/// long; docs/refinement.md, "Stage count and mesh path"),
 /// Ipopt 3000 iterations, the sticking stances 5 % inside the friction cone, every phase at least
 /// 20 ms long (without it the refinement shrinks three of the discovered stances to touches of
 /// zero length, and its second mesh round does not solve), no schedule edit (an edit the last
@@ -38,8 +41,8 @@ timefreezing::DiscoveryOptions hopper_discovery_options(int steps, std::ostream*
 /// skim the ground and the re-simulation touches down in them), the stances that end in a release
 /// loaded to 20 N at their middle (stance_load: without it the stance before the last flight
 /// grazes, lambda_n 0.13 N, and the re-simulation slips and lifts off early), every touchdown
-/// coming in at 0.3 m/s or faster along the normal (touchdown_speed: measured, the optimum 89.51
-/// against 91.68 and the refinement 138 s against 180 s), the mesh refined to local error
+/// coming in at 0.3 m/s or faster along the normal (touchdown_speed: measured with n_s = 3, the
+/// optimum 89.51 against 91.68 and the refinement 138 s against 180 s), the mesh refined to local error
 /// 2e-7 (split 4, 10 rounds of at most 1000 iterations each, the rounds warm-started at mu = 0.1),
 /// the per-phase re-simulation in windows of 0.02 s (the stances are open-loop unstable at about
 /// 40 / s). docs/refinement.md, "Hopper over three holes".
