@@ -27,7 +27,7 @@
 // reference_analysis_io.hpp) and writes the refined reference's files (report/hopper_refined_*).
 // Exit status 0 only when the reference is refined; the analysis's outcome is reported, not
 // reflected in it. About 5 minutes on one thread: discovery and refinement about 210 s, the
-// analysis about 70 s, most of it the Monte Carlo runs (docs/refinement.md, "Hopper over three holes").
+// analysis about 60 s, most of it the Monte Carlo runs (docs/refinement.md, "Hopper over three holes").
 #include <saltus/hybrid/reference/resimulation.hpp>
 #include <saltus/hybrid/dynamics/contact_forces_csv.hpp>
 #include <saltus/hybrid/vocabulary/trajectory_report.hpp>

@@ -440,7 +440,7 @@ TEST(ModeSelection, PainleveIndeterminacyReportsBothSolutions) {
 // u = (-3, g + 1). Per unit mass D = [1 + 3c^2, -3cs; -3cs, 1 + 3s^2] = [2.5, -1.5; -1.5, 2.5]
 // and b = (u_y - g, u_x) = (1, -3). Three modes solve the acceleration-level problem:
 // open (lambda = 0, y = b), stick (lambda = -D^{-1} b = (1/2, 3/2), inside the cone), and slip
-// towards -x (lambda_t = mu lambda_n: (2.5 + 1.5 mu) lambda_n = 1, lambda_n = 2/7,
+// towards -x (lambda_t = mu lambda_n: y_n = 2.5 lambda_n - 1.5 mu lambda_n + 1 = 0, lambda_n = 2/7,
 // y_t = -1.5 lambda_n + 2.5 lambda_t - 3 = -4/7 < 0). The enumeration finds all three, and the
 // persistent choice keeps the mode the contact is in.
 TEST(ModeSelection, ACoupledContactAtTangentialRestReportsItsThreeModes) {

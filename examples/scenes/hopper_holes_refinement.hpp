@@ -29,8 +29,8 @@ timefreezing::DiscoveryOptions hopper_discovery_options(int steps, std::ostream*
 
 /// The refinement's settings on the hopper: Radau IIA n_s = 4 on elements of at most 0.05 s (n_s
 /// = 3 reaches lower optima, 87.4 .. 89.5, on 840 .. 1070 elements, but its per-phase
-/// re-simulation stays above 1e-6 down to a local error of 8e-8 and takes two to three times as
-/// long; docs/refinement.md, "Stage count and mesh path"),
+/// re-simulation check fails at every local error measured, 2e-7, 8e-8 and 5e-8, and it takes 1.4
+/// to 3.3 times as long; docs/refinement.md, "Stage count and mesh path"),
 /// Ipopt 3000 iterations, the sticking stances 5 % inside the friction cone, every phase at least
 /// 20 ms long (without it the refinement shrinks three of the discovered stances to touches of
 /// zero length, and its second mesh round does not solve), no schedule edit (an edit the last

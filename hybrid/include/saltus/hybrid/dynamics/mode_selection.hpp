@@ -23,17 +23,19 @@ namespace saltus {
 
 /// Which solution select() takes when the acceleration-level problem has several (see
 /// SelectionUniqueness):
-/// - Persistent (the default): the contacts' current mode, select()'s `current` argument, when it
-///   is one of the solutions; else the solver's. This is the indicator rule of event-driven
+/// - Persistent (the default): the contacts' current mode, select()'s `current` argument (compared
+///   on the candidate contacts), when it is one of the first max_kept solutions; else the solver's. This is the indicator rule of event-driven
 ///   schemes (Pfeiffer & Glocker, Multibody Dynamics with Unilateral Contacts, 1996, ch. 6): a
 ///   closed contact stays closed while its normal force is not negative and its stick while its
 ///   friction is inside the cone. After an impact the current mode is the impact's post-impact
 ///   mode: a foot that touched down into stick and may either stay or lift off at the
-///   acceleration level stays (the hopper's touchdowns, docs/simulation.md).
+///   acceleration level stays (docs/refinement.md, "Hopper over three holes").
 /// - Solver: the pivoting or Coulomb solver's own (in Painleve's indeterminate case it is the
 ///   lift-off, where Lemke's pivoting ends first).
 /// - MostClosed / FewestClosed: the solution with the most or the fewest closed contacts.
-/// Without a `current` mode Persistent is Solver.
+/// Without a `current` mode Persistent is Solver. In a simulation the rule is
+/// SimulationOptions::selection.ambiguity; Solver there gives the choice made before Persistent
+/// existed (CHANGELOG.md).
 enum class AmbiguityChoice { Persistent, Solver, MostClosed, FewestClosed };
 
 /// What the last select() found about the uniqueness of its solution: the modes of all solutions
@@ -45,7 +47,8 @@ enum class AmbiguityChoice { Persistent, Solver, MostClosed, FewestClosed };
 /// s y_t >= 0, s = +-1). Each combination is a square linear system in its unknown forces;
 /// degenerate combinations are skipped (their solutions belong to a neighbouring one). Checked
 /// where the problem has at most 12 rows, at most 4096 combinations and no spatial contact at
-/// tangential rest (a spatial stick-slip has a continuum of slip directions: checked = false).
+/// tangential rest (a spatial stick-slip has a continuum of slip directions), and where at least
+/// one combination is feasible within the zero bands; otherwise checked = false.
 /// Solutions count as distinct when their modes differ (redundant contacts have many force
 /// distributions for one mode: not an ambiguity of the mode). A P-matrix problem without friction
 /// has exactly one; friction (a slipping contact folded into the columns, Painleve; a coupled
@@ -55,7 +58,9 @@ struct SelectionUniqueness {
   static constexpr int max_kept = 4;
   bool checked = false;
   int solutions = 1;  ///< solutions with distinct modes found (1 when not checked)
-  int taken = 0;      ///< which of `modes` select() returned
+  /// The index in `modes` of the mode select() returned; 0 also when it returned the solver's mode
+  /// and that mode is not among `modes` (beyond max_kept, or outside the enumeration's zero bands).
+  int taken = 0;
   std::array<Mode<NC>, max_kept> modes{};  ///< the first max_kept solutions' modes
 };
 
