@@ -97,7 +97,8 @@ TEST(ReferenceAnalysis, JsonKeepsTheKeysOfEachCompletedStage) {
   EXPECT_EQ(keys(j["monte_carlo"]),
             (std::vector<std::string>{"runs", "kept_event_sequence", "failed", "failure_reasons", "departures", "grew", "shrank",
                                       "observed_rate_max", "predicted_rate_max", "max_log_discrepancy",
-                                      "perturbation_size", "simulation_seconds", "seconds", "threads",
+                                      "relative_to_nominal_run", "nominal_run_deviation", "nominal_run_max_deviation",
+                                      "nominal_run_departure", "perturbation_size", "simulation_seconds", "seconds", "threads",
                                       "amplifications"}));
   EXPECT_EQ(j["monte_carlo"]["runs"].get<int>(), 4);
   // One entry per run that did not fail, the run's own numbers in the run's order.

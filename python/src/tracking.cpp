@@ -21,6 +21,13 @@ namespace saltus::python {
 
 namespace {
 
+void copy_nominal_run(const MonteCarloReport& from, MonteCarloReport& to) {
+  to.relative_to_nominal_run = from.relative_to_nominal_run;
+  to.nominal_run_deviation = from.nominal_run_deviation;
+  to.nominal_run_max_deviation = from.nominal_run_max_deviation;
+  to.nominal_run_departure = from.nominal_run_departure;
+}
+
 PyMonteCarlo merge(std::vector<PyMonteCarlo> parts) {
   SALTUS_REQUIRE(!parts.empty(), "MonteCarloReport.merge: no reports");
   std::sort(parts.begin(), parts.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
@@ -29,6 +36,7 @@ PyMonteCarlo merge(std::vector<PyMonteCarlo> parts) {
   out.batch_runs = parts.front().batch_runs;
   out.t0 = parts.front().t0;
   out.t_final = parts.front().t_final;
+  copy_nominal_run(parts.front().report, out.report);  // every chunk runs the same nominal run
   int next = out.first;
   for (const PyMonteCarlo& p : parts) {
     SALTUS_REQUIRE(p.first == next, "MonteCarloReport.merge: the chunks do not follow each other (runs from ", next,
@@ -134,6 +142,15 @@ void bind_tracking(py::module_& m) {
       .def_property_readonly("observed_rate_median", [](const MC& r) { return r.report.observed_rate_median; })
       .def_property_readonly("predicted_rate_max", [](const MC& r) { return r.report.predicted_rate_max; })
       .def_property_readonly("max_log_discrepancy", [](const MC& r) { return r.report.max_log_discrepancy; })
+      .def_property_readonly("relative_to_nominal_run", [](const MC& r) { return r.report.relative_to_nominal_run; },
+                             "whether the runs were measured against the nominal run (d = 0) rather than the reference")
+      .def_property_readonly("nominal_run_deviation", [](const MC& r) { return r.report.nominal_run_deviation; },
+                             "|x_0(T) - x_j(T)|_Wout of the nominal run: the reference's defect in closed loop (state units)")
+      .def_property_readonly("nominal_run_max_deviation",
+                             [](const MC& r) { return r.report.nominal_run_max_deviation; },
+                             "the same, largest over T and the deviation times")
+      .def_property_readonly("nominal_run_departure", [](const MC& r) { return r.report.nominal_run_departure; },
+                             "why the runs were measured against the reference (empty when against the nominal run)")
       .def_property_readonly("grew", [](const MC& r) { return r.report.grew; })
       .def_property_readonly("shrank", [](const MC& r) { return r.report.shrank; })
       .def_property_readonly("seconds", [](const MC& r) { return r.report.seconds; },
@@ -148,7 +165,8 @@ void bind_tracking(py::module_& m) {
                                                                        : r.report.run[k].observed;
             return v;
           },
-          "(runs,) |x(T) - x_j(T)|_Wout / |eps d|_W of each run (NaN for a failed run)")
+          "(runs,) |x(T) - x_j(T)|_Wout / |eps d|_W of each run, less the nominal run's error when "
+          "relative_to_nominal_run (NaN for a failed run)")
       .def_property_readonly(
           "predicted",
           [](const MC& r) {
@@ -186,7 +204,9 @@ void bind_tracking(py::module_& m) {
           [](const MC& r) {
             py::list runs;
             for (const auto& run : r.report.run) runs.append(run_state(run));
-            return py::make_tuple(r.first, r.batch_runs, r.t0, r.t_final, r.report.seconds, r.report.threads, runs);
+            return py::make_tuple(r.first, r.batch_runs, r.t0, r.t_final, r.report.seconds, r.report.threads, runs,
+                                  r.report.relative_to_nominal_run, r.report.nominal_run_deviation,
+                                  r.report.nominal_run_max_deviation, r.report.nominal_run_departure);
           },
           [](const py::tuple& t) {
             MC r;
@@ -197,6 +217,10 @@ void bind_tracking(py::module_& m) {
             r.report.seconds = t[4].cast<double>();
             r.report.threads = t[5].cast<int>();
             for (const auto& h : t[6].cast<py::list>()) r.report.run.push_back(run_from(h));
+            r.report.relative_to_nominal_run = t[7].cast<bool>();
+            r.report.nominal_run_deviation = t[8].cast<double>();
+            r.report.nominal_run_max_deviation = t[9].cast<double>();
+            r.report.nominal_run_departure = t[10].cast<std::string>();
             summarise_monte_carlo(r.report, r.t_final - r.t0);
             return r;
           }));

@@ -838,23 +838,83 @@ std::vector<double> predicted_deviations(const ClosedLoopLinearisation<S>& cl, c
   return out;
 }
 
-/// |x_j(t_k) - x(t_k)|_Wout / scale of one plant run at `times`: the plant on its segment at t_k
-/// (after an event at the event's time) against the reference segment of that plant segment's
-/// phase (phase_segments, the controller's bookkeeping), extended by reference spreading; NaN
-/// where t_k lies beyond that segment's extension.
+/// x(t_k) - x_j(t_k) of one plant run at `times`: the plant on its segment at t_k (after an event
+/// at the event's time) against the reference segment of that plant segment's phase
+/// (phase_segments, the controller's bookkeeping), extended by reference spreading; NaN where t_k
+/// lies beyond that segment's extension.
 template <Scene S>
-std::vector<double> observed_deviations(const HybridTrajectory<S>& plant, const std::vector<int>& phase_segments,
-                                        const ExtendedReference<S>& reference, const std::vector<double>& times,
-                                        const Mat<2 * S::nq, 2 * S::nq>& C, double scale) {
-  std::vector<double> out(times.size(), std::numeric_limits<double>::quiet_NaN());
+std::vector<Vec<2 * S::nq>> errors_at(const HybridTrajectory<S>& plant, const std::vector<int>& phase_segments,
+                                      const ExtendedReference<S>& reference, const std::vector<double>& times) {
+  std::vector<Vec<2 * S::nq>> out(times.size(), Vec<2 * S::nq>::Constant(std::numeric_limits<double>::quiet_NaN()));
   for (std::size_t k = 0; k < times.size(); ++k) {
     const double t = times[k];
     const int j = plant.segment_at(t);
     const int s = phase_segments[static_cast<std::size_t>(j)];
     if (t < reference.reached_before(s) || t > reference.reached_after(s)) continue;
     const double tj = std::min(t, plant.segments[static_cast<std::size_t>(j)].t_end);
-    out[k] = (C * (plant.state(j, tj) - reference.state(s, t))).norm() / scale;
+    out[k] = plant.state(j, tj) - reference.state(s, t);
   }
+  return out;
+}
+
+/// One closed-loop run followed through the controller's phases: whether it kept the reference's
+/// event sequence (else where it left it), and its errors against the reference at T and at the
+/// deviation times (errors_at).
+template <Scene S>
+struct TrackedRun {
+  bool failed = false, kept_event_sequence = false;
+  std::string reason, departure;
+  int events = 0;
+  Vec<2 * S::nq> error_at_end;
+  std::vector<Vec<2 * S::nq>> errors;
+};
+
+/// Simulates the closed loop of `controller` from `start` on [t0, T] with `simulator` and tracks its
+/// phases (TrackedRun); `last` is the reference segment at T. Throws what the simulator throws.
+template <Scene S>
+TrackedRun<S> track_run(Simulator<S>& simulator, const ReferenceSpreadingController<S>& controller,
+                        const Vec<2 * S::nq>& start, double t0, double T, int last, const std::vector<double>& times) {
+  using Phase = typename ReferenceSpreadingController<S>::Phase;
+  const auto& ref = controller.reference().reference();
+  TrackedRun<S> out;
+  const HybridTrajectory<S> traj = simulator.run(start, t0, T, controller.law());
+  if (traj.status != SimulationStatus::Completed) {
+    out.failed = true;
+    out.reason = concat("simulation ended with status ", to_string(traj.status));
+    return out;
+  }
+  out.events = static_cast<int>(traj.events.size());
+  // The plant's phase after each of its events (the controller's own bookkeeping).
+  Phase phase;
+  bool kept = true;
+  const ExtendedReference<S>& extended = controller.reference();
+  std::vector<int> phase_segments(static_cast<std::size_t>(traj.segment_count()), 0);
+  for (int k = 1; k < traj.segment_count(); ++k) {
+    const Phase before = phase;
+    phase = controller.next_phase(phase, traj.segments[k - 1].mode, traj.segments[k].mode);
+    phase_segments[static_cast<std::size_t>(k)] = phase.segment;
+    if (kept && !phase.intermediate && !phase.micro_event_ahead && !(traj.segments[k].mode == ref.segments[phase.segment].mode)) {
+      kept = false;
+      out.departure = concat("the plant's event into ", describe_contact_modes(traj.segments[k].mode), " where reference segment ",
+                             phase.segment, " has ", describe_contact_modes(ref.segments[phase.segment].mode),
+                             " (t = ", traj.events[k - 1].t, " s)");
+    }
+    // The controller held the reference beyond an extension (tracking.hpp): not a valid run.
+    const double te = traj.events[k - 1].t;
+    if (te > extended.reached_after(before.segment) || te < extended.reached_before(phase.segment)) {
+      out.failed = true;
+      out.reason = concat("the plant's event at t = ", te, " lies beyond the extension of reference segment ",
+                          te > extended.reached_after(before.segment) ? before.segment : phase.segment,
+                          " (make ExtensionOptions::before/after longer)");
+      return out;
+    }
+  }
+  out.kept_event_sequence = kept && !phase.intermediate && !phase.micro_event_ahead && phase.segment == last;
+  if (kept && !out.kept_event_sequence)
+    out.departure = phase.segment != last ? concat("ended in reference segment ", phase.segment, " of 0 .. ", last)
+                                          : std::string("ended between the micro-events of a reference event");
+  out.error_at_end = traj.final_state() - extended.state(phase.segment, T);
+  out.errors = errors_at(traj, phase_segments, extended, times);
   return out;
 }
 
@@ -867,7 +927,6 @@ MonteCarloReport monte_carlo(const S& scene, const SimulationOptions& simulation
   constexpr int nx = 2 * S::nq;
   using Matrix = Mat<nx, nx>;
   using State = Vec<nx>;
-  using Phase = typename ReferenceSpreadingController<S>::Phase;
   SALTUS_REQUIRE(options.runs >= 1, "monte_carlo: runs must be >= 1, got ", options.runs);
   SALTUS_REQUIRE(options.size > 0 && std::isfinite(options.size), "monte_carlo: size must be > 0, got ", options.size);
   SALTUS_REQUIRE(options.scale.allFinite(), "monte_carlo: the scale must be finite");
@@ -939,6 +998,33 @@ MonteCarloReport monte_carlo(const S& scene, const SimulationOptions& simulation
   const auto wall = std::chrono::steady_clock::now();
   // Counts for the progress lines: atomics, so that a line never reads another worker's run.
   std::atomic<int> failed_so_far{0}, kept_so_far{0};
+  // The nominal run (d = 0), against which the runs are measured (relative_to_nominal_run).
+  State nominal_end = State::Zero();
+  std::vector<State> nominal_errors(times.size(), State::Zero());
+  if (options.relative_to_nominal_run) {
+    detail::TrackedRun<S> nominal;
+    try {
+      nominal = detail::track_run(*simulators[0], controller, x0, t0, T, last, times);
+    } catch (const std::exception& ex) {
+      nominal.failed = true;
+      nominal.reason = ex.what();
+    }
+    if (!nominal.failed) {
+      report.nominal_run_deviation = (C * nominal.error_at_end).norm();
+      report.nominal_run_max_deviation = report.nominal_run_deviation;
+      for (const State& e : nominal.errors)
+        if (e.allFinite()) report.nominal_run_max_deviation = std::max(report.nominal_run_max_deviation, (C * e).norm());
+    }
+    report.relative_to_nominal_run = !nominal.failed && nominal.kept_event_sequence;
+    if (report.relative_to_nominal_run) {
+      nominal_end = nominal.error_at_end;
+      nominal_errors = nominal.errors;
+    } else {
+      report.nominal_run_departure =
+          nominal.failed ? detail::concat("the nominal run failed: ", nominal.reason)
+                         : detail::concat("the nominal run left the event sequence: ", nominal.departure);
+    }
+  }
   auto body = [&](int r, int worker) {
     MonteCarloRun& out = report.run[r];
     struct Count {  // counts this run once its result is final, however the body returns
@@ -951,49 +1037,20 @@ MonteCarloReport monte_carlo(const S& scene, const SimulationOptions& simulation
       }
     } count{out, failed_so_far, kept_so_far};
     try {
-      const HybridTrajectory<S> traj = simulators[worker]->run(start[r], t0, T, controller.law());
-      if (traj.status != SimulationStatus::Completed) {
-        out.failed = true;
-        out.reason = detail::concat("simulation ended with status ", to_string(traj.status));
-        return;
+      const detail::TrackedRun<S> run = detail::track_run(*simulators[worker], controller, start[r], t0, T, last, times);
+      out.failed = run.failed;
+      out.reason = run.reason;
+      out.departure = run.departure;
+      out.events = run.events;
+      out.kept_event_sequence = run.kept_event_sequence;
+      if (run.failed) return;
+      const double scale = (Lt * (options.size * d[r])).norm();
+      out.observed = (C * (run.error_at_end - nominal_end)).norm() / scale;
+      if (!times.empty()) {
+        out.observed_over_time.assign(times.size(), std::numeric_limits<double>::quiet_NaN());
+        for (std::size_t k = 0; k < times.size(); ++k)
+          out.observed_over_time[k] = (C * (run.errors[k] - nominal_errors[k])).norm() / scale;  // NaN stays NaN
       }
-      out.events = static_cast<int>(traj.events.size());
-      // The plant's phase after each of its events (the controller's own bookkeeping).
-      Phase phase;
-      bool kept = true;
-      const ExtendedReference<S>& extended = controller.reference();
-      std::vector<int> phase_segments(static_cast<std::size_t>(traj.segment_count()), 0);
-      for (int k = 1; k < traj.segment_count(); ++k) {
-        const Phase before = phase;
-        phase = controller.next_phase(phase, traj.segments[k - 1].mode, traj.segments[k].mode);
-        phase_segments[static_cast<std::size_t>(k)] = phase.segment;
-        if (kept && !phase.intermediate && !phase.micro_event_ahead &&
-            !(traj.segments[k].mode == ref.segments[phase.segment].mode)) {
-          kept = false;
-          out.departure = detail::concat("the plant's event into ", detail::describe_contact_modes(traj.segments[k].mode),
-                                         " where reference segment ", phase.segment, " has ",
-                                         detail::describe_contact_modes(ref.segments[phase.segment].mode),
-                                         " (t = ", traj.events[k - 1].t, " s)");
-        }
-        // The controller held the reference beyond an extension (tracking.hpp): not a valid run.
-        const double te = traj.events[k - 1].t;
-        if (te > extended.reached_after(before.segment) || te < extended.reached_before(phase.segment)) {
-          out.failed = true;
-          out.reason = detail::concat("the plant's event at t = ", te, " lies beyond the extension of reference segment ",
-                                      te > extended.reached_after(before.segment) ? before.segment : phase.segment,
-                                      " (make ExtensionOptions::before/after longer)");
-          return;
-        }
-      }
-      out.kept_event_sequence = kept && !phase.intermediate && !phase.micro_event_ahead && phase.segment == last;
-      if (kept && !out.kept_event_sequence)
-        out.departure = phase.segment != last ? detail::concat("ended in reference segment ", phase.segment, " of 0 .. ", last)
-                                              : std::string("ended between the micro-events of a reference event");
-      const State e = traj.final_state() - controller.reference().state(phase.segment, T);
-      out.observed = (C * e).norm() / (Lt * (options.size * d[r])).norm();
-      if (!times.empty())
-        out.observed_over_time = detail::observed_deviations(traj, phase_segments, extended, times, C,
-                                                             (Lt * (options.size * d[r])).norm());
     } catch (const std::exception& ex) {
       out.failed = true;
       out.reason = ex.what();

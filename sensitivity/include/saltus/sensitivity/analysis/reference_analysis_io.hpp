@@ -28,7 +28,11 @@ namespace saltus {
 ///                        runs whose observed amplification is > 1, < 1), observed_rate_max (max
 ///                        over kept runs of log(observed) / (T - t0), 1/s), predicted_rate_max (the
 ///                        same of each run's first-order amplification), max_log_discrepancy (max
-///                        |log(observed / first order)|), perturbation_size, simulation_seconds (the
+///                        |log(observed / first order)|), relative_to_nominal_run,
+///                        nominal_run_deviation, nominal_run_max_deviation (the nominal run's error
+///                        against the reference, state units), nominal_run_departure (why the runs
+///                        were measured against the reference instead; MonteCarloReport),
+///                        perturbation_size, simulation_seconds (the
 ///                        closed-loop runs), seconds (with the first-order predictions), threads,
 ///                        amplifications: {predicted, observed, kept_event_sequence} per run that
 ///                        did not fail (|z(T)| / |d| of the first order, |x(T) - x_j(T)| / |eps d|
@@ -87,6 +91,10 @@ nlohmann::ordered_json to_json(const ReferenceAnalysis<S>& analysis) {
                         {"observed_rate_max", m.observed_rate_max},
                         {"predicted_rate_max", m.predicted_rate_max},
                         {"max_log_discrepancy", m.max_log_discrepancy},
+                        {"relative_to_nominal_run", m.relative_to_nominal_run},
+                        {"nominal_run_deviation", m.nominal_run_deviation},
+                        {"nominal_run_max_deviation", m.nominal_run_max_deviation},
+                        {"nominal_run_departure", m.nominal_run_departure},
                         {"perturbation_size", analysis.perturbation_size},
                         {"simulation_seconds", m.seconds},
                         {"seconds", analysis.seconds.monte_carlo},
