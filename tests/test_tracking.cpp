@@ -341,6 +341,35 @@ TEST(Tracking, MonteCarloMeasuresAgainstTheNominalRunNotTheReferencesDefect) {
   EXPECT_GT(against_reference.max_log_discrepancy, 1.0) << "the defect over eps dominates";
 }
 
+// A plant that bounces where the reference lands: Example 3 (inelastic) tracked on a table of
+// restitution 0.3. The controller takes the bounces as micro-events ahead of the landing
+// (AFrictionMicroEventAheadOfAReleaseKeepsTheSegment), but the batch counts each such run as a
+// departure: the first order has one touchdown there.
+TEST(Tracking, MonteCarloCountsABounceAheadOfATouchdownAsADeparture) {
+  const auto ref = references::example3();
+  scenes::PointMassParameters bouncy = ref.scene.parameters();
+  bouncy.restitution = 0.3;
+  const PointMass plant(bouncy);
+  LinearisationOptions lo = signal_options<PointMass>(ref.options);
+  lo.spreading.after = 0.5;  // s: the plant lands for good about 0.27 s after the reference
+  LinearisedSystem<PointMass> ol(ref.scene, ref.trajectory, lo);
+  const GainSchedule<PointMass> K = lqr_design(ol, LqrWeights<PointMass>{}).gains;
+  const ReferenceSpreadingController<PointMass> controller(ol.reference(), K);
+  MonteCarloOptions<PointMass> mc;
+  mc.runs = 4;
+  mc.threads = 2;
+  SimulationOptions simulation = ref.options;
+  simulation.zeno_completion = true;  // the bounces accumulate; the mass then slides on
+  const MonteCarloReport m = monte_carlo(plant, simulation, controller, ClosedLoopLinearisation<PointMass>(ol, K), mc);
+  for (const std::string& d : m.departures) std::printf("%s\n", d.c_str());
+  for (const std::string& r : m.failure_reasons) std::printf("%s\n", r.c_str());
+  EXPECT_EQ(m.failed, 0);
+  EXPECT_EQ(m.kept_event_sequence, 0);
+  ASSERT_EQ(m.departures.size(), 1u);
+  EXPECT_EQ(m.departures[0].rfind("4 x a bounce: the plant's touchdown into contact 0 open ahead of the event that ends "
+                                  "reference segment 0 (t = ", 0), 0u) << m.departures[0];
+}
+
 // A reference whose input jumps (HybridTrajectory::input_breakpoints): the point mass slides on
 // the frictionless table at 1 m/s under a thrust g/2 that jumps to 2 g at t = 0.5, where the
 // contact releases (Event::input_jump) and the mass rises with y'' = g. A tracking controller's

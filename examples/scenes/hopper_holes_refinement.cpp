@@ -33,7 +33,7 @@ timefreezing::RefinementOptions hopper_refinement_options(std::ostream* progress
   o.flight_clearance = 0.005;
   o.stance_load = 20.0;
   o.touchdown_speed = 0.3;
-  o.mesh.local_error_tolerance = 2e-7;
+  o.mesh.local_error_tolerance = 2e-8;
   o.mesh.max_split = 4;
   o.mesh.max_rounds = 10;
   o.mesh.max_iter = 1000;

@@ -21,8 +21,9 @@
 // reference's next event changes them. Two kinds: a friction transition (a slip onset a
 // microsecond before a release from stick), and a bounce (a touchdown whose impact leaves the
 // contact open again, ahead of the reference's touchdown). A long flight after such a bounce is
-// flown under u_i(t) alone and ends far from the reference: the batch then reports growth, not
-// agreement (measured on a refined hopper whose touchdown bounced in the simulator: all 200 runs;
+// flown under u_i(t) alone and ends far from the reference, so the Monte Carlo batch counts a
+// run that bounced as a departure (MonteCarloRun::kept_event_sequence), not as a kept run that
+// grew (measured on a refined hopper whose touchdown bounced in the simulator: all 200 runs;
 // with the bounce advancing the segment instead, the default hopper's runs chattered to the
 // integrator's step limit, 45 of the first 50 failed, at 8.5 s a run).
 // A release from stick whose perturbed force leaves the friction cone a microsecond before lambda_n
@@ -426,7 +427,10 @@ struct MonteCarloOptions {
 struct MonteCarloRun {
   bool failed = false;
   std::string reason;     ///< the exception's message (failed runs)
-  bool kept_event_sequence = false;  ///< ends in the reference's last segment and mode, no unplanned event
+  /// Ends in the reference's last segment and mode with no unplanned event; a bounce ahead of a
+  /// reference touchdown (the controller's micro-event, file comment) is a departure: the first
+  /// order has one touchdown there, the plant a touchdown, a lift-off and another touchdown.
+  bool kept_event_sequence = false;
   /// A run that completed without keeping the event sequence: where it left it, e.g. "the plant's
   /// event into contact 0 slip+ where reference segment 12 has contact 0 stick (t = 2.2011 s)" or
   /// "ended in reference segment 11 of 0 .. 12"; empty otherwise.

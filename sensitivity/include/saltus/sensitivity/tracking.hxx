@@ -899,6 +899,16 @@ TrackedRun<S> track_run(Simulator<S>& simulator, const ReferenceSpreadingControl
                              phase.segment, " has ", describe_contact_modes(ref.segments[phase.segment].mode),
                              " (t = ", traj.events[k - 1].t, " s)");
     }
+    // A bounce (a touchdown that leaves the contacts as they were) is a micro-event for the
+    // controller, but a touchdown and a lift-off the reference does not have: a departure.
+    const auto& guards = traj.events[k - 1].guards();
+    if (kept && phase.micro_event_ahead &&
+        std::any_of(guards.begin(), guards.end(), [](const Guard& g) { return g.kind == GuardKind::Touchdown; })) {
+      kept = false;
+      out.departure = concat("a bounce: the plant's touchdown into ", describe_contact_modes(traj.segments[k].mode),
+                             " ahead of the event that ends reference segment ", phase.segment, " (t = ",
+                             traj.events[k - 1].t, " s)");
+    }
     // The controller held the reference beyond an extension (tracking.hpp): not a valid run.
     const double te = traj.events[k - 1].t;
     if (te > extended.reached_after(before.segment) || te < extended.reached_before(phase.segment)) {
