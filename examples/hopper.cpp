@@ -19,12 +19,16 @@
 //                (refinement.hpp);
 //   analysis     the refined reference's jump gains, an LQR reference-spreading design, its
 //                stability check and 200 perturbed closed-loop runs at eps = 1e-6 (scenes/hopper_tracking.hpp).
-// It prints {"converged", "stage" ("refined", "converged, checks failed: ..." naming the failed
+// `hopper --json --hop-guess` runs the same chain from the second initialisation instead, the
+// kinematic guess of three hops (HopperOverThreeHoles::hop_guess) in place of the hole continuation.
+// It prints {"converged", "initialisation" ("paper" or "hop_guess"), "stage" ("refined",
+// "converged, checks failed: ..." naming the failed
 // checks, or the stage where it stopped), "mode_validity_violation",
 // "max_path_violation", "target_error", "objective", "relaxed_objective", "schedule",
 // "schedule_edits", "events", "footholds", "phase_resim_max_error", "discovery_seconds",
 // "refinement_seconds", "solve_seconds", "discovery", "refinement", "analysis"} (refinement_io.hpp,
-// reference_analysis_io.hpp) and writes the refined reference's files (report/hopper_refined_*).
+// reference_analysis_io.hpp) and writes the refined reference's files (report/hopper_refined_*;
+// from hop_guess report/hopper_refined_hop_guess_*).
 // Exit status 0 only when the reference is refined; the analysis's outcome is reported, not
 // reflected in it. About 5 minutes on one thread: discovery and refinement about 250 s, the
 // analysis about 60 s, most of it the Monte Carlo runs (docs/refinement.md, "Hopper over three holes").
@@ -51,12 +55,13 @@
 
 namespace {
 
-/// The refined reference's files (report/hopper_refined_*) and its analysis: jump gains, an LQR
+/// The refined reference's files (report/<name>.json, .csv, _forces.csv) and its analysis: jump gains, an LQR
 /// design (R = I), its stability check, 200 perturbed runs, each run's deviation at 60 times.
-nlohmann::ordered_json analysed(const saltus::scenes::Hopper& hopper, const saltus::HybridTrajectory<saltus::scenes::Hopper>& ref) {
+nlohmann::ordered_json analysed(const saltus::scenes::Hopper& hopper, const saltus::HybridTrajectory<saltus::scenes::Hopper>& ref,
+                                const char* name) {
   using namespace saltus;
-  write_trajectory_files(hopper, ref, "hopper_refined", 0.005, report_directory(), stderr);
-  write_contact_forces_file(hopper, ref, "hopper_refined", 0.005, report_directory(), stderr);
+  write_trajectory_files(hopper, ref, name, 0.005, report_directory(), stderr);
+  write_contact_forces_file(hopper, ref, name, 0.005, report_directory(), stderr);
   ReferenceAnalysisOptions<scenes::Hopper> analysis = scenes::stance_start_lqr_analysis(hopper, ref, 200, 1.0, &std::cerr);
   // eps = 1e-6: the touchdowns' saltation norms reach 5e4, and at eps = 1e-5 a third of the runs
   // already leave the friction cone at a touchdown (docs/refinement.md, "The hopper's analysis").
@@ -66,16 +71,21 @@ nlohmann::ordered_json analysed(const saltus::scenes::Hopper& hopper, const salt
   return to_json(analyse_reference(hopper, ref, scenes::hopper_monte_carlo_simulation(), analysis));
 }
 
-int optimal_hop_over_three_holes() {
+int optimal_hop_over_three_holes(bool from_hop_guess) {
   using namespace saltus;
   using namespace saltus::timefreezing;
   using Ocp = scenes::HopperOverThreeHoles;
   const scenes::Hopper hopper{};
   nlohmann::ordered_json j;
   j["converged"] = false;
-  const DiscoveryResult<scenes::Hopper> discovery = discover_schedule_by_continuation(
-      hopper, Ocp::system(), Ocp::hole_continuation(), Ocp{}, Ocp::q0(), Ocp::v0(), Ocp::grid(), Ocp::solver(),
-      scenes::hopper_discovery_options(2, &std::cerr));
+  j["initialisation"] = from_hop_guess ? "hop_guess" : "paper";
+  const MotionGuess hops = [](double t) { return Eigen::VectorXd(Ocp::hop_guess(t)); };
+  const DiscoveryOptions discovery_options = scenes::hopper_discovery_options(2, &std::cerr);
+  const DiscoveryResult<scenes::Hopper> discovery =
+      from_hop_guess ? discover_schedule_from_guess(hopper, Ocp::system(), Ocp{}, Ocp::q0(), Ocp::v0(), Ocp::grid(), hops,
+                                                    Ocp::solver(), discovery_options)
+                     : discover_schedule_by_continuation(hopper, Ocp::system(), Ocp::hole_continuation(), Ocp{}, Ocp::q0(),
+                                                         Ocp::v0(), Ocp::grid(), Ocp::solver(), discovery_options);
   j["stage"] = "discovery (" + discovery.message + ")";
   j["relaxed_objective"] = discovery.relaxed.solution.objective;
   j["discovery_seconds"] = discovery.seconds;
@@ -100,7 +110,8 @@ int optimal_hop_over_three_holes() {
     j["target_error"] = refined->terminal_violation;
     j["solve_seconds"] = discovery.seconds + refined->seconds;
     j["refinement"] = rj;
-    if (refined->converged) j["analysis"] = analysed(hopper, refined->trajectory);
+    if (refined->converged)
+      j["analysis"] = analysed(hopper, refined->trajectory, from_hop_guess ? "hopper_refined_hop_guess" : "hopper_refined");
   }
   std::cout << j.dump(2) << "\n";
   return refined && refined->stage == "refined" ? 0 : 1;
@@ -110,7 +121,8 @@ int optimal_hop_over_three_holes() {
 
 int main(int argc, char** argv) {
   using namespace saltus;
-  if (argc > 1 && std::strcmp(argv[1], "--json") == 0) return optimal_hop_over_three_holes();
+  if (argc > 1 && std::strcmp(argv[1], "--json") == 0)
+    return optimal_hop_over_three_holes(argc > 2 && std::strcmp(argv[2], "--hop-guess") == 0);
   using H = scenes::Hopper;
   H hopper;  // masses, lengths and inertias: scenes/hopper.hpp
 
