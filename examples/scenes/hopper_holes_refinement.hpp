@@ -45,9 +45,9 @@ timefreezing::DiscoveryOptions hopper_discovery_options(int steps, std::ostream*
 /// optimum 89.51 against 91.68 and the refinement 138 s against 180 s), the mesh refined to local error
 /// 2e-8 (split 4, 10 rounds of at most 1000 iterations each, the rounds warm-started at mu = 0.1;
 /// 2e-8, not the 2e-7 that the re-simulation check alone needs: the touchdowns' saltation norms
-/// reach 5e4, and at 2e-7 the reference's defect, 1.7e-5 before the touchdown at 1.864 s, puts the
-/// tracking design's nominal run 0.6 off the reference after it, where the analysis's first order
-/// does not hold; at 2e-8 the nominal run stays within 1.3e-5),
+/// reach 5e4, and at 2e-7 (per-phase re-simulation 3.3e-7) the tracking design's nominal run, 1.7e-5
+/// off the reference just before the touchdown at 1.864 s, is 0.6 off after it, where the analysis's
+/// first order does not hold; at 2e-8 the nominal run stays within 1.3e-5),
 /// the per-phase re-simulation in windows of 0.02 s (the stances are open-loop unstable at about
 /// 40 / s). docs/refinement.md, "Hopper over three holes".
 timefreezing::RefinementOptions hopper_refinement_options(std::ostream* progress);

@@ -417,28 +417,35 @@ struct MonteCarloOptions {
   /// nominal run's. This is the finite difference of the closed-loop map that the first order
   /// predicts, and it cancels the reference's own defect: a collocation reference differs from the
   /// simulator's trajectory by its discretisation error, which the events' saltation matrices
-  /// amplify (on the hopper over three holes, 3e-7 before a touchdown of gain 5e4); that defect is
-  /// reported instead (MonteCarloReport::nominal_run_deviation). When the nominal run fails or
-  /// leaves the event sequence the runs are measured against the reference and the report says why
-  /// (nominal_run_departure). false: against the reference (e(t) alone).
+  /// amplify (on the hopper over three holes refined to local error 2e-7, the nominal run is 1.7e-5
+  /// off the reference before a touchdown of saltation norm 5.3e4, 0.6 after it); that defect is
+  /// reported instead (MonteCarloReport::nominal_run_deviation). The nominal run is one simulation
+  /// more, not counted in `runs`; it never throws out of monte_carlo: when it fails or leaves the
+  /// event sequence, the runs are measured against the reference and nominal_run_departure says
+  /// why. false: against the reference (e(t) alone), no nominal run.
   bool relative_to_nominal_run = true;
 };
 
 struct MonteCarloRun {
   bool failed = false;
   std::string reason;     ///< the exception's message (failed runs)
-  /// Ends in the reference's last segment and mode with no unplanned event; a bounce ahead of a
-  /// reference touchdown (the controller's micro-event, file comment) is a departure: the first
-  /// order has one touchdown there, the plant a touchdown, a lift-off and another touchdown.
+  /// Ends in the reference's last segment and mode with no unplanned event. A bounce ahead of a
+  /// reference touchdown (a touchdown that leaves the contact open, which the controller takes as a
+  /// micro-event: file comment) is a departure, "a bounce: the plant's touchdown into ... ahead of
+  /// the event that ends reference segment j (t = ... s)": the first order has one touchdown there,
+  /// the plant a touchdown, a lift-off and another touchdown.
   bool kept_event_sequence = false;
   /// A run that completed without keeping the event sequence: where it left it, e.g. "the plant's
   /// event into contact 0 slip+ where reference segment 12 has contact 0 stick (t = 2.2011 s)" or
   /// "ended in reference segment 11 of 0 .. 12"; empty otherwise.
   std::string departure;
   int events = 0;         ///< plant events (micro-events counted one by one)
-  double observed = 0.0;  ///< |x(T) - x_j(T)|_Wout / |eps d|_W
+  /// |x(T) - x_j(T)|_Wout / |eps d|_W, with x(T) - x_j(T) less the nominal run's x_0(T) - x_j(T)
+  /// when MonteCarloReport::relative_to_nominal_run
+  double observed = 0.0;
   double predicted = 0.0; ///< |z(T)|_Wout / |d|_W of the first-order closed loop
-  /// At MonteCarloOptions::deviation_times t_k: |x(t_k) - x_j(t_k)|_Wout / |eps d|_W, the plant
+  /// At MonteCarloOptions::deviation_times t_k: |x(t_k) - x_j(t_k)|_Wout / |eps d|_W (less the
+  /// nominal run's error at t_k as for `observed`), the plant
   /// compared with the reference segment of its own phase at t_k (extended by reference
   /// spreading), and |z(t_k)|_Wout / |d|_W. NaN where t_k lies beyond the extension of that
   /// segment, or where the prediction leaves the conewise pieces with a nominal outcome
@@ -467,13 +474,16 @@ struct MonteCarloReport {
   /// Whether the runs were measured against the nominal run (MonteCarloOptions::relative_to_nominal_run
   /// and the nominal run kept the event sequence) or against the reference.
   bool relative_to_nominal_run = false;
-  /// The nominal run's |x_0(T) - x_j(T)|_Wout and the largest at the deviation times [state units,
-  /// not divided by eps]: the reference's defect as the closed loop sees it (the simulator's
-  /// tolerance for an exact reference). NaN when not run or when it failed.
+  /// The nominal run's |x_0(T) - x_j(T)|_Wout, and the largest of it at T and at the deviation times
+  /// (equal without deviation_times), in the output weight's norm of the state (not divided by
+  /// eps): the reference's defect as the closed loop sees it (for an exact reference, of the order
+  /// of the simulator's tolerance). NaN when not asked for or when the nominal run failed; finite
+  /// also when it left the event sequence.
   double nominal_run_deviation = std::numeric_limits<double>::quiet_NaN();
   double nominal_run_max_deviation = std::numeric_limits<double>::quiet_NaN();
-  /// Empty when the nominal run kept the event sequence (or was not asked for); else its departure
-  /// or failure, the reason the runs were measured against the reference.
+  /// Empty when the nominal run kept the event sequence (or was not asked for); else why the runs
+  /// were measured against the reference: "the nominal run failed: <reason>" or "the nominal run
+  /// left the event sequence: <departure>".
   std::string nominal_run_departure;
   double seconds = 0.0;      ///< wall time of the simulations
   int threads = 1;
