@@ -68,8 +68,13 @@ def test_chunks_merge_into_the_whole_batch(lqr):
     np.testing.assert_array_equal(merged.observed, whole.observed)
     np.testing.assert_array_equal(merged.predicted, whole.predicted)
     for name in ["runs", "failed", "kept_event_sequence", "observed_rate_max", "observed_rate_median",
-                 "predicted_rate_max", "max_log_discrepancy", "grew", "shrank", "failure_reasons", "departures"]:
+                 "predicted_rate_max", "max_log_discrepancy", "grew", "shrank", "failure_reasons", "departures",
+                 "relative_to_nominal_run", "nominal_run_deviation", "nominal_run_max_deviation",
+                 "nominal_run_departure"]:
         assert getattr(merged, name) == getattr(whole, name), name
+    # every run measured against the nominal run, whose error against the simulated reference is tiny
+    assert whole.relative_to_nominal_run and whole.nominal_run_departure == ""
+    assert 0.0 <= whole.nominal_run_deviation <= whole.nominal_run_max_deviation < 1e-8
     # a chunk runs the batch's own perturbations, not a fresh draw
     assert parts[1].observed[0] == whole.observed[0] and parts[0].observed[0] == whole.observed[12]
 
@@ -82,6 +87,8 @@ def test_merge_refuses_gaps_and_pickles_roundtrip(lqr):
     back = pickle.loads(pickle.dumps(a))
     np.testing.assert_array_equal(back.observed, a.observed)
     assert (back.first, back.batch_runs, back.observed_rate_max) == (0, 10, a.observed_rate_max)
+    assert (back.relative_to_nominal_run, back.nominal_run_deviation, back.nominal_run_departure) == \
+        (a.relative_to_nominal_run, a.nominal_run_deviation, a.nominal_run_departure)
     r = lqr.check_stability()
     assert pickle.loads(pickle.dumps(r)).upper_bound == r.upper_bound
 
