@@ -857,75 +857,99 @@ std::vector<Vec<2 * S::nq>> errors_at(const HybridTrajectory<S>& plant, const st
   return out;
 }
 
-/// One closed-loop run followed through the controller's phases: whether it kept the reference's
-/// event sequence (else where it left it), and its errors against the reference at T and at the
-/// deviation times (errors_at).
+/// The errors of one closed-loop run against the reference at T and at the deviation times
+/// (errors_at).
 template <Scene S>
-struct TrackedRun {
-  bool failed = false, kept_event_sequence = false;
-  std::string reason, departure;
-  int events = 0;
-  Vec<2 * S::nq> error_at_end;
-  std::vector<Vec<2 * S::nq>> errors;
+struct RunErrors {
+  Vec<2 * S::nq> at_end;
+  std::vector<Vec<2 * S::nq>> at_times;
 };
 
-/// Simulates the closed loop of `controller` from `start` on [t0, T] with `simulator` and tracks its
-/// phases (TrackedRun); `last` is the reference segment at T. Throws what the simulator throws.
+/// Where the plant's event into segment k leaves the reference's event sequence, given the phase
+/// after it (file comment, ReferenceSpreadingController::next_phase): a mode other than the phase
+/// segment's, or a bounce (a touchdown that leaves the contacts as they were: a micro-event for the
+/// controller, but a touchdown and a lift-off the reference does not have). Empty: it keeps it.
 template <Scene S>
-TrackedRun<S> track_run(Simulator<S>& simulator, const ReferenceSpreadingController<S>& controller,
-                        const Vec<2 * S::nq>& start, double t0, double T, int last, const std::vector<double>& times) {
+std::string departure_at_event(const HybridTrajectory<S>& plant, int k, const HybridTrajectory<S>& ref,
+                               const typename ReferenceSpreadingController<S>::Phase& phase) {
+  const Event<S>& event = plant.events[static_cast<std::size_t>(k - 1)];
+  const auto& mode = plant.segments[static_cast<std::size_t>(k)].mode;
+  if (!phase.intermediate && !phase.micro_event_ahead && !(mode == ref.segments[phase.segment].mode))
+    return concat("the plant's event into ", describe_contact_modes(mode), " where reference segment ", phase.segment,
+                  " has ", describe_contact_modes(ref.segments[phase.segment].mode), " (t = ", event.t, " s)");
+  const auto& guards = event.guards();
+  if (phase.micro_event_ahead &&
+      std::any_of(guards.begin(), guards.end(), [](const Guard& g) { return g.kind == GuardKind::Touchdown; }))
+    return concat("a bounce: the plant's touchdown into ", describe_contact_modes(mode),
+                  " ahead of the event that ends reference segment ", phase.segment, " (t = ", event.t, " s)");
+  return {};
+}
+
+/// Simulates the closed loop of `controller` from `start` on [t0, T] with `simulator` and follows
+/// it through the controller's phases: `o` gets whether it failed and why, whether it kept the
+/// event sequence or where it left it, and its event count (observed and predicted untouched);
+/// `last` is the reference segment at T. What the simulation throws is o's failure, not rethrown.
+template <Scene S>
+RunErrors<S> track_run(Simulator<S>& simulator, const ReferenceSpreadingController<S>& controller,
+                       const Vec<2 * S::nq>& start, double t0, double T, int last, const std::vector<double>& times,
+                       MonteCarloRun& o) {
   using Phase = typename ReferenceSpreadingController<S>::Phase;
-  const auto& ref = controller.reference().reference();
-  TrackedRun<S> out;
-  const HybridTrajectory<S> traj = simulator.run(start, t0, T, controller.law());
-  if (traj.status != SimulationStatus::Completed) {
-    out.failed = true;
-    out.reason = concat("simulation ended with status ", to_string(traj.status));
-    return out;
-  }
-  out.events = static_cast<int>(traj.events.size());
-  // The plant's phase after each of its events (the controller's own bookkeeping).
-  Phase phase;
-  bool kept = true;
-  const ExtendedReference<S>& extended = controller.reference();
-  std::vector<int> phase_segments(static_cast<std::size_t>(traj.segment_count()), 0);
-  for (int k = 1; k < traj.segment_count(); ++k) {
-    const Phase before = phase;
-    phase = controller.next_phase(phase, traj.segments[k - 1].mode, traj.segments[k].mode);
-    phase_segments[static_cast<std::size_t>(k)] = phase.segment;
-    if (kept && !phase.intermediate && !phase.micro_event_ahead && !(traj.segments[k].mode == ref.segments[phase.segment].mode)) {
-      kept = false;
-      out.departure = concat("the plant's event into ", describe_contact_modes(traj.segments[k].mode), " where reference segment ",
-                             phase.segment, " has ", describe_contact_modes(ref.segments[phase.segment].mode),
-                             " (t = ", traj.events[k - 1].t, " s)");
-    }
-    // A bounce (a touchdown that leaves the contacts as they were) is a micro-event for the
-    // controller, but a touchdown and a lift-off the reference does not have: a departure.
-    const auto& guards = traj.events[k - 1].guards();
-    if (kept && phase.micro_event_ahead &&
-        std::any_of(guards.begin(), guards.end(), [](const Guard& g) { return g.kind == GuardKind::Touchdown; })) {
-      kept = false;
-      out.departure = concat("a bounce: the plant's touchdown into ", describe_contact_modes(traj.segments[k].mode),
-                             " ahead of the event that ends reference segment ", phase.segment, " (t = ",
-                             traj.events[k - 1].t, " s)");
-    }
-    // The controller held the reference beyond an extension (tracking.hpp): not a valid run.
-    const double te = traj.events[k - 1].t;
-    if (te > extended.reached_after(before.segment) || te < extended.reached_before(phase.segment)) {
-      out.failed = true;
-      out.reason = concat("the plant's event at t = ", te, " lies beyond the extension of reference segment ",
-                          te > extended.reached_after(before.segment) ? before.segment : phase.segment,
-                          " (make ExtensionOptions::before/after longer)");
+  RunErrors<S> out;
+  try {
+    const HybridTrajectory<S> traj = simulator.run(start, t0, T, controller.law());
+    if (traj.status != SimulationStatus::Completed) {
+      o.failed = true;
+      o.reason = concat("simulation ended with status ", to_string(traj.status));
       return out;
     }
-  }
-  out.kept_event_sequence = kept && !phase.intermediate && !phase.micro_event_ahead && phase.segment == last;
-  if (kept && !out.kept_event_sequence)
-    out.departure = phase.segment != last ? concat("ended in reference segment ", phase.segment, " of 0 .. ", last)
+    o.events = static_cast<int>(traj.events.size());
+    const ExtendedReference<S>& extended = controller.reference();
+    Phase phase;  // the plant's phase after each of its events (the controller's own bookkeeping)
+    std::vector<int> phase_segments(static_cast<std::size_t>(traj.segment_count()), 0);
+    for (int k = 1; k < traj.segment_count(); ++k) {
+      const Phase before = phase;
+      phase = controller.next_phase(phase, traj.segments[k - 1].mode, traj.segments[k].mode);
+      phase_segments[static_cast<std::size_t>(k)] = phase.segment;
+      if (o.departure.empty()) o.departure = departure_at_event(traj, k, extended.reference(), phase);
+      // The controller held the reference beyond an extension (tracking.hpp): not a valid run.
+      const double te = traj.events[k - 1].t;
+      if (te > extended.reached_after(before.segment) || te < extended.reached_before(phase.segment)) {
+        o.failed = true;
+        o.reason = concat("the plant's event at t = ", te, " lies beyond the extension of reference segment ",
+                          te > extended.reached_after(before.segment) ? before.segment : phase.segment,
+                          " (make ExtensionOptions::before/after longer)");
+        return out;
+      }
+    }
+    o.kept_event_sequence = o.departure.empty() && !phase.intermediate && !phase.micro_event_ahead && phase.segment == last;
+    if (o.departure.empty() && !o.kept_event_sequence)
+      o.departure = phase.segment != last ? concat("ended in reference segment ", phase.segment, " of 0 .. ", last)
                                           : std::string("ended between the micro-events of a reference event");
-  out.error_at_end = traj.final_state() - extended.state(phase.segment, T);
-  out.errors = errors_at(traj, phase_segments, extended, times);
+    out.at_end = traj.final_state() - extended.state(phase.segment, T);
+    out.at_times = errors_at(traj, phase_segments, extended, times);
+  } catch (const std::exception& ex) {
+    o.failed = true;
+    o.reason = ex.what();
+  }
   return out;
+}
+
+/// The nominal run's part of `report` (MonteCarloOptions::relative_to_nominal_run): its distance
+/// from the reference in the output norm C, and whether the runs are measured against it (else
+/// why not). Returns whether they are.
+template <Scene S>
+bool record_nominal_run(const MonteCarloRun& o, const RunErrors<S>& nominal, const Mat<2 * S::nq, 2 * S::nq>& C,
+                        MonteCarloReport& report) {
+  if (!o.failed) {
+    report.nominal_run_deviation = report.nominal_run_max_deviation = (C * nominal.at_end).norm();
+    for (const Vec<2 * S::nq>& e : nominal.at_times)
+      if (e.allFinite()) report.nominal_run_max_deviation = std::max(report.nominal_run_max_deviation, (C * e).norm());
+  }
+  report.relative_to_nominal_run = !o.failed && o.kept_event_sequence;
+  if (!report.relative_to_nominal_run)
+    report.nominal_run_departure = o.failed ? concat("the nominal run failed: ", o.reason)
+                                            : concat("the nominal run left the event sequence: ", o.departure);
+  return report.relative_to_nominal_run;
 }
 
 }  // namespace detail
@@ -1012,27 +1036,11 @@ MonteCarloReport monte_carlo(const S& scene, const SimulationOptions& simulation
   State nominal_end = State::Zero();
   std::vector<State> nominal_errors(times.size(), State::Zero());
   if (options.relative_to_nominal_run) {
-    detail::TrackedRun<S> nominal;
-    try {
-      nominal = detail::track_run(*simulators[0], controller, x0, t0, T, last, times);
-    } catch (const std::exception& ex) {
-      nominal.failed = true;
-      nominal.reason = ex.what();
-    }
-    if (!nominal.failed) {
-      report.nominal_run_deviation = (C * nominal.error_at_end).norm();
-      report.nominal_run_max_deviation = report.nominal_run_deviation;
-      for (const State& e : nominal.errors)
-        if (e.allFinite()) report.nominal_run_max_deviation = std::max(report.nominal_run_max_deviation, (C * e).norm());
-    }
-    report.relative_to_nominal_run = !nominal.failed && nominal.kept_event_sequence;
-    if (report.relative_to_nominal_run) {
-      nominal_end = nominal.error_at_end;
-      nominal_errors = nominal.errors;
-    } else {
-      report.nominal_run_departure =
-          nominal.failed ? detail::concat("the nominal run failed: ", nominal.reason)
-                         : detail::concat("the nominal run left the event sequence: ", nominal.departure);
+    MonteCarloRun outcome;
+    const detail::RunErrors<S> nominal = detail::track_run(*simulators[0], controller, x0, t0, T, last, times, outcome);
+    if (detail::record_nominal_run(outcome, nominal, C, report)) {
+      nominal_end = nominal.at_end;
+      nominal_errors = nominal.at_times;
     }
   }
   auto body = [&](int r, int worker) {
@@ -1046,25 +1054,12 @@ MonteCarloReport monte_carlo(const S& scene, const SimulationOptions& simulation
         if (run.kept_event_sequence) ++kept;
       }
     } count{out, failed_so_far, kept_so_far};
-    try {
-      const detail::TrackedRun<S> run = detail::track_run(*simulators[worker], controller, start[r], t0, T, last, times);
-      out.failed = run.failed;
-      out.reason = run.reason;
-      out.departure = run.departure;
-      out.events = run.events;
-      out.kept_event_sequence = run.kept_event_sequence;
-      if (run.failed) return;
-      const double scale = (Lt * (options.size * d[r])).norm();
-      out.observed = (C * (run.error_at_end - nominal_end)).norm() / scale;
-      if (!times.empty()) {
-        out.observed_over_time.assign(times.size(), std::numeric_limits<double>::quiet_NaN());
-        for (std::size_t k = 0; k < times.size(); ++k)
-          out.observed_over_time[k] = (C * (run.errors[k] - nominal_errors[k])).norm() / scale;  // NaN stays NaN
-      }
-    } catch (const std::exception& ex) {
-      out.failed = true;
-      out.reason = ex.what();
-    }
+    const detail::RunErrors<S> run = detail::track_run(*simulators[worker], controller, start[r], t0, T, last, times, out);
+    if (out.failed) return;
+    const double scale = (Lt * (options.size * d[r])).norm();
+    out.observed = (C * (run.at_end - nominal_end)).norm() / scale;
+    for (std::size_t k = 0; k < times.size(); ++k)  // a NaN error (beyond an extension) stays NaN
+      out.observed_over_time.push_back((C * (run.at_times[k] - nominal_errors[k])).norm() / scale);
   };
   auto after_batch = [&](int done) {
     if (!options.progress) return;
