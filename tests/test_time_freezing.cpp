@@ -1334,7 +1334,10 @@ TEST(TimeFreezingOcp, ContinuationOnTheTargetReachesIt) {
   }
   for (const MpccHomotopyStep& s : r.solution.steps) iterations += s.ipopt_iterations;
   EXPECT_EQ(r.solution.ipopt_iterations, iterations);
-  EXPECT_NE(progress.str().find("continuation stage 2 of 2 done"), std::string::npos) << progress.str();
+  // one line per stage, with its status, iterations, seconds and objective
+  EXPECT_NE(progress.str().find("continuation stage 2 of 2: Solve_Succeeded, " + std::to_string(r.continuation_steps[1].ipopt_iterations) + " iterations, "),
+            std::string::npos)
+      << progress.str();
   EXPECT_THROW(solve_time_freezing_ocp_by_continuation(Case::system(), std::vector<PointMassToAMovableTarget>{}, ocp,
                                                        Case::q0(), Case::v0(), Case::grid(), solver),
                InvalidArgument);

@@ -97,7 +97,10 @@ ContinuationRun run_continuation(const TimeFreezingSystem<S>& system, const std:
     for (MpccHomotopyStep st : r.steps) run.steps.push_back(st);
     run.iterations += r.ipopt_iterations;
     run.seconds += r.seconds;
-    if (progress) *progress << "continuation stage " << c + 1 << " of " << continuation.size() << " done\n";
+    if (progress)
+      *progress << "continuation stage " << c + 1 << " of " << continuation.size() << ": "
+                << (r.steps.empty() ? std::string("no solve") : r.steps.back().ipopt_status) << ", "
+                << r.ipopt_iterations << " iterations, " << r.seconds << " s, objective " << r.objective << "\n";
     run.start = MpccStart{r.x, r.constraint_multipliers, r.bound_multipliers_lower, r.bound_multipliers_upper};
     if (r.steps.empty() || !r.steps.back().ipopt_succeeded) {
       run.interrupted = "continuation stopped at stage " + std::to_string(c + 1) + " of " +

@@ -72,6 +72,9 @@ struct RefinementSolve {
   double objective = 0.0, constraint_violation = 0.0;
   int ipopt_iterations = 0;
   double seconds = 0.0;
+  /// Started from carried-over multipliers as well as a primal point (a mesh round's dual warm
+  /// start, RefinementMesh::dual_warm_start_split_fraction); false: from the primal guess alone.
+  bool warm_started = false;
   /// The rows with the largest |multiplier| at the solve's last point, largest first (at most
   /// five: "name (multiplier)", ScheduleRefinementNlp::constraint_name): where a solve that does
   /// not converge loses its regularity.
@@ -87,6 +90,7 @@ struct MeshRound {
   int elements_split = 0;            ///< elements over the tolerance, each split into 2 .. max_split
   int elements = 0;                  ///< elements of the finer grid
   bool solved = false;               ///< its solve succeeded (RefinementResult::solves has its record)
+  bool dual_warm_start = false;      ///< its solve started from the previous grid's multipliers
 };
 
 /// The event-driven re-simulation of one phase from its start state (x+ of the event before it)

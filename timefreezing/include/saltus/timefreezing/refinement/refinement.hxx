@@ -16,9 +16,10 @@ namespace saltus::timefreezing {
 
 namespace detail {
 
-/// One Ipopt solve of the refinement NLP from its initial point: the MPCC solver with no pairs is
-/// one Ipopt solve of the plain NLP (its homotopy has nothing to relax or polish).
-inline MpccSolution solve_refinement_nlp(const Mpcc& nlp, const RefinementIpopt& o) {
+/// One Ipopt solve of the refinement NLP from its initial point, or from `start` (primal-dual,
+/// warm_start_init_point): the MPCC solver with no pairs is one Ipopt solve of the plain NLP (its
+/// homotopy has nothing to relax or polish).
+inline MpccSolution solve_refinement_nlp(const Mpcc& nlp, const RefinementIpopt& o, const MpccStart* start = nullptr) {
   MpccSolverOptions s;
   s.homotopy.max_steps = 1;
   s.polish.enabled = false;
@@ -30,7 +31,7 @@ inline MpccSolution solve_refinement_nlp(const Mpcc& nlp, const RefinementIpopt&
   // validity rows at -1e-8 .. -1e-7 (the plank-box's slide at h = 0.05: 7.7e-8 with it, 1.2e-13
   // with 0). The user's options come after and may set it again.
   s.ipopt.options = o.options;
-  return solve_mpcc(nlp, s);
+  return start ? solve_mpcc(nlp, *start, s) : solve_mpcc(nlp, s);
 }
 
 template <Scene S, class Ocp>
@@ -90,7 +91,7 @@ inline std::vector<std::string> largest_multipliers(const Mpcc& nlp, const Eigen
 inline void progress_line(std::ostream* os, const RefinementSolve& s) {
   if (!os) return;
   *os << "refinement: " << (s.succeeded ? "solved" : "failed") << " (" << s.ipopt_status << ", " << s.ipopt_iterations
-      << " iterations, " << s.seconds << " s), objective " << s.objective << ", violation " << s.constraint_violation
+      << " iterations, " << s.seconds << " s" << (s.warm_started ? ", from the previous multipliers" : "") << "), objective " << s.objective << ", violation " << s.constraint_violation
       << ": " << s.schedule << "\n";
   if (!s.succeeded && !s.largest_multipliers.empty()) {
     *os << "refinement:   largest multipliers:";
@@ -99,14 +100,20 @@ inline void progress_line(std::ostream* os, const RefinementSolve& s) {
   }
 }
 
-/// The solve of one schedule: builds the NLP, solves it, records it. Returns the NLP and the solution.
+/// The solve of one schedule: builds the NLP, solves it (from the guess, or with the multipliers
+/// of `coarser`'s solution `coarse` carried over when both are given and the NLPs share their point
+/// conditions: ScheduleRefinementNlp::warm_start_from), records it. Returns the NLP and the solution.
 template <Scene S, class Ocp>
 std::pair<std::unique_ptr<ScheduleRefinementNlp<S, Ocp>>, MpccSolution> solve_schedule(
     const S& scene, const Ocp& ocp, const OcpHorizon<S>& horizon, const ScheduleGuess<S>& guess,
-    const RefinementOptions& options, RefinementResult<S>& out) {
+    const RefinementOptions& options, RefinementResult<S>& out, const ScheduleRefinementNlp<S, Ocp>* coarser = nullptr,
+    const MpccSolution* coarse = nullptr) {
   auto nlp = std::make_unique<ScheduleRefinementNlp<S, Ocp>>(scene, ocp, horizon, guess, options);
-  MpccSolution sol = solve_refinement_nlp(*nlp, options.ipopt);
+  const std::optional<MpccStart> start =
+      coarser && coarse ? nlp->warm_start_from(*coarser, *coarse) : std::optional<MpccStart>{};
+  MpccSolution sol = solve_refinement_nlp(*nlp, options.ipopt, start ? &*start : nullptr);
   RefinementSolve record = solve_record(describe(scene, nlp->schedule()), sol);
+  record.warm_started = start.has_value();
   record.largest_multipliers = largest_multipliers(*nlp, sol.constraint_multipliers, 5);
   progress_line(options.progress, record);
   out.solves.push_back(record);

@@ -25,11 +25,12 @@ inline nlohmann::ordered_json finite_or_null(double v) {
 ///   objective, mode_validity_violation, path_violation, terminal_violation, constraint_violation,
 ///   contact_drift               as in RefinementResult
 ///   local_error                 as in RefinementResult
-///   mesh_rounds                 [{largest_local_error, worst_phase, worst_time, elements_split, elements, solved}]
+///   mesh_rounds                 [{largest_local_error, worst_phase, worst_time, elements_split, elements, solved,
+///                                 dual_warm_start}]
 ///   schedule_edits              [{kind, phase, contact, t, t_begin, t_end, multiplier, schedule_after}]
 ///   schedule_check_passed       no edit proposed after the last solve
 ///   solves                      [{schedule, succeeded, ipopt_status, objective, constraint_violation,
-///                               ipopt_iterations, seconds, largest_multipliers}]
+///                               ipopt_iterations, seconds, warm_started, largest_multipliers}]
 ///   phase_resim_max_error       max over phases of the per-phase re-simulation's distance
 ///   phase_resimulation          [{phase, max_error, end_error, start_projection, event_time_error,
 ///                               x_plus_error, event_guards_match, next_mode_matches, compared_until,
@@ -57,7 +58,7 @@ nlohmann::ordered_json to_json(const S& scene, const RefinementResult<S>& r) {
   for (const MeshRound& m : r.mesh_rounds)
     rounds.push_back({{"largest_local_error", finite_or_null(m.largest_local_error)}, {"worst_phase", m.worst_phase},
                       {"worst_time", m.worst_time}, {"elements_split", m.elements_split}, {"elements", m.elements},
-                      {"solved", m.solved}});
+                      {"solved", m.solved}, {"dual_warm_start", m.dual_warm_start}});
   j["mesh_rounds"] = rounds;
   json edits = json::array();
   for (const ScheduleEdit& e : r.edits)
@@ -72,7 +73,7 @@ nlohmann::ordered_json to_json(const S& scene, const RefinementResult<S>& r) {
                       {"objective", finite_or_null(s.objective)},
                       {"constraint_violation", finite_or_null(s.constraint_violation)},
                       {"ipopt_iterations", s.ipopt_iterations}, {"seconds", s.seconds},
-                      {"largest_multipliers", s.largest_multipliers}});
+                      {"warm_started", s.warm_started}, {"largest_multipliers", s.largest_multipliers}});
   j["solves"] = solves;
   j["phase_resim_max_error"] = finite_or_null(r.phase_resim_max_error);
   json phases = json::array();

@@ -134,11 +134,13 @@
 #include <saltus/timefreezing/discretisation/fesd.hpp>
 #include <saltus/timefreezing/discretisation/radau.hpp>
 #include <saltus/timefreezing/mpcc/mpcc.hpp>
+#include <saltus/timefreezing/mpcc/solution.hpp>
 #include <saltus/timefreezing/refinement/refinement_options.hpp>
 #include <saltus/timefreezing/refinement/schedule_guess.hpp>
 
 #include <Eigen/Core>
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -279,6 +281,13 @@ class ScheduleRefinementNlp final : public Mpcc {
   int validity_row(int e, int r, int k) const;
   /// The applied input of element e (after the OCP's input law, at the element's start).
   VecT<double, S::nu> applied_input(const Eigen::Ref<const Eigen::VectorXd>& x, int e) const;
+  /// A start for this NLP from a solution of `coarser`, an NLP of the same schedule on a grid that
+  /// this one refines (every element of this grid inside one of coarser's: split_elements): x this
+  /// NLP's initial point, the multipliers carried over (refinement_nlp_warm_start.hxx: the costate
+  /// rows as they are, the O(h) rows in proportion to the element's length). nullopt when the two
+  /// NLPs do not share their point conditions (another schedule or stage count, other event,
+  /// path or terminal rows imposed) or the solution's multipliers have the wrong sizes.
+  std::optional<MpccStart> warm_start_from(const ScheduleRefinementNlp& coarser, const MpccSolution& solution) const;
   /// The contact forces of point (e, r) at x (the flow of the phase's mode).
   std::array<ContactForce<double>, S::nc> contact_forces(const Eigen::Ref<const Eigen::VectorXd>& x, int e, int r) const;
   /// The impulses of event b at x (zero without an impact).
@@ -302,6 +311,10 @@ class ScheduleRefinementNlp final : public Mpcc {
              nx + impulse_rows;
     }
   };
+
+  // the dual warm start (refinement_nlp_warm_start.hxx)
+  int parent_element(const ScheduleRefinementNlp& coarser, int e) const;  // coarser's element containing e
+  bool shares_point_conditions(const ScheduleRefinementNlp& coarser) const;
 
   // construction (refinement_nlp_build.hxx)
   void build_grid(const ScheduleGuess<S>& guess);

@@ -34,6 +34,11 @@ inline void RefinementOptions::validate() const {
   SALTUS_REQUIRE(mesh.safety > 0.0 && mesh.safety <= 1.0, "refinement: mesh.safety must lie in (0, 1], got ", mesh.safety);
   SALTUS_REQUIRE(std::isfinite(mesh.warm_start_mu) && mesh.warm_start_mu > 0.0,
                  "refinement: mesh.warm_start_mu must be > 0, got ", mesh.warm_start_mu);
+  SALTUS_REQUIRE(mesh.dual_warm_start_split_fraction >= 0.0 && mesh.dual_warm_start_split_fraction <= 1.0,
+                 "refinement: mesh.dual_warm_start_split_fraction must lie in [0, 1], got ",
+                 mesh.dual_warm_start_split_fraction);
+  SALTUS_REQUIRE(std::isfinite(mesh.dual_warm_start_mu) && mesh.dual_warm_start_mu > 0.0,
+                 "refinement: mesh.dual_warm_start_mu must be > 0, got ", mesh.dual_warm_start_mu);
   SALTUS_REQUIRE(std::isfinite(ipopt.tol) && ipopt.tol > 0.0, "refinement: ipopt.tol must be > 0, got ", ipopt.tol);
   SALTUS_REQUIRE(ipopt.max_iter >= 0, "refinement: ipopt.max_iter must be >= 0, got ", ipopt.max_iter);
   SALTUS_REQUIRE(edits.max_edits >= 0, "refinement: edits.max_edits must be >= 0, got ", edits.max_edits);

@@ -379,3 +379,4 @@ std::string ScheduleRefinementNlp<S, Ocp>::constraint_name(int j) const {
 
 #include <saltus/timefreezing/refinement/refinement_nlp_terminal.hxx>
 #include <saltus/timefreezing/refinement/refinement_nlp_reading.hxx>
+#include <saltus/timefreezing/refinement/refinement_nlp_warm_start.hxx>

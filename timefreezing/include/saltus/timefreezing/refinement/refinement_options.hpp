@@ -56,6 +56,19 @@ struct RefinementMesh {
   /// parameter): the hopper's chain at local error 2e-8 took the same 122, 76, 72, 37, 26 and 27
   /// iterations with 0.1, 1e-2 and 1e-4.
   double warm_start_mu = 0.1;
+  /// A round that splits at most this fraction of the previous grid's elements (in [0, 1]; 0:
+  /// none, 1: every round) starts from the previous grid's multipliers as well
+  /// (ScheduleRefinementNlp::warm_start_from: the costate rows as they are, the O(h) rows in
+  /// proportion to the split), with Ipopt's warm_start_init_point and mu_init =
+  /// dual_warm_start_mu; the others from the primal guess alone at mu_init = warm_start_mu.
+  /// Measured on the hopper's chain (local error 2e-8; docs/refinement.md, "Where the refinement's
+  /// time goes"), every round warm-started with its multipliers: the rounds that split 2 of 456
+  /// and 7 of 448 elements took 8 and 17 iterations against 27 and 26, the one that split 41 of
+  /// 387 36 against 37, while the first two, which split a quarter and two fifths of their grids
+  /// and move the objective from 334 to 163 to 113, took 88 and 76 against 76 and 72: where most
+  /// of the grid changes, the old multipliers belong to another solution.
+  double dual_warm_start_split_fraction = 0.1;
+  double dual_warm_start_mu = 1e-6;  ///< Ipopt's mu_init for a dual warm start, > 0
   // The rounds are reproducible: they order MUMPS by AMD (Ipopt's mumps_pivot_order 0, set before
   // RefinementIpopt::options). MUMPS' automatic choice made two identical runs of the hopper's
   // rounds take 177 and 132, then 123 and 253 iterations; with AMD three runs agree to every
