@@ -10,6 +10,7 @@
 // RefinementMesh's. Then name=value pairs:
 //   resimulation_window=<s>        RefinementChecks::resimulation_window
 //   mesh_max_rounds=<n>            RefinementMesh::max_rounds
+//   dual_warm_start_split_fraction=<f>  RefinementMesh::dual_warm_start_split_fraction
 //   normal_force_margin=<N>        RefinementOptions::normal_force_margin
 //   then_normal_force_margin=<N>   a second refinement with that margin, from the first one's result on its grid
 //   min_phase_duration=<s>         RefinementOptions::min_phase_duration
@@ -23,6 +24,8 @@
 //   discovery_from=hop_guess       discovery from the second initialisation (Ocp::hop_guess), no continuation
 //   discovery_steps=<K>            the footsteps discovered from the paper's initialisation instead of
 //                                  the holes' ones (discovered_footsteps below)
+//   discovery_grid=<N>x<E>         discovery on N control intervals of E finite elements (Ocp::grid(N, E);
+//                                  default the paper's 20x3)
 //   analysis_runs=<n>, analysis_R=<r>  the refined reference analysed by analyse_reference with n Monte
 //                                  Carlo runs under scenes::stance_start_lqr_analysis with R = r I
 //                                  (default 1e-3; `hopper --json` uses analysis_runs=200 analysis_R=1);
@@ -83,17 +86,18 @@ saltus::scenes::HopperFootsteps holes_footsteps(double stance, double end_stance
 /// The footsteps discovered from the paper's initialisation (the start state at every node, zero
 /// torques; or, from_hop_guess, from the second one, Ocp::hop_guess, by discover_schedule_from_guess
 /// without a continuation): discover_schedule_by_continuation with the hole continuation and at most `steps`
-/// homotopy steps on the paper's grid, read as scenes::hopper_discovery_options says, then
+/// homotopy steps on `grid` (the paper's unless discovery_grid= says otherwise), read as scenes::hopper_discovery_options says, then
 /// scenes::footsteps_of (a final flight lands for its last 0.1 s).
-saltus::scenes::HopperFootsteps discovered_footsteps(const Hopper& hopper, int steps, bool from_hop_guess) {
+saltus::scenes::HopperFootsteps discovered_footsteps(const Hopper& hopper, int steps, bool from_hop_guess,
+                                                    const saltus::timefreezing::FesdOptions& grid) {
   using namespace saltus::timefreezing;
   const DiscoveryOptions options = saltus::scenes::hopper_discovery_options(steps, &std::cout);
   const MotionGuess hops = [](double t) { return Eigen::VectorXd(Ocp::hop_guess(t)); };
   const DiscoveryResult<Hopper> d =
       from_hop_guess
-          ? discover_schedule_from_guess(hopper, Ocp::system(), Ocp{}, Ocp::q0(), Ocp::v0(), Ocp::grid(), hops, Ocp::solver(), options)
+          ? discover_schedule_from_guess(hopper, Ocp::system(), Ocp{}, Ocp::q0(), Ocp::v0(), grid, hops, Ocp::solver(), options)
           : discover_schedule_by_continuation(hopper, Ocp::system(), Ocp::hole_continuation(), Ocp{}, Ocp::q0(), Ocp::v0(),
-                                              Ocp::grid(), Ocp::solver(), options);
+                                              grid, Ocp::solver(), options);
   std::cout << "discovery: " << d.message << ", " << d.seconds << " s (continuation " << d.continuation_seconds << " s)\n";
   saltus::scenes::HopperFootsteps footsteps;
   (void)saltus::scenes::hopper_guess_from(d, &footsteps);
@@ -148,6 +152,7 @@ int main(int argc, char** argv) {
   double analysis_R = 1e-3;
   double then_margin = 0.0;
   int discovery_steps = 0;
+  int discovery_intervals = 20, discovery_elements = 3;
   bool discovery_from_hop_guess = false;
   for (int a = 14; a < argc; ++a) {
     const std::string arg = argv[a];
@@ -210,6 +215,11 @@ int main(int argc, char** argv) {
       discovery_from_hop_guess = value == "hop_guess";
       continue;
     }
+    if (name == "discovery_grid") {  // N x E of the discovery's FESD grid
+      discovery_intervals = std::atoi(value.c_str());
+      discovery_elements = std::atoi(value.c_str() + value.find('x') + 1);
+      continue;
+    }
     if (name == "discovery_steps") {  // the footsteps discovered from the paper's initialisation
       discovery_steps = std::atoi(value.c_str());
       continue;
@@ -220,6 +230,10 @@ int main(int argc, char** argv) {
     }
     if (name == "mesh_max_rounds") {  // RefinementMesh::max_rounds
       options.mesh.max_rounds = std::atoi(value.c_str());
+      continue;
+    }
+    if (name == "dual_warm_start_split_fraction") {  // RefinementMesh::dual_warm_start_split_fraction
+      options.mesh.dual_warm_start_split_fraction = std::atof(value.c_str());
       continue;
     }
     char* end = nullptr;
@@ -233,7 +247,8 @@ int main(int argc, char** argv) {
     else options.ipopt.options.push_back({name, value});
   }
   scenes::HopperFootsteps steps = holes_footsteps(stance, end_stance);
-  if (discovery_steps > 0) steps = discovered_footsteps(hopper, discovery_steps, discovery_from_hop_guess);
+  if (discovery_steps > 0)
+    steps = discovered_footsteps(hopper, discovery_steps, discovery_from_hop_guess, Ocp::grid(discovery_intervals, discovery_elements));
   const ScheduleGuess<Hopper> guess = scenes::footstep_guess(hopper, steps, Ocp::q0(), Ocp::q_target(), Ocp::horizon);
   std::cout << "schedule: " << describe(hopper, guess.schedule) << "\nfootholds:";
   for (double x : steps.footholds) std::cout << " " << x;
