@@ -98,8 +98,8 @@ TEST(HopperOverOneHole, IsTheThreeHoleOcpWithAnotherTarget) {
 }
 
 // The issue's whole chain on the one-hole bed (T = 1 s, target (1, 0.4, 0, 0), N = 8; HopperOverOneHole)
-// in about a minute, with the three-hole chain's settings (examples/hopper.cpp --json;
-// docs/refinement.md, "Hopper over three holes") but for three:
+// in about a minute (the issue's bound; measured at it, below), with the three-hole chain's
+// settings (examples/hopper.cpp --json; docs/refinement.md, "Hopper over three holes") but for three:
 //  - discovery: the hole continuation and two homotopy steps (sigma = 1, 0.1) with the one-hole
 //    bed's grid and solver (contact-side selection, primal-only warm starts), on the three-hole
 //    OCP type with the one-hole target (nothing else compiled);
@@ -108,9 +108,10 @@ TEST(HopperOverOneHole, IsTheThreeHoleOcpWithAnotherTarget) {
 //    measured 2.8e-7; at 1e-6 it failed with 1.4e-6; at 2e-8 the refinement took 64 s instead of 36);
 //  - analysis: the LQR design (R = I) and its stability check as the flagship's, 30 Monte Carlo runs
 //    at eps = 1e-6 (not 200) and no deviation times (60 of them cost the batch about 11 s).
-// Measured (release, one thread, the other core busy; /work/helperA/measurements.md, variants v2
-// and v4): discovery 19-20 s (the first hole stage 12 s), refinement 36-40 s (4 mesh rounds, 169
-// elements, 196 Ipopt iterations), analysis 6 s. Footholds 0, 0.246, 0.750, 1 from the discovered
+// Measured (release, one thread, the other core busy; docs/refinement.md, "The whole chain on the
+// one-hole bed"): 60 s, discovery 21 s (its first hole stage 12 s), refinement 33 s (4 mesh rounds,
+// 169 elements, 196 Ipopt iterations; 33-40 s over runs, by the machine's load), analysis 6 s;
+// none of the variants measured there was faster. Footholds 0, 0.246, 0.750, 1 from the discovered
 // slides; refined objective 39.20 (the relaxed 13.27), mode validity 7e-13, per-phase
 // re-simulation 2.8e-7; a hop in place (lift-off 0.40 s, touchdown at foot x 0.2498, on the hole's
 // edge), the jump over the hole (0.55 s to 0.75 s, touchdown at x = 0.834), a hop to x = 1
@@ -128,13 +129,14 @@ TEST(HopperOverOneHole, WholeChainDiscoveryRefinementAnalysis) {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - clock).count();
   };
   const timefreezing::DiscoveryResult<Hopper> discovery = timefreezing::discover_schedule_by_continuation(
-      hopper, Short::system(), HopperOverThreeHoles::hole_continuation(Short::q_target()), ocp, Short::q0(), Short::v0(),
-      Short::grid(), Short::solver(), hopper_discovery_options(2, nullptr));
+      hopper, Short::system(), HopperOverThreeHoles::hole_continuation(Short::q_target()), ocp, Short::q0(),
+      Short::v0(), Short::grid(), Short::solver(), hopper_discovery_options(2, nullptr));
   const double discovery_seconds = seconds();
   ASSERT_TRUE(discovery.schedule_found) << discovery.message;
   EXPECT_EQ(discovery.continuation_steps.size(), HopperOverThreeHoles::hole_continuation().size());
   HopperFootsteps footsteps;
-  const timefreezing::ScheduleGuess<Hopper> guess = hopper_guess_from(discovery, &footsteps, Short::q_target(), Short::horizon);
+  const timefreezing::ScheduleGuess<Hopper> guess =
+      hopper_guess_from(discovery, &footsteps, Short::q_target(), Short::horizon);
   ASSERT_GE(footsteps.footholds.size(), 2u);
   EXPECT_EQ(footsteps.footholds.back(), 1.0);  // the target's foothold
 
@@ -205,9 +207,10 @@ TEST(HopperOverOneHole, WholeChainDiscoveryRefinementAnalysis) {
   std::cout << "hopper over one hole, whole chain: discovery " << discovery_seconds << " s (" << discovery.message
             << "), refinement " << refinement_seconds << " s (" << r.stage << ", objective " << r.objective << ", "
             << r.element_times.size() - 1 << " elements, " << r.ipopt_iterations << " Ipopt iterations, re-simulation "
-            << r.phase_resim_max_error << "), analysis " << analysis_seconds << " s (" << to_string(a.stability->verdict)
-            << ", a(T) <= " << a.stability->upper_bound << ", " << batch.kept_event_sequence << " of " << batch.runs
-            << " runs kept the events, discrepancy " << batch.max_log_discrepancy << "); events:" << listed.str() << "\n";
+            << r.phase_resim_max_error << "), analysis " << analysis_seconds << " s ("
+            << to_string(a.stability->verdict) << ", a(T) <= " << a.stability->upper_bound << ", "
+            << batch.kept_event_sequence << " of " << batch.runs << " runs kept the events, discrepancy "
+            << batch.max_log_discrepancy << "); events:" << listed.str() << "\n";
 }
 
 }  // namespace

@@ -4,9 +4,10 @@
 // the programs that refine the hopper (examples/hopper.cpp --json, bench/experiments, the
 // release-stage test tests/test_flagship_refinement.cpp) link it, so the tests' scene library does
 // not compile it. The one-hole bed (HopperOverOneHole) runs on it too, as the three-hole type with
-// its target (HopperOverThreeHoles::target, HopperOverOneHole::on_three_hole_rows) and horizon. With it, the settings of the hopper's chain
-// (docs/refinement.md, "Hopper over three holes"): discovery from the paper's initialisation, the
-// footsteps it finds, and the refinement of their schedule.
+// its target (HopperOverThreeHoles::target, HopperOverOneHole::on_three_hole_rows) and horizon.
+// With it, the settings of the hopper's chain (docs/refinement.md, "Hopper over three holes"):
+// discovery from the paper's initialisation, the footsteps it finds, and the refinement of their
+// schedule.
 #pragma once
 
 #include "scenes/hopper_footsteps.hpp"
