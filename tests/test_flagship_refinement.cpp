@@ -109,8 +109,8 @@ TEST(HopperOverOneHole, IsTheThreeHoleOcpWithAnotherTarget) {
 //  - analysis: the LQR design (R = I) and its stability check as the flagship's, 30 Monte Carlo runs
 //    at eps = 1e-6 (not 200) and no deviation times (60 of them cost the batch about 11 s).
 // Measured (release, one thread, the other core busy; docs/refinement.md, "The whole chain on the
-// one-hole bed"): 60 s, discovery 21 s (its first hole stage 12 s), refinement 33 s (4 mesh rounds,
-// 169 elements, 196 Ipopt iterations; 33-40 s over runs, by the machine's load), analysis 6 s;
+// one-hole bed"): 58-62 s, discovery 18-21 s (its first hole stage 12 s), refinement 32-35 s (4 mesh
+// rounds, 169 elements, 196 Ipopt iterations), analysis 6-7 s, by the machine's load;
 // none of the variants measured there was faster. Footholds 0, 0.246, 0.750, 1 from the discovered
 // slides; refined objective 39.20 (the relaxed 13.27), mode validity 7e-13, per-phase
 // re-simulation 2.8e-7; a hop in place (lift-off 0.40 s, touchdown at foot x 0.2498, on the hole's
