@@ -56,6 +56,13 @@ struct HopperOverThreeHoles {
 
   Hopper hopper{};
   double hole_level = 1.0;  ///< beta in [0, 1] (file comment); 1: the problem itself
+  /// The terminal target q(T) = (x [m], z [m], phi_hip [rad], phi_knee [rad]) that the four
+  /// terminal rows pin (terminal_lower() = terminal_upper() = target); q_target() unless set. A
+  /// value, not a type, so that another task on the same rows reuses this OCP's compiled
+  /// machinery: the one-hole bed's target (1, 0.4, 0, 0) with the horizon T = 1 s of its grid and
+  /// refinement horizon (HopperOverOneHole::on_three_hole_rows; holes 2 and 3 lie beyond its
+  /// target's foothold and never bind).
+  Vec<4> target = q_target();
 
   static Vec<4> q0() { return Vec<4>(0.0, 0.4, 0.0, 0.0); }
   static Vec<4> v0() { return Vec<4>::Zero(); }
@@ -106,8 +113,8 @@ struct HopperOverThreeHoles {
   VecT<T, 4> terminal_constraints(const VecT<T, 8>& x, const T&) const {
     return x.template head<4>();
   }
-  Vec<4> terminal_lower() const { return q_target(); }
-  Vec<4> terminal_upper() const { return q_target(); }
+  Vec<4> terminal_lower() const { return target; }
+  Vec<4> terminal_upper() const { return target; }
 
   /// The paper's discretisation (time-freezing paper, Nurkanović, Albrecht, Brogliato, Diehl,
   /// Automatica 2023, Section 6, as in NOSNOC's hopper script):
@@ -123,12 +130,14 @@ struct HopperOverThreeHoles {
   /// The continuation on the holes that precedes the homotopy
   /// (solve_time_freezing_ocp_by_continuation): hole levels 1e-4, 1e-3, 1e-2, 0.05, 0.2, 0.5, 1 at
   /// the first relaxation parameter. Nothing in it hints at the contact timing: the start is still
-  /// the start state at every node with zero torques.
-  static std::vector<HopperOverThreeHoles> hole_continuation() {
+  /// the start state at every node with zero torques. Every stage has the terminal target
+  /// `q_end` (the member `target`).
+  static std::vector<HopperOverThreeHoles> hole_continuation(const Vec<4>& q_end = q_target()) {
     std::vector<HopperOverThreeHoles> stages;
     for (double level : {1e-4, 1e-3, 1e-2, 0.05, 0.2, 0.5, 1.0}) {
       HopperOverThreeHoles o;
       o.hole_level = level;
+      o.target = q_end;
       stages.push_back(o);
     }
     return stages;
@@ -229,12 +238,22 @@ struct HopperOverThreeHoles {
 /// flagship's settings it stops at complementarity 1.3e-4; with the selection alone (warm
 /// starts) at 3.3e-4, with primal-only starts alone at 1.43e-6. On the flagship these settings
 /// stop at 1e-3.
+/// Its OCP is the three-hole one with another target (the member `target`, set by the
+/// constructor): on_three_hole_rows() is that OCP as a HopperOverThreeHoles, whose discovery and
+/// refinement are compiled once (hopper_holes_refinement.hpp), over the horizon T = 1 s of grid().
 struct HopperOverOneHole : HopperOverThreeHoles {
   static constexpr double horizon = 1.0;  ///< T [s]
   static constexpr double contact_side_weight = 1e-2;  ///< rho_c (struct comment)
   static Vec<4> q_target() { return Vec<4>(1.0, 0.4, 0.0, 0.0); }
-  Vec<4> terminal_lower() const { return q_target(); }
-  Vec<4> terminal_upper() const { return q_target(); }
+  HopperOverOneHole() { target = q_target(); }
+  /// The same OCP (rows, target (1, 0.4, 0, 0), hole level) typed as the three-hole OCP, for its
+  /// compiled discovery and refinement.
+  static HopperOverThreeHoles on_three_hole_rows(double hole_level = 1.0) {
+    HopperOverThreeHoles o;
+    o.hole_level = hole_level;
+    o.target = q_target();
+    return o;
+  }
   static timefreezing::FesdOptions grid(int control_intervals = 8, int finite_elements = 3, int stages = 2) {
     timefreezing::FesdOptions o =
         terminal_clock_grid(horizon, control_intervals, finite_elements, stages,

@@ -4,6 +4,8 @@
 
 #include <saltus/timefreezing/instantiate.hxx>
 
+#include <cmath>
+
 SALTUS_INSTANTIATE_SCHEDULE_REFINEMENT_SCENE(saltus::scenes::Hopper)
 SALTUS_INSTANTIATE_SCHEDULE_REFINEMENT(saltus::scenes::Hopper, saltus::scenes::HopperOverThreeHoles)
 
@@ -43,24 +45,25 @@ timefreezing::RefinementOptions hopper_refinement_options(std::ostream* progress
   return o;
 }
 
-timefreezing::OcpHorizon<Hopper> hopper_refinement_horizon() {
+timefreezing::OcpHorizon<Hopper> hopper_refinement_horizon(double T) {
   using Ocp = HopperOverThreeHoles;
+  SALTUS_REQUIRE(std::isfinite(T) && T > 0.0, "hopper_refinement_horizon: T must be finite and > 0, got ", T);
   timefreezing::OcpHorizon<Hopper> h;
   h.x0 << Ocp::q0(), Ocp::v0();
-  h.final_time = Ocp::horizon;
+  h.final_time = T;
   h.control_lower = Eigen::VectorXd::Constant(2, -Ocp::torque_limit);
   h.control_upper = Eigen::VectorXd::Constant(2, Ocp::torque_limit);
   return h;
 }
 
 timefreezing::ScheduleGuess<Hopper> hopper_guess_from(const timefreezing::DiscoveryResult<Hopper>& discovery,
-                                                      HopperFootsteps* footsteps) {
+                                                      HopperFootsteps* footsteps, const Vec<4>& q_end, double T) {
   using Ocp = HopperOverThreeHoles;
   SALTUS_REQUIRE(discovery.schedule_found, "hopper_guess_from: discovery found no schedule (", discovery.message, ")");
   const Hopper hopper{};
-  const HopperFootsteps steps = footsteps_of(hopper, discovery.discovered.guess, Ocp::q0(), Ocp::q_target(), Ocp::horizon);
+  const HopperFootsteps steps = footsteps_of(hopper, discovery.discovered.guess, Ocp::q0(), q_end, T);
   if (footsteps) *footsteps = steps;
-  return footstep_guess(hopper, steps, Ocp::q0(), Ocp::q_target(), Ocp::horizon);
+  return footstep_guess(hopper, steps, Ocp::q0(), q_end, T);
 }
 
 }  // namespace saltus::scenes

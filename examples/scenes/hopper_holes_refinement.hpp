@@ -1,10 +1,13 @@
 // The mode-schedule refinement of the hopper over three holes (refine_schedule, discover_schedule
 // and discover_schedule_by_continuation for scenes::HopperOverThreeHoles), declared here and
 // compiled once in hopper_holes_refinement.cpp, in its own library saltus_hopper_refinement: only
-// the programs that refine the hopper (examples/hopper.cpp --json, bench/experiments) link it, so
-// the tests' scene library does not compile it. With it, the settings of the hopper's chain
-// (docs/refinement.md, "Hopper over three holes"): discovery from the paper's initialisation, the
-// footsteps it finds, and the refinement of their schedule.
+// the programs that refine the hopper (examples/hopper.cpp --json, bench/experiments, the
+// release-stage test tests/test_flagship_refinement.cpp) link it, so the tests' scene library does
+// not compile it. The one-hole bed (HopperOverOneHole) runs on it too, as the three-hole type with
+// its target (HopperOverThreeHoles::target, HopperOverOneHole::on_three_hole_rows) and horizon.
+// With it, the settings of the hopper's chain (docs/refinement.md, "Hopper over three holes"):
+// discovery from the paper's initialisation, the footsteps it finds, and the refinement of their
+// schedule.
 #pragma once
 
 #include "scenes/hopper_footsteps.hpp"
@@ -52,14 +55,20 @@ timefreezing::DiscoveryOptions hopper_discovery_options(int steps, std::ostream*
 /// 40 / s). docs/refinement.md, "Hopper over three holes".
 timefreezing::RefinementOptions hopper_refinement_options(std::ostream* progress);
 
-/// The OCP's horizon for refine_schedule: from (q0, v0) at t = 0 to T = 2.5 s, |u_i| <= 60 N m.
-timefreezing::OcpHorizon<Hopper> hopper_refinement_horizon();
+/// The OCP's horizon for refine_schedule: from (q0, v0) at t = 0 to T [s] (default the three-hole
+/// task's 2.5 s; the one-hole bed's is 1 s), |u_i| <= 60 N m. Throws InvalidArgument for T not
+/// finite and > 0.
+timefreezing::OcpHorizon<Hopper> hopper_refinement_horizon(double T = HopperOverThreeHoles::horizon);
 
 /// The guess the refinement starts from after discovery: the footsteps of the discovered schedule
-/// (footsteps_of) with the kinematically consistent motion in them (footstep_guess). A discovery
-/// that did not settle is accepted (the chain reads its last relaxed solution). Throws
-/// InvalidArgument when discovery found no schedule, and as footsteps_of and footstep_guess.
+/// (footsteps_of) with the kinematically consistent motion in them (footstep_guess), from q0 at
+/// t = 0 to the pose `q_end` at T [s] (default the three-hole task's target and 2.5 s; the
+/// one-hole bed's are (1, 0.4, 0, 0) and 1 s). A discovery that did not settle is accepted (the
+/// chain reads its last relaxed solution). Throws InvalidArgument when discovery found no
+/// schedule, and as footsteps_of and footstep_guess.
 timefreezing::ScheduleGuess<Hopper> hopper_guess_from(const timefreezing::DiscoveryResult<Hopper>& discovery,
-                                                      HopperFootsteps* footsteps = nullptr);
+                                                      HopperFootsteps* footsteps = nullptr,
+                                                      const Vec<4>& q_end = HopperOverThreeHoles::q_target(),
+                                                      double T = HopperOverThreeHoles::horizon);
 
 }  // namespace saltus::scenes
