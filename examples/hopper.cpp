@@ -30,7 +30,7 @@
 // reference_analysis_io.hpp) and writes the refined reference's files (report/hopper_refined_*;
 // from hop_guess report/hopper_refined_hop_guess_*).
 // Exit status 0 only when the reference is refined; the analysis's outcome is reported, not
-// reflected in it. About 5 minutes on one thread: discovery and refinement about 250 s, the
+// reflected in it. About 5 minutes on one thread: discovery and refinement about 245 s, the
 // analysis about 60 s, most of it the Monte Carlo runs (docs/refinement.md, "Hopper over three holes").
 #include <saltus/hybrid/reference/resimulation.hpp>
 #include <saltus/hybrid/dynamics/contact_forces_csv.hpp>

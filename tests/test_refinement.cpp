@@ -10,7 +10,7 @@
 #include <saltus/hybrid/reference/resimulation.hpp>
 #include <saltus/hybrid/vocabulary/trajectory_io.hpp>
 #include <saltus/timefreezing/drivers/optimal_control.hpp>
-// the definitions, for the test's own OCPs (AboveTheTable, LiftWish); the guiding OCP's are in
+// the definitions, for the test's own OCPs (QuadraticInputCost, PushAndLift, LiftWish); the guiding OCP's are in
 // the scene library
 #include <saltus/timefreezing/refinement/refinement.hxx>
 
@@ -483,11 +483,13 @@ TEST(ScheduleRefinement, AnImportedCsvReferenceDefinesTheSchedule) {
   EXPECT_NEAR(r.objective, 18.7116, 1e-4);
 }
 
-/// A schedule that cannot reach its target: the mass stays on the table, the target is above it.
-struct AboveTheTable : scenes::PointMassToTheTarget {
-  Vec<4> terminal_lower() const { return Vec<4>(1, 0.5, 0, 0); }
-  Vec<4> terminal_upper() const { return terminal_lower(); }
-};
+/// A schedule that cannot reach its target: the mass stays on the table, the target is above it
+/// (the guiding OCP with another target: its compiled refinement).
+Case above_the_table() {
+  Case c;
+  c.target = Vec<4>(1, 0.5, 0, 0);
+  return c;
+}
 
 /// A single stance on the table moving at 1 m/s (x = t), in the mode closed_mode(slip_sign) (the
 /// default: sliding forward), under a constant input.
@@ -511,7 +513,7 @@ TEST(ScheduleRefinement, AScheduleThatCannotReachItsTargetSaysSo) {
   RefinementOptions o;
   o.grid.max_element_duration = 0.25;
   o.ipopt.max_iter = 200;
-  const RefinementResult<PointMass> r = refine_schedule(frictional_mass(), AboveTheTable{}, h, g, o);
+  const RefinementResult<PointMass> r = refine_schedule(frictional_mass(), above_the_table(), h, g, o);
   EXPECT_FALSE(r.converged);
   EXPECT_EQ(r.stage, "not converged");
   EXPECT_NE(r.message.find("Ipopt"), std::string::npos) << r.message;
@@ -545,7 +547,7 @@ TEST(RefinementNlp, TerminalRowsHeldByTheLastStanceAreImpliedWhereTheirValueHold
 
   const ScheduleGuess<PointMass> g = sliding_stance_guess();
   const OcpHorizon<PointMass> h = sliding_start_horizon();
-  const ScheduleRefinementNlp<PointMass, AboveTheTable> above(frictional_mass(), {}, h, g, grid_options(0.25, 2));
+  const ScheduleRefinementNlp<PointMass, Case> above(frictional_mass(), above_the_table(), h, g, grid_options(0.25, 2));
   implied.clear();
   for (const ImpliedRow& row : above.implied_rows())
     if (row.terminal) implied.push_back(row.index);
@@ -554,9 +556,20 @@ TEST(RefinementNlp, TerminalRowsHeldByTheLastStanceAreImpliedWhereTheirValueHold
 
   RefinementOptions bad = grid_options(0.25, 2);
   bad.implied_terminal_value_tolerance = 0.0;
-  expect_invalid([&] { (void)refine_schedule(frictional_mass(), AboveTheTable{}, h, g, bad); },
+  expect_invalid([&] { (void)refine_schedule(frictional_mass(), above_the_table(), h, g, bad); },
                  {"implied_terminal_value_tolerance"});
 }
+
+/// A running cost weight_x (u_x - target_x)^2 + (u_z - target_z)^2 [N^2] and nothing else: the
+/// OCPs of the stance tests below as values of one type, so that the refinement is compiled once
+/// for all of them.
+struct QuadraticInputCost {
+  double weight_x = 1.0, target_x = 0.0, target_z = 0.0;
+  template <class T>
+  T running_cost(const VecT<T, 4>&, const VecT<T, 2>& u) const {
+    return T(weight_x) * (u[0] - T(target_x)) * (u[0] - T(target_x)) + (u[1] - T(target_z)) * (u[1] - T(target_z));
+  }
+};
 
 /// A sticking stance that ends in a release while the input pushes sideways: the cost wants
 /// u = (2, 15) N throughout (15 N > m g lifts the mass), the stance lasts at least 0.3 s. At the
@@ -649,21 +662,16 @@ TEST(ScheduleRefinement, AReleaseFromStickLeavesNoTangentialForceAndResimulatesI
 // stance's last element unload the mass and stop pushing; at an input jump it pushes up to the
 // release, the flight's first input lifts the mass (u_z >= m g), and the event-driven
 // re-simulation finds the release at the input's breakpoint, on time to the last bit.
-struct SidewaysPushThenLift {
-  template <class T>
-  T running_cost(const VecT<T, 4>&, const VecT<T, 2>& u) const {
-    return T(10.0) * (u[0] - T(2.0)) * (u[0] - T(2.0)) + (u[1] - T(10.0)) * (u[1] - T(10.0));
-  }
-};
+QuadraticInputCost sideways_push_then_lift() { return {10.0, 2.0, 10.0}; }
 
 TEST(ScheduleRefinement, AReleaseAtAnInputJumpKeepsTheStanceLoadedToItsEnd) {
   const ScheduleGuess<PointMass> g = push_and_lift_guess();
   const OcpHorizon<PointMass> h = from_rest_for_one_second();
   const RefinementResult<PointMass> by_guard =
-      refine_schedule(frictional_mass(), SidewaysPushThenLift{}, h, g, push_and_lift_options());
+      refine_schedule(frictional_mass(), sideways_push_then_lift(), h, g, push_and_lift_options());
   RefinementOptions o = push_and_lift_options();
   o.releases_at_input_jumps = true;
-  const RefinementResult<PointMass> r = refine_schedule(frictional_mass(), SidewaysPushThenLift{}, h, g, o);
+  const RefinementResult<PointMass> r = refine_schedule(frictional_mass(), sideways_push_then_lift(), h, g, o);
   ASSERT_TRUE(by_guard.converged) << by_guard.message;
   ASSERT_TRUE(r.converged) << r.message;
   EXPECT_LE(r.mode_validity_violation, 1e-9);
@@ -690,7 +698,7 @@ TEST(ScheduleRefinement, AReleaseAtAnInputJumpKeepsTheStanceLoadedToItsEnd) {
   // (by the guard a hump that falls to 0 there): 3 N is above the free optimum's 2.72 N, so the
   // whole stance, its end included, carries 3 N.
   o.stance_load = 3.0;
-  const RefinementResult<PointMass> loaded = refine_schedule(frictional_mass(), SidewaysPushThenLift{}, h, g, o);
+  const RefinementResult<PointMass> loaded = refine_schedule(frictional_mass(), sideways_push_then_lift(), h, g, o);
   ASSERT_TRUE(loaded.converged) << loaded.message;
   const double t_loaded = loaded.event_times[0];
   const Vec<2> u_loaded = loaded.trajectory.input(t_loaded - 1e-9, loaded.trajectory.state(0, t_loaded), loaded.schedule.phases[0]);
@@ -700,7 +708,7 @@ TEST(ScheduleRefinement, AReleaseAtAnInputJumpKeepsTheStanceLoadedToItsEnd) {
 
 // SLIP SPEED MARGIN (RefinementOptions::slip_speed_margin). The point mass slides backward on the
 // table (v_x = -1 m/s at t = 0, slip-) for at least 0.7 s, then lifts off (T = 2 s);
-// SidewaysPushThenLift's cost wants u_x = 2 N, a push against the slide that would stop it within
+// sideways_push_then_lift()'s cost wants u_x = 2 N, a push against the slide that would stop it within
 // half a second. The slip- phase cannot stop (the schedule has no stop event), so without a margin the optimum brings the
 // slide to rest and holds it there with its sign row active (a perturbed motion would stick: the
 // degenerate slide of the plank-box flat landing); with a 0.1 m/s margin the slide keeps at least
@@ -729,11 +737,11 @@ TEST(ScheduleRefinement, ASlipSpeedMarginKeepsTheSlideAwayFromRest) {
       if (t <= r.event_times[0]) slowest = std::min(slowest, -r.trajectory.state(0, t)[2]);
     return slowest;
   };
-  const RefinementResult<PointMass> to_rest = refine_schedule(frictional_mass(), SidewaysPushThenLift{}, h, g, o);
+  const RefinementResult<PointMass> to_rest = refine_schedule(frictional_mass(), sideways_push_then_lift(), h, g, o);
   ASSERT_TRUE(to_rest.converged) << to_rest.message;
   EXPECT_LT(slowest_slide(to_rest), 1e-6);
   o.slip_speed_margin = 0.1;
-  const RefinementResult<PointMass> kept = refine_schedule(frictional_mass(), SidewaysPushThenLift{}, h, g, o);
+  const RefinementResult<PointMass> kept = refine_schedule(frictional_mass(), sideways_push_then_lift(), h, g, o);
   ASSERT_TRUE(kept.converged) << kept.message;
   EXPECT_LE(kept.mode_validity_violation, 1e-9);
   EXPECT_NEAR(slowest_slide(kept), 0.1, 1e-6);
@@ -742,7 +750,7 @@ TEST(ScheduleRefinement, ASlipSpeedMarginKeepsTheSlideAwayFromRest) {
   std::printf("slide to rest: objective %.6f; with a 0.1 m/s margin %.6f, re-simulated to %.2g\n", to_rest.objective,
               kept.objective, kept.phase_resim_max_error);
   o.slip_speed_margin = -0.1;
-  expect_invalid([&] { (void)refine_schedule(frictional_mass(), SidewaysPushThenLift{}, h, g, o); },
+  expect_invalid([&] { (void)refine_schedule(frictional_mass(), sideways_push_then_lift(), h, g, o); },
                  {"slip_speed_margin", ">= 0"});
 }
 
@@ -851,12 +859,7 @@ TEST(PhaseResimulation, AnEarlyTouchdownSelectsTheStanceWithTheStancesFirstInput
 /// A push the table's friction cannot hold: the cost wants u = (20, 0) N throughout while the
 /// mass sticks on the table for the whole horizon, so the optimum pushes as hard as the cone lets
 /// it, |u_1| = (1 - margin) mu m g.
-struct PushHard {
-  template <class T>
-  T running_cost(const VecT<T, 4>&, const VecT<T, 2>& u) const {
-    return (u[0] - T(20.0)) * (u[0] - T(20.0)) + u[1] * u[1];
-  }
-};
+QuadraticInputCost push_hard() { return {1.0, 20.0, 0.0}; }
 
 /// The largest |lambda_t| / (mu lambda_n) of the first phase of `r` over its element boundaries
 /// (where its rows hold), from the flow's forces.
@@ -871,7 +874,7 @@ double largest_cone_use(const RefinementResult<PointMass>& r) {
   return largest;
 }
 
-// PushHard's stick uses the whole cone; with stick_cone_margin = 0.25 it uses three quarters of it
+// push_hard()'s stick uses the whole cone; with stick_cone_margin = 0.25 it uses three quarters of it
 // and pays for the weaker push. A margin outside [0, 1) is refused by name.
 TEST(ScheduleRefinement, AStickConeMarginKeepsTheStickInsideTheCone) {
   ScheduleGuess<PointMass> g;
@@ -882,18 +885,18 @@ TEST(ScheduleRefinement, AStickConeMarginKeepsTheStickInsideTheCone) {
   RefinementOptions o;
   o.grid.max_element_duration = 0.1;
   o.edits.max_edits = 0;
-  const RefinementResult<PointMass> edge = refine_schedule(frictional_mass(), PushHard{}, h, g, o);
+  const RefinementResult<PointMass> edge = refine_schedule(frictional_mass(), push_hard(), h, g, o);
   ASSERT_TRUE(edge.converged) << edge.message;
   EXPECT_NEAR(largest_cone_use(edge), 1.0, 1e-6);
   o.stick_cone_margin = 0.25;
-  const RefinementResult<PointMass> inside = refine_schedule(frictional_mass(), PushHard{}, h, g, o);
+  const RefinementResult<PointMass> inside = refine_schedule(frictional_mass(), push_hard(), h, g, o);
   ASSERT_TRUE(inside.converged) << inside.message;
   EXPECT_LE(inside.mode_validity_violation, 1e-9);
   EXPECT_NEAR(largest_cone_use(inside), 0.75, 1e-6);
   EXPECT_GT(inside.objective, edge.objective + 1.0);
   EXPECT_LE(inside.phase_resim_max_error, 1e-8);
   o.stick_cone_margin = 1.0;
-  EXPECT_THROW(refine_schedule(frictional_mass(), PushHard{}, h, g, o), InvalidArgument);
+  EXPECT_THROW(refine_schedule(frictional_mass(), push_hard(), h, g, o), InvalidArgument);
 }
 
 /// The smallest lambda_n of phase `phase` of `r` over its element boundaries inside the phase
@@ -1036,12 +1039,13 @@ TEST(ScheduleRefinement, AStanceLoadKeepsAReleasedStanceLoadedBetweenItsEvents) 
 /// A slide to x = 1 at rest at T = 1 s, for u'u: cheapest on the table, so a flight the schedule
 /// forces (stance, flight of at least 0.2 s, stance) stays low: it rises 1.3 cm and lands with an
 /// impact that takes its downward speed for free.
-struct SlideToOne : scenes::PointMassToTheTarget {
-  Vec<4> terminal_lower() const { return Vec<4>(1, 0, 0, 0); }
-  Vec<4> terminal_upper() const { return terminal_lower(); }
-};
+Case slide_to_one() {
+  Case c;
+  c.target = Vec<4>(1, 0, 0, 0);
+  return c;
+}
 
-/// SlideToOne's forced flight: a stance, a flight (released at 0.4 s, landing at 0.6 s in the
+/// slide_to_one()'s forced flight: a stance, a flight (released at 0.4 s, landing at 0.6 s in the
 /// guess), a stance, all sticking; the guess holds the mass at rest at the origin.
 ScheduleGuess<PointMass> forced_flight_guess() {
   ScheduleGuess<PointMass> g = sliding_stance_guess(0, Vec<2>::Zero());
@@ -1070,30 +1074,30 @@ std::pair<double, double> flight_gap_over_profile(const RefinementResult<PointMa
   return {largest, smallest};
 }
 
-// SlideToOne through a forced flight: without a clearance it stays below the profile of a 5 cm
+// slide_to_one() through a forced flight: without a clearance it stays below the profile of a 5 cm
 // clearance; with flight_clearance = 5 cm it rises above the profile (5 cm at three quarters of the
 // flight: the hump after a release, ScheduleRefinementNlp::clearance) and pays for it. A negative
 // clearance is refused by name.
 TEST(ScheduleRefinement, AFlightClearanceLiftsAFlightThatSkimsTheGround) {
   const ScheduleGuess<PointMass> g = forced_flight_guess();
   RefinementOptions o = short_schedule_options(0.2);
-  const RefinementResult<PointMass> skim = refine_schedule(PointMass{}, SlideToOne{}, from_rest_for_one_second(), g, o);
+  const RefinementResult<PointMass> skim = refine_schedule(PointMass{}, slide_to_one(), from_rest_for_one_second(), g, o);
   ASSERT_TRUE(skim.converged) << skim.message;
   EXPECT_LT(flight_gap_over_profile(skim, 0.05).second, -0.01);
   EXPECT_LT(flight_gap_over_profile(skim, 0.0).first, 0.02);
   o.flight_clearance = 0.05;
-  const RefinementResult<PointMass> clear = refine_schedule(PointMass{}, SlideToOne{}, from_rest_for_one_second(), g, o);
+  const RefinementResult<PointMass> clear = refine_schedule(PointMass{}, slide_to_one(), from_rest_for_one_second(), g, o);
   ASSERT_TRUE(clear.converged) << clear.message;
   EXPECT_LE(clear.mode_validity_violation, 1e-9);
   EXPECT_GE(flight_gap_over_profile(clear, 0.05).second, -1e-9);
   EXPECT_GE(flight_gap_over_profile(clear, 0.0).first, 0.049);  // about 5 cm up at s = 3/4
   EXPECT_GT(clear.objective, skim.objective + 1.0);
   o.flight_clearance = -0.01;
-  expect_invalid([&] { (void)refine_schedule(PointMass{}, SlideToOne{}, from_rest_for_one_second(), g, o); },
+  expect_invalid([&] { (void)refine_schedule(PointMass{}, slide_to_one(), from_rest_for_one_second(), g, o); },
                  {"flight_clearance"});
 }
 
-/// SlideToOne through its forced flight refined twice, without and with one landing row that
+/// slide_to_one() through its forced flight refined twice, without and with one landing row that
 /// `set(o, value)` turns on (options short_schedule_options(0.2)); both must converge. Then a
 /// negative value must be refused naming `option` (and `bound`, when given).
 struct ForcedFlightPair {
@@ -1103,7 +1107,7 @@ template <class SetOption>
 ForcedFlightPair forced_flight_with(SetOption set, double value, const char* option, const char* bound = nullptr) {
   const ScheduleGuess<PointMass> g = forced_flight_guess();
   RefinementOptions o = short_schedule_options(0.2);
-  const auto refine = [&] { return refine_schedule(PointMass{}, SlideToOne{}, from_rest_for_one_second(), g, o); };
+  const auto refine = [&] { return refine_schedule(PointMass{}, slide_to_one(), from_rest_for_one_second(), g, o); };
   ForcedFlightPair out{refine(), {}};
   set(o, value);
   out.with = refine();
@@ -1117,7 +1121,7 @@ ForcedFlightPair forced_flight_with(SetOption set, double value, const char* opt
   return out;
 }
 
-// SlideToOne through a forced flight lands on the table under the weight alone (lambda_n = m g
+// slide_to_one() through a forced flight lands on the table under the weight alone (lambda_n = m g
 // right after the impact, the cheapest thrust); with touchdown_load = 12 N the stance after the
 // touchdown starts with lambda_n >= 12 N (the row active at the post-impact state: the thrust
 // pushes down) and pays for it, the re-simulation still agrees. A negative load is refused by name.
@@ -1147,7 +1151,7 @@ TEST(ScheduleRefinement, ATouchdownLoadMakesTheStanceStartLoaded) {
   EXPECT_EQ((traj.input(after, x, flight) - traj.input(after, x, stance)).norm(), 0.0);
 }
 
-// SlideToOne through a forced flight lands with the downward speed its low flight gives; with
+// slide_to_one() through a forced flight lands with the downward speed its low flight gives; with
 // touchdown_speed = 1.5 m/s the touchdown comes in at least that fast (the row active: the
 // flight rises higher, or is pushed down, and pays for it). A negative speed is refused by name.
 TEST(ScheduleRefinement, ATouchdownSpeedMakesTheLandingComeInFast) {

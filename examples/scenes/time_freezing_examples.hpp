@@ -80,8 +80,12 @@ struct PointMassToTheTarget {
   VecT<T, 4> terminal_constraints(const VecT<T, 4>& x, const T&) const {
     return x;
   }
-  Vec<4> terminal_lower() const { return Vec<4>(3, 0, 0, 0); }
-  Vec<4> terminal_upper() const { return Vec<4>(3, 0, 0, 0); }
+  Vec<4> terminal_lower() const { return target; }
+  Vec<4> terminal_upper() const { return target; }
+  /// The terminal state (x [m], z [m], v_x [m/s], v_z [m/s]) the four terminal rows pin; rest at
+  /// x = 3 unless set. A value, not a type, so that a task with another target (the refinement
+  /// tests' slide to x = 1, a target above the table) runs on this OCP's compiled machinery.
+  Vec<4> target = Vec<4>(3, 0, 0, 0);
 
   static PointMassParameters parameters() {
     PointMassParameters p;
