@@ -108,8 +108,7 @@ void refine_mesh(const S& scene, const Ocp& ocp, const OcpHorizon<S>& horizon, c
     // differ from run to run (RefinementMesh, "reproducible"); the user's options come after.
     const bool duals = round.elements_split <= mesh.dual_warm_start_split_fraction * double(nlp->element_count());
     finer.ipopt.options.insert(finer.ipopt.options.begin(),
-                               {IpoptOption{"mu_init", duals ? mesh.dual_warm_start_mu : mesh.warm_start_mu},
-                                IpoptOption{"mumps_pivot_order", 0}});
+                               {IpoptOption{"mu_init", mesh.warm_start_mu}, IpoptOption{"mumps_pivot_order", 0}});
     const ScheduleGuess<S> guess = solution_guess(*nlp, sol.x, out);
     auto [finer_nlp, finer_sol] = duals ? solve_schedule(scene, ocp, horizon, guess, finer, out, nlp.get(), &sol)
                                         : solve_schedule(scene, ocp, horizon, guess, finer, out);

@@ -91,8 +91,8 @@ inline std::vector<std::string> largest_multipliers(const Mpcc& nlp, const Eigen
 inline void progress_line(std::ostream* os, const RefinementSolve& s) {
   if (!os) return;
   *os << "refinement: " << (s.succeeded ? "solved" : "failed") << " (" << s.ipopt_status << ", " << s.ipopt_iterations
-      << " iterations, " << s.seconds << " s" << (s.warm_started ? ", from the previous multipliers" : "") << "), objective " << s.objective << ", violation " << s.constraint_violation
-      << ": " << s.schedule << "\n";
+      << " iterations, " << s.seconds << " s" << (s.warm_started ? ", from the previous multipliers" : "")
+      << "), objective " << s.objective << ", violation " << s.constraint_violation << ": " << s.schedule << "\n";
   if (!s.succeeded && !s.largest_multipliers.empty()) {
     *os << "refinement:   largest multipliers:";
     for (const std::string& m : s.largest_multipliers) *os << " " << m << ";";
@@ -111,7 +111,14 @@ std::pair<std::unique_ptr<ScheduleRefinementNlp<S, Ocp>>, MpccSolution> solve_sc
   auto nlp = std::make_unique<ScheduleRefinementNlp<S, Ocp>>(scene, ocp, horizon, guess, options);
   const std::optional<MpccStart> start =
       coarser && coarse ? nlp->warm_start_from(*coarser, *coarse) : std::optional<MpccStart>{};
-  MpccSolution sol = solve_refinement_nlp(*nlp, options.ipopt, start ? &*start : nullptr);
+  RefinementIpopt ipopt = options.ipopt;
+  if (start)  // a primal-dual start: the round's barrier start (its first mu_init) is RefinementMesh::dual_warm_start_mu
+    for (IpoptOption& o : ipopt.options)
+      if (o.name == "mu_init") {
+        o.value = options.mesh.dual_warm_start_mu;
+        break;
+      }
+  MpccSolution sol = solve_refinement_nlp(*nlp, ipopt, start ? &*start : nullptr);
   RefinementSolve record = solve_record(describe(scene, nlp->schedule()), sol);
   record.warm_started = start.has_value();
   record.largest_multipliers = largest_multipliers(*nlp, sol.constraint_multipliers, 5);
