@@ -97,8 +97,8 @@ TEST(HopperOverOneHole, IsTheThreeHoleOcpWithAnotherTarget) {
   EXPECT_THROW((void)hopper_refinement_horizon(0.0), InvalidArgument);
 }
 
-// The whole chain on the one-hole bed (T = 1 s, target (1, 0.4, 0, 0), N = 8; HopperOverOneHole)
-// in about a minute (the bound; measured at it, below), with the three-hole chain's
+// The whole chain on the one-hole bed (T = 1 s, target (1, 0.4, 0, 0), N = 8; HopperOverOneHole)
+// in about a minute (measured below, before the mesh rounds' dual warm start), with the three-hole chain's
 // settings (examples/hopper.cpp --json; docs/refinement.md, "Hopper over three holes") but for three:
 //  - discovery: the hole continuation and two homotopy steps (sigma = 1, 0.1) with the one-hole
 //    bed's grid and solver (contact-side selection, primal-only warm starts), on the three-hole

@@ -56,7 +56,7 @@ timefreezing::DiscoveryOptions hopper_discovery_options(int steps, std::ostream*
 timefreezing::RefinementOptions hopper_refinement_options(std::ostream* progress);
 
 /// The OCP's horizon for refine_schedule: from (q0, v0) at t = 0 to T [s] (default the three-hole
-/// task's 2.5 s; the one-hole bed's is 1 s), |u_i| <= 60 N m. Throws InvalidArgument for T not
+/// task's 2.5 s; the one-hole bed's is 1 s), |u_i| <= 60 N m. Throws InvalidArgument unless T is
 /// finite and > 0.
 timefreezing::OcpHorizon<Hopper> hopper_refinement_horizon(double T = HopperOverThreeHoles::horizon);
 
