@@ -6,6 +6,7 @@
 // (scenes/plank_box_landing.hpp): its start, target and rows, the derivative checker on its
 // two-contact FESD MPCC with the scaled gap, and the optimal reference itself (its grid, solved,
 // recovered, re-simulated and analysed).
+#include "one_hole_checks.hpp"
 #include "scenes/hopper_footsteps.hpp"
 #include "scenes/hopper_holes.hpp"
 #include "scenes/plank_box_landing.hpp"
@@ -285,36 +286,10 @@ TEST(HopperOverOneHole, CoarseGridConvergesAndJumpsTheHole) {
   const Short::Feasibility f = Short::feasibility(r.points);
   EXPECT_LE(f.path_violation, 1e-6);
   EXPECT_LE(f.target_error, 1e-6);
-  const Short ocp;
-  const auto foot_x = [&ocp](const Vec<8>& x) {  // path row 1
-    return ocp.path_constraints<double>(x, Vec<2>::Zero())[1];
-  };
-  const auto& events = r.trajectory.events;
-  std::ostringstream listed;
-  for (const auto& ev : events) {
-    listed << "\n  t = " << ev.t << (ev.impact() ? " impact" : "") << " foot x " << foot_x(ev.x_minus);
-    for (const Guard& g : ev.guards()) listed << " " << to_string(g.kind);
-  }
-  ASSERT_GE(events.size(), 2u) << listed.str();
-  double last_lift_off_x = std::numeric_limits<double>::quiet_NaN();
-  bool crossed = false;
-  for (const auto& ev : events) {
-    ASSERT_EQ(ev.guards().size(), 1u) << listed.str();
-    const double fx = foot_x(ev.x_minus);
-    if (ev.guards()[0].kind == GuardKind::Release) last_lift_off_x = fx;
-    if (ev.guards()[0].kind != GuardKind::Touchdown) continue;
-    // A touchdown on the ground (foot z = 0) outside the hole's ellipse: |foot x - 0.5| >= 0.25.
-    EXPECT_GE(std::abs(fx - Short::hole_centres[0]), Short::hole_half_width - 1e-6) << listed.str();
-    if (last_lift_off_x <= Short::hole_centres[0] - Short::hole_half_width &&
-        fx >= Short::hole_centres[0] + Short::hole_half_width)
-      crossed = true;
-  }
-  EXPECT_TRUE(crossed) << "no flight from before the hole to beyond it:" << listed.str();
-  // Standing at the target: the last event puts the foot on the ground, and nothing lifts it again.
-  EXPECT_NE(events.back().guards()[0].kind, GuardKind::Release) << listed.str();
+  testing::expect_one_hole_event_structure(r.trajectory.events);
   const PolishResult<Hopper> resim = polish(Hopper{}, r.reference);
   std::cout << "hopper over one hole: objective " << r.solution.objective << ", " << r.solution.ipopt_iterations
-            << " Ipopt iterations, " << r.solution.seconds << " s; " << events.size()
+            << " Ipopt iterations, " << r.solution.seconds << " s; " << r.trajectory.events.size()
             << " recovered events; re-simulation distance " << resim.state_distance << " at t = "
             << resim.worst_sample_time << ", " << resim.trajectory.events.size() << " simulated events, the first:";
   for (std::size_t k = 0; k < std::min<std::size_t>(2, resim.trajectory.events.size()); ++k) {

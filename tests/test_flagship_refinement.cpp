@@ -6,6 +6,7 @@
 // the sanitizer build, which then compiles neither this program nor the refinement units (the
 // refinement's code paths run under the sanitizers in tests/test_refinement.cpp, on the guiding
 // example's scene).
+#include "one_hole_checks.hpp"
 #include "scenes/hopper_holes_refinement.hpp"
 #include "scenes/hopper_tracking.hpp"
 #include "scenes/plank_box_landing.hpp"
@@ -159,31 +160,8 @@ TEST(HopperOverOneHole, WholeChainDiscoveryRefinementAnalysis) {
   EXPECT_NEAR(traj.t_end(), 1.0, 1e-12);
   EXPECT_LE((traj.state(last, traj.t_end()).head<4>() - Short::q_target()).cwiseAbs().maxCoeff(), 1e-6);
 
-  const auto foot_x = [&ocp](const Vec<8>& x) {  // path row 1
-    return ocp.path_constraints<double>(x, Vec<2>::Zero())[1];
-  };
   const auto& events = traj.events;
-  std::ostringstream listed;
-  for (const auto& ev : events) {
-    listed << "\n  t = " << ev.t << (ev.impact() ? " impact" : "") << " foot x " << foot_x(ev.x_minus);
-    for (const Guard& g : ev.guards()) listed << " " << to_string(g.kind);
-  }
-  ASSERT_GE(events.size(), 2u) << listed.str();
-  const double near_edge = Short::hole_centres[0] - Short::hole_half_width;  // 0.25
-  const double far_edge = Short::hole_centres[0] + Short::hole_half_width;   // 0.75
-  double last_lift_off_x = std::numeric_limits<double>::quiet_NaN();
-  int crossings = 0;
-  for (const auto& ev : events) {
-    ASSERT_EQ(ev.guards().size(), 1u) << listed.str();
-    const double fx = foot_x(ev.x_minus);
-    if (ev.guards()[0].kind == GuardKind::Release) last_lift_off_x = fx;
-    if (ev.guards()[0].kind != GuardKind::Touchdown) continue;
-    // A touchdown on the ground (foot z = 0) outside the hole's ellipse: |foot x - 0.5| >= 0.25.
-    EXPECT_GE(std::abs(fx - Short::hole_centres[0]), Short::hole_half_width - 1e-6) << listed.str();
-    if (last_lift_off_x <= near_edge + 1e-6 && fx >= far_edge - 1e-6) ++crossings;
-  }
-  EXPECT_EQ(crossings, 1) << "flights from before the hole to beyond it:" << listed.str();
-  EXPECT_NE(events.back().guards()[0].kind, GuardKind::Release) << listed.str();
+  testing::expect_one_hole_event_structure(events);
 
   ReferenceAnalysisOptions<Hopper> analysis = stance_start_lqr_analysis(hopper, traj, 30, 1.0, nullptr);
   analysis.monte_carlo.size = 1e-6;  // as the flagship's: the touchdowns' saltation norms
@@ -210,7 +188,7 @@ TEST(HopperOverOneHole, WholeChainDiscoveryRefinementAnalysis) {
             << r.phase_resim_max_error << "), analysis " << analysis_seconds << " s ("
             << to_string(a.stability->verdict) << ", a(T) <= " << a.stability->upper_bound << ", "
             << batch.kept_event_sequence << " of " << batch.runs << " runs kept the events, discrepancy "
-            << batch.max_log_discrepancy << "); events:" << listed.str() << "\n";
+            << batch.max_log_discrepancy << "); events:" << testing::list_one_hole_events(events) << "\n";
 }
 
 }  // namespace

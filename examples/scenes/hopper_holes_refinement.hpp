@@ -46,7 +46,8 @@ timefreezing::DiscoveryOptions hopper_discovery_options(int steps, std::ostream*
 /// grazes, lambda_n 0.13 N, and the re-simulation slips and lifts off early), every touchdown
 /// coming in at 0.3 m/s or faster along the normal (touchdown_speed: measured with n_s = 3, the
 /// optimum 89.51 against 91.68 and the refinement 138 s against 180 s), the mesh refined to local error
-/// 2e-8 (split 4, 10 rounds of at most 1000 iterations each, the rounds warm-started at mu = 0.1;
+/// 2e-8 (split 4, 10 rounds of at most 1000 iterations each, each round started from the previous
+/// solution, a round that splits at most a tenth of its grid also from its multipliers;
 /// 2e-8, not the 2e-7 that the re-simulation check alone needs: the touchdowns' saltation norms
 /// reach 5e4, and at 2e-7 (per-phase re-simulation 3.3e-7) the tracking design's nominal run, 1.7e-5
 /// off the reference just before the touchdown at 1.864 s, is 0.6 off after it, where the analysis's
@@ -62,10 +63,12 @@ timefreezing::OcpHorizon<Hopper> hopper_refinement_horizon(double T = HopperOver
 
 /// The guess the refinement starts from after discovery: the footsteps of the discovered schedule
 /// (footsteps_of) with the kinematically consistent motion in them (footstep_guess), from q0 at
-/// t = 0 to the pose `q_end` at T [s] (default the three-hole task's target and 2.5 s; the
-/// one-hole bed's are (1, 0.4, 0, 0) and 1 s). A discovery that did not settle is accepted (the
-/// chain reads its last relaxed solution). Throws InvalidArgument when discovery found no
-/// schedule, and as footsteps_of and footstep_guess.
+/// t = 0 to the pose `q_end` = (hip x [m], hip z [m], phi_hip [rad], phi_knee [rad]) at T [s] (default
+/// the three-hole task's target and 2.5 s; the one-hole bed's are (1, 0.4, 0, 0) and 1 s). T must be
+/// the horizon `discovery` was solved on (the footsteps' times are read from it; not checked).
+/// `footsteps`, when not null, receives the footsteps read from the discovery. A discovery that
+/// did not settle is accepted (the chain reads its last relaxed solution). Throws InvalidArgument
+/// when discovery found no schedule, and as footsteps_of and footstep_guess.
 timefreezing::ScheduleGuess<Hopper> hopper_guess_from(const timefreezing::DiscoveryResult<Hopper>& discovery,
                                                       HopperFootsteps* footsteps = nullptr,
                                                       const Vec<4>& q_end = HopperOverThreeHoles::q_target(),

@@ -100,7 +100,8 @@ void refine_mesh(const S& scene, const Ocp& ocp, const OcpHorizon<S>& horizon, c
     if (options.progress)
       *options.progress << "refinement: mesh round " << k + 1 << ": largest local error " << round.largest_local_error
                         << " (phase " << round.worst_phase << ", t = " << round.worst_time << "), "
-                        << round.elements_split << " elements split, " << round.elements << " elements\n";
+                        << round.elements_split << " of " << nlp->element_count() << " elements split, "
+                        << round.elements << " elements\n";
     RefinementOptions finer = options;
     finer.grid.element_boundaries = boundaries;
     finer.ipopt.max_iter = std::min(options.ipopt.max_iter, mesh.max_iter);

@@ -37,9 +37,9 @@
 // parts, as many as the local error's order asks for; the NLP of the same schedule is built on the
 // finer grid (RefinementGrid::element_boundaries) and solved from the previous solution (its
 // dense output and its inputs; Ipopt's barrier parameter starts at RefinementMesh::warm_start_mu;
-// a round that splits few elements also from its multipliers, RefinementMesh::
-// dual_warm_start_split_fraction), until every element is within the tolerance or max_rounds solves are spent. A round whose solve
-// fails is reported and the previous solution kept. Local-error control of the mesh is the
+// a round that splits few elements also from its multipliers,
+// RefinementMesh::dual_warm_start_split_fraction), until every element is within the tolerance or
+// max_rounds solves are spent. A round whose solve fails is reported and the previous solution kept. Local-error control of the mesh is the
 // standard of direct collocation (Betts, "Practical Methods for Optimal Control", ch. 4.7).
 #pragma once
 

@@ -281,12 +281,17 @@ class ScheduleRefinementNlp final : public Mpcc {
   int validity_row(int e, int r, int k) const;
   /// The applied input of element e (after the OCP's input law, at the element's start).
   VecT<double, S::nu> applied_input(const Eigen::Ref<const Eigen::VectorXd>& x, int e) const;
-  /// A start for this NLP from a solution of `coarser`, an NLP of the same schedule on a grid that
-  /// this one refines (every element of this grid inside one of coarser's: split_elements): x this
-  /// NLP's initial point, the multipliers carried over (refinement_nlp_warm_start.hxx: the costate
-  /// rows as they are, the O(h) rows in proportion to the element's length). nullopt when the two
-  /// NLPs do not share their point conditions (another schedule or stage count, other event,
-  /// path or terminal rows imposed) or the solution's multipliers have the wrong sizes.
+  /// A start for this NLP from `solution`, the solution of `coarser`: an NLP of the same schedule on
+  /// a grid that this one refines (every element of this grid inside one of coarser's, as
+  /// split_elements makes it). The returned start has x = this NLP's initial point
+  /// (variable_count()), the constraint multipliers (constraint_count()) and the lower and upper
+  /// bound multipliers (variable_count() each) carried over (refinement_nlp_warm_start.hxx: the
+  /// costate rows as they are, the O(h) rows in proportion to the element's length).
+  /// Precondition, NOT checked: this grid refines coarser's (an element is mapped to the coarser
+  /// element that holds its middle; a grid that moves element boundaries gets multipliers of the
+  /// wrong element). nullopt when the two NLPs do not share their point conditions (another
+  /// schedule or stage count, other event, path or terminal rows imposed) or the solution's
+  /// vectors do not have coarser's sizes. Throws nothing of its own.
   std::optional<MpccStart> warm_start_from(const ScheduleRefinementNlp& coarser, const MpccSolution& solution) const;
   /// The contact forces of point (e, r) at x (the flow of the phase's mode).
   std::array<ContactForce<double>, S::nc> contact_forces(const Eigen::Ref<const Eigen::VectorXd>& x, int e, int r) const;

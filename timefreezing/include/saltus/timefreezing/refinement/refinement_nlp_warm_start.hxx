@@ -6,8 +6,8 @@
 // For Radau IIA collocation the multipliers behave as follows (the discrete adjoint: stationarity
 // of the Lagrangian in the stage states; Hager 2000 for Runge-Kutta, the same algebra here):
 //   - the collocation rows of an element's LAST stage carry the costate, lambda_{e,s} ~ p(t_e+h):
-//     it is the next element's start state, so its row's multiplier is the sum of the next
-//     element's collocation multipliers, O(1) and independent of h;
+//     it is the next element's start state, so its row's multiplier is, up to O(h), the sum of the
+//     next element's collocation multipliers: O(1) and independent of h;
 //   - the rows of the other stages carry h b_r (f_x' p - l_x), O(h);
 //   - a validity or path row at a stage point is a quadrature node of a distributed multiplier,
 //     h b_r nu(t), O(h); an input's bound multiplier integrates over the element, O(h);
@@ -15,7 +15,9 @@
 //     duration and terminal rows are point conditions, O(1).
 // So a child e' takes its parent's last-stage collocation multipliers as they are (the costate at
 // the parent's end: first-order accurate over the parent), its other stage rows and its input's
-// bound multipliers times rho, its start rows only when it starts where its parent starts, and the
+// bound multipliers times rho, its start rows only when it starts where its parent starts (a child
+// that starts inside its parent has start rows the coarser grid did not have: they start at 0,
+// though the finer solution may hold them active), and the
 // event, duration and terminal rows and the time and phase-start bounds as they are. A row the two
 // grids do not share (a validity row imposed on one grid only: a phase's end rows moved to the last
 // child) starts at 0. The transfer needs the same schedule and the same event and terminal rows
