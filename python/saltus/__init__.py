@@ -24,10 +24,14 @@ Linearisation, tracking and stability (the actuated scenes: PointMass, PlankBox,
     and ``state_transition(t1, t0)`` (nx, nx); ``lqr_design(lin, Q, R, Q_final)`` or
     ``constant_gains(lin, pd_gain(Kp, Kd))``, ``tracking(lin, gains)`` with
     ``check_stability()``, ``check_periodic_stability(period)``, ``monte_carlo(runs)``.
+    ``analyse_reference(reference, Q, R, ...)``: all of it in one call (jump gains, LQR design,
+    stability check, Monte Carlo batch and their agreement), the report as a dict.
     ``saltus.distributed`` runs Monte Carlo batches and gain sweeps on a Dask cluster.
 Optimal references
     ``optimal_control.point_mass_to_the_target(progress=None)``: time-freezing discovery and the
-    mode-schedule refinement; the refined reference comes back as a trajectory to analyse. The
+    mode-schedule refinement; the refined reference comes back as a trajectory to analyse.
+    ``plank_box_flat_landing``, ``hopper_over_three_holes``, ``hopper_over_one_hole``: discovery,
+    refinement and the analysis of the refined reference, as the C++ programs run them. The
     progress lines go to the callable given, or to the logger "saltus".
 Errors
     the C++ exception types with their names and messages: ``Error`` (a ``RuntimeError``),
@@ -67,6 +71,7 @@ from ._saltus import (  # noqa: F401  (the public names)
     SpatialBox,
     StabilityReport,
     UnplannedEvent,
+    analyse_reference,
     conewise_gain,
     constant_gains,
     jump_gains,
@@ -83,7 +88,7 @@ __all__ = [
     "BouncingBall", "PointMass", "PlankBox", "Hopper", "SpatialBox", "SimulationOptions", "IntegratorKind",
     "simulate", "polish", "references", "Segment", "Event",
     "jump_gains", "JumpGain", "conewise_gain", "ConewisePiece",
-    "linearise", "lqr_design", "constant_gains", "pd_gain", "tracking", "optimal_control",
+    "linearise", "lqr_design", "constant_gains", "pd_gain", "tracking", "analyse_reference", "optimal_control",
     "StabilityReport", "PeriodicStabilityReport", "MonteCarloReport",
     "Error", "InvalidArgument", "NumericalFailure", "ContactProblemFailure", "NonSpdMassMatrix",
     "InternalError", "GrazingEvent", "SimultaneousActivation", "UnplannedEvent",
@@ -100,3 +105,4 @@ def pd_gain(Kp, Kd):
     if Kp.shape != Kd.shape:
         raise InvalidArgument(f"pd_gain: Kp has shape {Kp.shape}, Kd {Kd.shape}: they must agree")
     return -_np.hstack([Kp, Kd])
+
