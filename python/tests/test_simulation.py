@@ -156,8 +156,42 @@ def test_scenes_and_options_pickle():
         assert repr(back) == repr(scene)
     o = tight()
     o.breakpoints = [0.5]
+    o.zeno_completion = True
+    o.zeno_bounces = 20
     back = pickle.loads(pickle.dumps(o))
     assert back.relative_tolerance == 1e-12 and back.breakpoints == [0.5]
+    assert back.zeno_completion is True and back.zeno_bounces == 20
+    assert saltus.SimulationOptions().zeno_completion is False  # the C++ default
+
+
+def test_bouncing_ball_with_zeno_completion_rests_on_the_ground_past_its_accumulation(ball_trajectory):
+    """As ZenoCompletion.OneBallOnASpringRestsPastItsAccumulation in C++: continued past the
+    accumulation at the closed-form t_inf = sqrt(2 h / g) (1 + e) / (1 - e) (within the stated
+    uncertainty), the ball rests on the ground in persistent contact until t_final."""
+    t_inf = math.sqrt(2.0 / G) * 1.5 / 0.5
+    for bounces in (12, 40):
+        o = tight()
+        o.zeno_completion = True
+        o.zeno_bounces = bounces
+        traj = saltus.simulate(saltus.BouncingBall(restitution=0.5), [1.0, 0.0], 0.0, 5.0, options=o)
+        assert traj.status == "completed"
+        assert traj.t_end == 5.0
+        (z,) = traj.zeno_completions
+        assert z["contacts"] == ["ground"] and z["contact_indices"] == [0]
+        assert abs(z["t"] - t_inf) <= z["uncertainty"] + 1e-12
+        assert z["uncertainty"] < 1e-9
+        assert z["last_touchdown"] < z["t"]
+        assert traj.zeno_time == z["t"]
+        completion = traj.events[z["event"]]
+        assert completion.t == z["t"] and completion.guards == []
+        assert traj.segments[-1].mode == "ground:closed"
+        np.testing.assert_array_equal(traj.final_state, [0.0, 0.0])
+        rest = traj.sample(np.linspace(z["t"] + 1e-6, 5.0, 20))
+        assert np.abs(rest).max() <= 1e-12  # at rest on the ground, in contact
+        # Without completion the same run stops at the accumulation.
+        assert ball_trajectory.status == "zeno" and ball_trajectory.zeno_completions == []
+        j = json.loads(traj.to_json())
+        assert j["zeno_completions"][0]["contacts"] == ["ground"] and j["zeno_completions"][0]["t"] == z["t"]
 
 
 def test_a_reference_written_as_csv_is_read_back_and_polished():
@@ -169,3 +203,4 @@ def test_a_reference_written_as_csv_is_read_back_and_polished():
     assert out["state_distance"] < 1e-9  # the input is piecewise linear: its samples interpolate it exactly
     with pytest.raises(saltus.InvalidArgument, match="no column 'v0'"):
         saltus.polish(ref.scene, "t,segment,mode,q0\n0,0,\"table:open\",x\n")
+

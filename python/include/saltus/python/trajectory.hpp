@@ -244,11 +244,35 @@ void bind_trajectory(py::module_& m, const std::string& scene_name, const char* 
       .def_property_readonly("status", [](const T& t) { return std::string(to_string(t.trajectory.status)); },
                              "'completed', 'zeno' (accumulating impacts) or 'max-events'")
       .def_property_readonly("zeno_time", [](const T& t) { return t.trajectory.zeno_time; },
-                             "s: the predicted accumulation time (NaN unless status is 'zeno')")
+                             "s: the predicted accumulation time (status 'zeno', or the last accumulation the run was continued "
+                             "past, see zeno_completions; NaN otherwise)")
       .def_property_readonly("zeno_time_uncertainty", [](const T& t) { return t.trajectory.zeno_time_uncertainty; },
                              "s: how far zeno_time may be from the accumulation time (the change of its "
                              "extrapolation between the last two orders; inf: too few touchdowns, zeno_time is "
-                             "the geometric estimate; NaN unless status is 'zeno')")
+                             "the geometric estimate; NaN without an accumulation)")
+      .def_property_readonly(
+          "zeno_completions",
+          [](const T& t) {
+            py::list out;
+            for (const ZenoCompletion& z : t.trajectory.zeno_completions) {
+              py::dict d;
+              d["t"] = z.t;
+              d["uncertainty"] = z.uncertainty;
+              d["last_touchdown"] = z.last_touchdown;
+              std::vector<std::string> names;
+              for (int i : z.contacts) names.push_back(t.scene->contact(i).name);
+              d["contact_indices"] = z.contacts;
+              d["contacts"] = names;
+              d["event"] = z.event;
+              out.append(d);
+            }
+            return out;
+          },
+          "the accumulations the run was continued past (SimulationOptions.zeno_completion), in time order: dicts "
+          "with t (s: the accumulation time the motion was continued from), uncertainty (s: how far t may be from "
+          "it; inf for the geometric estimate), last_touchdown (s: the last touchdown resolved before it), "
+          "contacts (the accumulating contacts' names), contact_indices, event (the index of the completion's "
+          "event in events)")
       .def_property_readonly("t_begin", [](const T& t) { return t.trajectory.t_begin(); })
       .def_property_readonly("t_end", [](const T& t) { return t.trajectory.t_end(); })
       .def_property_readonly("final_state", [](const T& t) { return Eigen::VectorXd(t.trajectory.final_state()); },
