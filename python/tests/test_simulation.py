@@ -204,3 +204,88 @@ def test_a_reference_written_as_csv_is_read_back_and_polished():
     with pytest.raises(saltus.InvalidArgument, match="no column 'v0'"):
         saltus.polish(ref.scene, "t,segment,mode,q0\n0,0,\"table:open\",x\n")
 
+
+def _round_trip_cases():
+    box = saltus.PlankBox()
+    spatial = saltus.SpatialBox()
+    x0 = np.zeros(12)
+    x0[2] = 0.5 * spatial.size[2] + 0.1
+    x0[6:8] = [2.0, 1.0]  # lands on four corners, slides diagonally: slip directions (dx, dy)
+    completing = tight()
+    completing.zeno_completion = True
+    return {
+        "ball (zeno)": lambda: saltus.simulate(saltus.BouncingBall(), [1.0, 0.0], 0.0, 5.0, options=tight()),
+        "ball (completed)": lambda: saltus.simulate(saltus.BouncingBall(), [1.0, 0.0], 0.0, 5.0, options=completing),
+        "example 3": saltus.references.example3,
+        "point mass with friction": saltus.references.point_mass_with_friction,
+        "plank-box flat landing": lambda: saltus.simulate(box, box.flat_state(), 0.0, 0.3, input=box.lowering_input(),
+                                                          options=tight()),
+        "hopper push-off": saltus.references.hopper_push_off,
+        "spatial box": lambda: saltus.simulate(spatial, x0, 0.0, 1.0, options=tight()),
+    }
+
+
+@pytest.mark.parametrize("case", list(_round_trip_cases()))
+def test_a_trajectory_written_as_complete_json_is_read_back_exactly(case, tmp_path):
+    """to_json(complete=True), then read_trajectory, from the text and from a file: every segment's
+    times and states bit for bit, every event's fields, the dense output between the steps, the
+    Zeno fields; written again, the same JSON."""
+    traj = _round_trip_cases()[case]()
+    text = traj.to_json(complete=True)
+    path = tmp_path / "trajectory.json"
+    path.write_text(text)
+    for back in (saltus.read_trajectory(text, traj.scene), saltus.read_trajectory(path, traj.scene),
+                 saltus.read_trajectory(str(path), traj.scene)):
+        assert type(back) is type(traj) and back.name == "read from JSON"
+        assert back.to_json(complete=True) == text and back.to_json() == traj.to_json()
+        assert back.status == traj.status and len(back) == len(traj)
+        for a, b in zip(traj.segments, back.segments):
+            assert b.mode == a.mode and b.contact_modes == a.contact_modes and b.sliding_contact == a.sliding_contact
+            assert b.t_begin == a.t_begin and b.t_end == a.t_end
+            np.testing.assert_array_equal(b.times, a.times)
+            np.testing.assert_array_equal(b.states, a.states)
+            inside = 0.5 * (a.times[:-1] + a.times[1:])  # between the step points: the dense output
+            np.testing.assert_array_equal(back.sample(inside), traj.sample(inside))
+        assert len(back.events) == len(traj.events)
+        for a, b in zip(traj.events, back.events):
+            for field in ["t", "impact", "input_jump", "guards", "mode_before", "mode_after", "contact_modes_before",
+                          "contact_modes_after"]:
+                assert getattr(b, field) == getattr(a, field), field
+            np.testing.assert_array_equal(b.x_minus, a.x_minus)
+            np.testing.assert_array_equal(b.x_plus, a.x_plus)
+        np.testing.assert_array_equal(back.final_state, traj.final_state)
+        np.testing.assert_array_equal(back.event_times, traj.event_times)
+        for name in ["zeno_time", "zeno_time_uncertainty"]:
+            a, b = getattr(traj, name), getattr(back, name)
+            assert a == b or (math.isnan(a) and math.isnan(b)), name
+        assert back.zeno_completions == traj.zeno_completions
+        assert back.statistics == traj.statistics
+        assert back.options.breakpoints == traj.options.breakpoints or not traj.options.breakpoints
+    if traj.scene.nu > 0:
+        with pytest.raises(saltus.InvalidArgument, match="does not hold its input law"):
+            back.inputs([traj.t_begin])
+    else:
+        assert back.inputs([traj.t_begin]).shape == (1, 0)
+
+
+def test_read_trajectory_refuses_what_it_cannot_rebuild(ball_trajectory, tmp_path):
+    ball = saltus.BouncingBall()
+    with pytest.raises(saltus.InvalidArgument, match="not written complete"):
+        saltus.read_trajectory(ball_trajectory.to_json(), ball)
+    j = json.loads(ball_trajectory.to_json(complete=True))
+    del j["events"][0]["x_minus"]
+    with pytest.raises(saltus.InvalidArgument, match=r"events\[0\] has no 'x_minus'"):
+        saltus.read_trajectory(json.dumps(j), ball)
+    with pytest.raises(saltus.InvalidArgument, match="trajectory JSON: .*parse error"):
+        saltus.read_trajectory("{ not json", ball)
+    with pytest.raises(saltus.InvalidArgument, match=r"x_plus is not an array of 4 numbers"):
+        saltus.read_trajectory(saltus.references.example3().to_json(complete=True).replace(
+            '"x_plus":[', '"x_plus":[0.5,'), saltus.PointMass())
+    with pytest.raises(saltus.InvalidArgument, match=r"segments\[0\]\.pieces\[0\]\.c\[0\] is not an array of 4 numbers"):
+        saltus.read_trajectory(ball_trajectory.to_json(complete=True), saltus.PointMass())  # another scene's
+    with pytest.raises(TypeError):
+        saltus.read_trajectory(ball_trajectory.to_json(complete=True), "ball")
+    with pytest.raises(FileNotFoundError):
+        saltus.read_trajectory(tmp_path / "missing.json", ball)
+    with pytest.raises(TypeError, match="source must be JSON text or a path"):
+        saltus.read_trajectory(3, ball)

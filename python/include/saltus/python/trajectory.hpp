@@ -321,8 +321,13 @@ void bind_trajectory(py::module_& m, const std::string& scene_name, const char* 
            "x at the given times [s] from the dense output: (n,) -> (n, nx); at an event time the state after it")
       .def("inputs", &inputs<S>, py::arg("times"), "u at the given times [s]: (n,) -> (n, nu)")
       .def(
-          "to_json", [](const T& t) { return to_json(t.trajectory, *t.scene).dump(); },
-          "the C++ side's JSON (saltus::to_json): status, segments, events, zeno_time, statistics")
+          "to_json",
+          [](const T& t, bool complete) { return to_json(t.trajectory, *t.scene, TrajectoryJsonOptions{complete}).dump(); },
+          py::arg("complete") = false,
+          "the C++ side's JSON (saltus::to_json) as a str: status, segments, events, zeno_time, zeno_completions, "
+          "statistics; complete=True adds what saltus.read_trajectory needs to rebuild the trajectory exactly (every "
+          "segment's dense output, every transition, the final state; non-finite numbers as \"inf\", \"-inf\", "
+          "\"nan\"). The input law is never written.")
       .def(
           "to_csv",
           [](const T& t, double dt) {
@@ -371,6 +376,36 @@ void bind_trajectory(py::module_& m, const std::string& scene_name, const char* 
       "trajectory (the re-simulation), state_distance (max over the samples of |x_imported - x_simulated|_inf), "
       "worst_sample_time [s], event_time_distance [s], imported_events, simulated_events. Raises "
       "saltus.InvalidArgument naming the line of a malformed CSV.");
+
+  m.def(
+      "trajectory_from_json",
+      [](const S& scene, const std::string& text) {
+        nlohmann::json j;
+        try {
+          j = nlohmann::json::parse(text);
+        } catch (const nlohmann::json::parse_error& e) {
+          throw InvalidArgument(std::string("trajectory JSON: ") + e.what());
+        }
+        auto out = std::make_shared<T>();
+        out->scene = std::make_shared<const S>(scene);
+        out->trajectory = trajectory_from_json(j, scene);
+        out->options.breakpoints = out->trajectory.input_breakpoints;
+        out->name = "read from JSON";
+        if constexpr (S::nu == 0) {
+          out->trajectory.input = zero_input<S>();  // no input to lose
+        } else {
+          out->trajectory.input = [](double t, const VecT<double, 2 * S::nq>&, const Mode<S::nc>&) -> VecT<double, S::nu> {
+            throw InvalidArgument(detail::concat("the trajectory was read from JSON, which does not hold its input law: "
+                                                 "no input at t = ",
+                                                 t, " (simulate it again, or polish its CSV, to analyse it)"));
+          };
+        }
+        return out;
+      },
+      py::arg("scene"), py::arg("text"),
+      "The trajectory that Trajectory.to_json(complete=True) wrote, rebuilt exactly for `scene` (its class must be "
+      "the trajectory's); see saltus.read_trajectory, which also reads files. Raises saltus.InvalidArgument naming "
+      "the key of a JSON it cannot rebuild from (not written complete, a missing key, a state of the wrong size, ...).");
 
   m.def("simulate", &simulate<S>, py::arg("scene"), py::arg("x0"), py::arg("t0"), py::arg("t_final"),
         py::arg("input") = py::none(), py::arg("options") = py::none(), simulate_doc);
