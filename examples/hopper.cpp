@@ -11,7 +11,9 @@
 //
 // `hopper --json` instead optimises the flagship OCP, the hopper over three holes (time-freezing
 // paper Section 6; scenes/hopper_holes.hpp), from the paper's initialisation (the start state at
-// every node, zero torques), in three stages with one progress line each on stderr:
+// every node, zero torques), in three stages with one progress line each on stderr (the chain is
+// the scene library's run_hopper_chain, scenes/hopper_holes_refinement.hpp, which the Python
+// bindings and the one-hole test run too):
 //   discovery    the hole continuation, then the time-freezing homotopy for two steps (sigma = 1,
 //                0.1), the footsteps read off its relaxed motion (scenes/hopper_holes_refinement.hpp);
 //   refinement   the smooth multi-phase OCP of those footsteps' schedule on the hopper's own flows,
@@ -35,11 +37,8 @@
 #include <saltus/hybrid/reference/resimulation.hpp>
 #include <saltus/hybrid/dynamics/contact_forces_csv.hpp>
 #include <saltus/hybrid/vocabulary/trajectory_report.hpp>
-#include <saltus/sensitivity/analysis/reference_analysis_io.hpp>
-#include <saltus/timefreezing/refinement/refinement_io.hpp>
 #include "scenes/all_scenes.hpp"
 #include "scenes/hopper_holes_refinement.hpp"
-#include "scenes/hopper_tracking.hpp"
 
 #include <saltus/sensitivity/sensitivity.hpp>
 
@@ -51,70 +50,24 @@
 #include <cstring>
 #include <fstream>
 #include <iostream>
-#include <optional>
 
 namespace {
 
-/// The refined reference's files (report/<name>.json, .csv, _forces.csv) and its analysis: jump gains, an LQR
-/// design (R = I), its stability check, 200 perturbed runs, each run's deviation at 60 times.
-nlohmann::ordered_json analysed(const saltus::scenes::Hopper& hopper, const saltus::HybridTrajectory<saltus::scenes::Hopper>& ref,
-                                const char* name) {
-  using namespace saltus;
-  write_trajectory_files(hopper, ref, name, 0.005, report_directory(), stderr);
-  write_contact_forces_file(hopper, ref, name, 0.005, report_directory(), stderr);
-  ReferenceAnalysisOptions<scenes::Hopper> analysis = scenes::stance_start_lqr_analysis(hopper, ref, 200, 1.0, &std::cerr);
-  // eps = 1e-6: the touchdowns' saltation norms reach 5e4, and at eps = 1e-5 a third of the runs
-  // already leave the friction cone at a touchdown (docs/refinement.md, "The hopper's analysis").
-  analysis.monte_carlo.size = 1e-6;
-  const double t0 = ref.t_begin(), T = ref.t_end();
-  for (int k = 1; k <= 60; ++k) analysis.monte_carlo.deviation_times.push_back(k == 60 ? T : t0 + (T - t0) * k / 60.0);
-  return to_json(analyse_reference(hopper, ref, scenes::hopper_monte_carlo_simulation(), analysis));
-}
-
 int optimal_hop_over_three_holes(bool from_hop_guess) {
   using namespace saltus;
-  using namespace saltus::timefreezing;
-  using Ocp = scenes::HopperOverThreeHoles;
-  const scenes::Hopper hopper{};
-  nlohmann::ordered_json j;
-  j["converged"] = false;
-  j["initialisation"] = from_hop_guess ? "hop_guess" : "paper";
-  const MotionGuess hops = [](double t) { return Eigen::VectorXd(Ocp::hop_guess(t)); };
-  const DiscoveryOptions discovery_options = scenes::hopper_discovery_options(2, &std::cerr);
-  const DiscoveryResult<scenes::Hopper> discovery =
-      from_hop_guess ? discover_schedule_from_guess(hopper, Ocp::system(), Ocp{}, Ocp::q0(), Ocp::v0(), Ocp::grid(), hops,
-                                                    Ocp::solver(), discovery_options)
-                     : discover_schedule_by_continuation(hopper, Ocp::system(), Ocp::hole_continuation(), Ocp{}, Ocp::q0(),
-                                                         Ocp::v0(), Ocp::grid(), Ocp::solver(), discovery_options);
-  j["stage"] = "discovery (" + discovery.message + ")";
-  j["relaxed_objective"] = discovery.relaxed.solution.objective;
-  j["discovery_seconds"] = discovery.seconds;
-  j["discovery"] = to_json(discovery);
-  std::optional<RefinementResult<scenes::Hopper>> refined;
-  try {
-    scenes::HopperFootsteps footsteps;
-    const ScheduleGuess<scenes::Hopper> guess = scenes::hopper_guess_from(discovery, &footsteps);
-    j["footholds"] = footsteps.footholds;
-    refined = refine_schedule(hopper, Ocp{}, scenes::hopper_refinement_horizon(), guess,
-                              scenes::hopper_refinement_options(&std::cerr));
-  } catch (const Error& e) {
-    j["stage"] = std::string("refinement (") + e.what() + ")";
+  scenes::HopperChainOptions options = scenes::hopper_chain_options(scenes::HopperTask::ThreeHoles);
+  options.initialisation = from_hop_guess ? scenes::HopperInitialisation::HopGuess : scenes::HopperInitialisation::Paper;
+  options.progress = &std::cerr;
+  const scenes::HopperChain chain = scenes::run_hopper_chain(options);
+  if (chain.refined && chain.refined->converged) {
+    // The refined reference's files: report/<name>.json, .csv, _forces.csv.
+    const char* name = from_hop_guess ? "hopper_refined_hop_guess" : "hopper_refined";
+    const scenes::Hopper hopper{};
+    write_trajectory_files(hopper, chain.refined->trajectory, name, 0.005, report_directory(), stderr);
+    write_contact_forces_file(hopper, chain.refined->trajectory, name, 0.005, report_directory(), stderr);
   }
-  if (refined) {
-    const nlohmann::ordered_json rj = to_json(hopper, *refined);
-    for (const char* key : {"converged", "stage", "mode_validity_violation", "objective", "schedule", "schedule_edits",
-                            "phase_resim_max_error", "refinement_seconds"})
-      j[key] = rj[key];
-    j["events"] = rj["event_times"];
-    j["max_path_violation"] = refined->path_violation;
-    j["target_error"] = refined->terminal_violation;
-    j["solve_seconds"] = discovery.seconds + refined->seconds;
-    j["refinement"] = rj;
-    if (refined->converged)
-      j["analysis"] = analysed(hopper, refined->trajectory, from_hop_guess ? "hopper_refined_hop_guess" : "hopper_refined");
-  }
-  std::cout << j.dump(2) << "\n";
-  return refined && refined->stage == "refined" ? 0 : 1;
+  std::cout << to_json(chain).dump(2) << "\n";
+  return chain.refined && chain.refined->stage == "refined" ? 0 : 1;
 }
 
 }  // namespace

@@ -17,7 +17,6 @@
 
 #include <gtest/gtest.h>
 
-#include <chrono>
 #include <cmath>
 #include <iostream>
 #include <limits>
@@ -99,8 +98,9 @@ TEST(HopperOverOneHole, IsTheThreeHoleOcpWithAnotherTarget) {
 }
 
 // The whole chain on the one-hole bed (T = 1 s, target (1, 0.4, 0, 0), N = 8; HopperOverOneHole)
-// in about a minute (measured below, before the mesh rounds' dual warm start), with the three-hole chain's
-// settings (examples/hopper.cpp --json; docs/refinement.md, "Hopper over three holes") but for three:
+// in about a minute (measured below, before the mesh rounds' dual warm start): run_hopper_chain, the
+// code of examples/hopper.cpp --json and of the Python binding, with hopper_chain_options(OneHole),
+// the three-hole chain's settings (docs/refinement.md, "Hopper over three holes") but for three:
 //  - discovery: the hole continuation and two homotopy steps (sigma = 1, 0.1) with the one-hole
 //    bed's grid and solver (contact-side selection, primal-only warm starts), on the three-hole
 //    OCP type with the one-hole target (nothing else compiled);
@@ -123,29 +123,22 @@ TEST(HopperOverOneHole, IsTheThreeHoleOcpWithAnotherTarget) {
 // hole, one flight crosses it, no lift-off comes last.
 TEST(HopperOverOneHole, WholeChainDiscoveryRefinementAnalysis) {
   using Short = HopperOverOneHole;
-  const Hopper hopper{};
   const HopperOverThreeHoles ocp = Short::on_three_hole_rows();
-  const auto clock = std::chrono::steady_clock::now();
-  const auto seconds = [&clock] {
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - clock).count();
-  };
-  const timefreezing::DiscoveryResult<Hopper> discovery = timefreezing::discover_schedule_by_continuation(
-      hopper, Short::system(), HopperOverThreeHoles::hole_continuation(Short::q_target()), ocp, Short::q0(),
-      Short::v0(), Short::grid(), Short::solver(), hopper_discovery_options(2, nullptr));
-  const double discovery_seconds = seconds();
+  const HopperChainOptions options = hopper_chain_options(HopperTask::OneHole);  // the settings above
+  EXPECT_EQ(options.local_error_tolerance, 2e-7);
+  EXPECT_EQ(options.runs, 30);
+  EXPECT_EQ(options.perturbation_size, 1e-6);  // as the flagship's: the touchdowns' saltation norms
+  EXPECT_EQ(options.deviation_times, 0);
+  const HopperChain chain = run_hopper_chain(options);
+  const timefreezing::DiscoveryResult<Hopper>& discovery = chain.discovery;
   ASSERT_TRUE(discovery.schedule_found) << discovery.message;
   EXPECT_EQ(discovery.continuation_steps.size(), HopperOverThreeHoles::hole_continuation().size());
-  HopperFootsteps footsteps;
-  const timefreezing::ScheduleGuess<Hopper> guess =
-      hopper_guess_from(discovery, &footsteps, Short::q_target(), Short::horizon);
+  const HopperFootsteps& footsteps = chain.footsteps;
   ASSERT_GE(footsteps.footholds.size(), 2u);
   EXPECT_EQ(footsteps.footholds.back(), 1.0);  // the target's foothold
 
-  timefreezing::RefinementOptions options = hopper_refinement_options(nullptr);
-  options.mesh.local_error_tolerance = 2e-7;
-  const timefreezing::RefinementResult<Hopper> r =
-      timefreezing::refine_schedule(hopper, ocp, hopper_refinement_horizon(Short::horizon), guess, options);
-  const double refinement_seconds = seconds() - discovery_seconds;
+  ASSERT_TRUE(chain.refined.has_value()) << chain.refinement_failure;
+  const timefreezing::RefinementResult<Hopper>& r = *chain.refined;
   ASSERT_TRUE(r.converged) << r.message;
   EXPECT_EQ(r.stage, "refined") << r.message;
   EXPECT_LE(r.mode_validity_violation, 1e-9);
@@ -163,10 +156,8 @@ TEST(HopperOverOneHole, WholeChainDiscoveryRefinementAnalysis) {
   const auto& events = traj.events;
   testing::expect_one_hole_event_structure(events);
 
-  ReferenceAnalysisOptions<Hopper> analysis = stance_start_lqr_analysis(hopper, traj, 30, 1.0, nullptr);
-  analysis.monte_carlo.size = 1e-6;  // as the flagship's: the touchdowns' saltation norms
-  const ReferenceAnalysis<Hopper> a = analyse_reference(hopper, traj, hopper_monte_carlo_simulation(), analysis);
-  const double analysis_seconds = seconds() - discovery_seconds - refinement_seconds;
+  ASSERT_TRUE(chain.analysis.has_value());
+  const ReferenceAnalysis<Hopper>& a = *chain.analysis;
   ASSERT_TRUE(a.completed()) << a.failure;
   EXPECT_EQ(a.events.size(), events.size());
   ASSERT_TRUE(a.stability.has_value());
@@ -182,10 +173,10 @@ TEST(HopperOverOneHole, WholeChainDiscoveryRefinementAnalysis) {
   EXPECT_LE(batch.max_log_discrepancy, 0.05) << why.str();
   EXPECT_TRUE(a.agree) << why.str();
 
-  std::cout << "hopper over one hole, whole chain: discovery " << discovery_seconds << " s (" << discovery.message
-            << "), refinement " << refinement_seconds << " s (" << r.stage << ", objective " << r.objective << ", "
+  std::cout << "hopper over one hole, whole chain: discovery " << discovery.seconds << " s (" << discovery.message
+            << "), refinement " << r.seconds << " s (" << r.stage << ", objective " << r.objective << ", "
             << r.element_times.size() - 1 << " elements, " << r.ipopt_iterations << " Ipopt iterations, re-simulation "
-            << r.phase_resim_max_error << "), analysis " << analysis_seconds << " s ("
+            << r.phase_resim_max_error << "), analysis " << a.seconds.total << " s ("
             << to_string(a.stability->verdict) << ", a(T) <= " << a.stability->upper_bound << ", "
             << batch.kept_event_sequence << " of " << batch.runs << " runs kept the events, discrepancy "
             << batch.max_log_discrepancy << "); events:" << testing::list_one_hole_events(events) << "\n";

@@ -7,16 +7,22 @@
 // its target (HopperOverThreeHoles::target, HopperOverOneHole::on_three_hole_rows) and horizon.
 // With it, the settings of the hopper's chain (docs/refinement.md, "Hopper over three holes"):
 // discovery from the paper's initialisation, the footsteps it finds, and the refinement of their
-// schedule.
+// schedule; and the whole chain in one call (run_hopper_chain, with the analysis of the refined
+// reference), which examples/hopper.cpp --json, the one-hole test and the Python module run.
 #pragma once
 
 #include "scenes/hopper_footsteps.hpp"
 #include "scenes/hopper_holes.hpp"
 
+#include <saltus/sensitivity/analysis/reference_analysis.hpp>
 #include <saltus/timefreezing/refinement/discovery.hpp>
 #include <saltus/timefreezing/refinement/refinement.hpp>
 
+#include <nlohmann/json.hpp>
+
 #include <iosfwd>
+#include <optional>
+#include <string>
 
 SALTUS_DECLARE_SCHEDULE_REFINEMENT_SCENE(saltus::scenes::Hopper)
 SALTUS_DECLARE_SCHEDULE_REFINEMENT(saltus::scenes::Hopper, saltus::scenes::HopperOverThreeHoles)
@@ -73,5 +79,73 @@ timefreezing::ScheduleGuess<Hopper> hopper_guess_from(const timefreezing::Discov
                                                       HopperFootsteps* footsteps = nullptr,
                                                       const Vec<4>& q_end = HopperOverThreeHoles::q_target(),
                                                       double T = HopperOverThreeHoles::horizon);
+
+/// The tasks of the hopper's chain: the flagship over three holes (HopperOverThreeHoles, T = 2.5 s)
+/// and the one-hole bed (HopperOverOneHole, T = 1 s, run on the three-hole OCP type with its target).
+enum class HopperTask { ThreeHoles, OneHole };
+
+/// Where discovery starts: the paper's initialisation (the start state at every node, zero torques,
+/// after the hole continuation) or the kinematic guess of three hops (HopperOverThreeHoles::hop_guess,
+/// three holes only).
+enum class HopperInitialisation { Paper, HopGuess };
+
+/// The settings of the hopper's whole chain (run_hopper_chain): discovery, refinement, analysis.
+struct HopperChainOptions {
+  HopperTask task = HopperTask::ThreeHoles;
+  HopperInitialisation initialisation = HopperInitialisation::Paper;
+  /// The refinement's mesh tolerance (RefinementOptions::mesh.local_error_tolerance): 2e-8 over three
+  /// holes (hopper_refinement_options), 2e-7 on the one-hole bed (its per-phase re-simulation check
+  /// passes at 2.8e-7 measured, and the refinement takes 36 s instead of 64 s;
+  /// tests/test_flagship_refinement.cpp).
+  double local_error_tolerance = 2e-8;
+  /// Closed-loop Monte Carlo runs of the analysis (>= 1), at perturbation size `perturbation_size`
+  /// (the touchdowns' saltation norms reach 5e4: at 1e-5 a third of the runs leave the friction
+  /// cone at a touchdown; docs/refinement.md, "The hopper's analysis").
+  int runs = 200;
+  double perturbation_size = 1e-6;
+  /// Times, evenly spaced over the reference and its end among them, at which every run records its
+  /// deviation and its first-order prediction (MonteCarloOptions::deviation_times; 0: none).
+  int deviation_times = 60;
+  /// Progress lines of every stage (not owned; null: silent).
+  std::ostream* progress = nullptr;
+};
+
+/// The chain's settings for `task`: the three-hole flagship's as examples/hopper.cpp --json runs it
+/// (200 runs, 60 deviation times), the one-hole bed's as its test runs it (local error 2e-7, 30
+/// runs, no deviation times).
+HopperChainOptions hopper_chain_options(HopperTask task);
+
+/// What run_hopper_chain found, stage by stage.
+struct HopperChain {
+  HopperChainOptions options;
+  timefreezing::DiscoveryResult<Hopper> discovery;
+  HopperFootsteps footsteps;  ///< read off the discovered schedule (empty when discovery found none)
+  /// The refinement of the footsteps' schedule; none when building its guess or the refinement threw
+  /// (refinement_failure says why).
+  std::optional<timefreezing::RefinementResult<Hopper>> refined;
+  std::string refinement_failure;
+  /// The refined reference's analysis (stance_start_lqr_analysis with R = I), when it converged.
+  std::optional<ReferenceAnalysis<Hopper>> analysis;
+};
+
+/// The hopper's whole chain (docs/refinement.md, "Hopper over three holes"): discovery with
+/// hopper_discovery_options(2) (by the hole continuation, or from hop_guess), the footsteps of its
+/// schedule and their guess (hopper_guess_from), their refinement (hopper_refinement_options with the
+/// options' mesh tolerance), and, when refined, analyse_reference under hopper_monte_carlo_simulation()
+/// with stance_start_lqr_analysis (R = I) at the options' runs, size and deviation times. A
+/// saltus::Error of the guess or the refinement is kept (refinement_failure), not thrown. Used by
+/// examples/hopper.cpp --json, tests/test_flagship_refinement.cpp and the Python bindings
+/// (saltus.optimal_control.hopper_over_three_holes, hopper_over_one_hole). Throws InvalidArgument
+/// for hop_guess on the one-hole bed, runs < 1, a perturbation size that is not finite and > 0,
+/// deviation_times < 0, a mesh tolerance that is not finite and > 0.
+HopperChain run_hopper_chain(const HopperChainOptions& options);
+
+/// The chain's report, as examples/hopper.cpp --json prints it: {converged, initialisation ("paper"
+/// or "hop_guess"), stage ("refined", "converged, checks failed: ...", "discovery (<why>)" or
+/// "refinement (<why>)"), relaxed_objective, discovery_seconds, discovery, footholds; when refined:
+/// mode_validity_violation, objective, schedule, schedule_edits, phase_resim_max_error,
+/// refinement_seconds, events (the event times, s), max_path_violation, target_error,
+/// solve_seconds, refinement (refinement_io.hpp); analysis (reference_analysis_io.hpp)}.
+nlohmann::ordered_json to_json(const HopperChain& chain);
 
 }  // namespace saltus::scenes

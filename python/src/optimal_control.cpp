@@ -3,13 +3,19 @@
 // at (0, 1) m to rest on the table at x = 3 m at T = 2 s, minimising the integral of u'u): the
 // time-freezing homotopy discovers the contact schedule, the mode-schedule refinement makes the
 // reference exact, and the refined reference comes back as a PointMassTrajectory that jump_gains,
-// linearise and tracking analyse. The solver's progress lines reach Python: a callable gets each
-// line, or else the logging module's logger "saltus" (level INFO).
+// linearise and tracking analyse. The plank-box flat landing and the hopper over its holes run the
+// whole chain (discovery, refinement, analyse_reference) as their C++ programs do: the hopper's is the
+// scene library's run_hopper_chain (scenes/hopper_holes_refinement.hpp, saltus_hopper_refinement),
+// the code of `hopper --json`. The solver's progress lines reach Python: a callable gets each line, or
+// else the logging module's logger "saltus" (level INFO).
 #include "common.hpp"
+#include "scenes/hopper_holes_refinement.hpp"
+#include "scenes/hopper_tracking.hpp"
 #include "scenes/plank_box_landing.hpp"
 #include "scenes/plank_box_tracking.hpp"
 #include "scenes/time_freezing_examples.hpp"
 
+#include <saltus/python/progress.hpp>
 #include <saltus/sensitivity/analysis/reference_analysis_io.hpp>
 #include <saltus/timefreezing/refinement/discovery.hpp>
 
@@ -18,65 +24,10 @@
 
 #include <optional>
 #include <ostream>
-#include <streambuf>
 
 namespace saltus::python {
 
 namespace {
-
-/// A stream buffer that hands every complete line to a Python callable (under the GIL). An
-/// exception the callable raises is kept and raised by rethrow() after the solve (an ostream would
-/// swallow it).
-class PythonLines : public std::streambuf {
- public:
-  explicit PythonLines(py::object sink) : sink_(std::move(sink)) {}
-  ~PythonLines() override {
-    py::gil_scoped_acquire gil;
-    sink_ = py::object();
-  }
-  void rethrow() {
-    flush_line();
-    if (error_) throw *error_;
-  }
-
- protected:
-  int_type overflow(int_type c) override {
-    if (traits_type::eq_int_type(c, traits_type::eof())) return traits_type::not_eof(c);
-    if (traits_type::to_char_type(c) == '\n')
-      flush_line();
-    else
-      line_ += traits_type::to_char_type(c);
-    return c;
-  }
-  std::streamsize xsputn(const char* s, std::streamsize n) override {
-    for (std::streamsize k = 0; k < n; ++k) overflow(traits_type::to_int_type(s[k]));
-    return n;
-  }
-
- private:
-  void flush_line() {
-    if (line_.empty()) return;
-    py::gil_scoped_acquire gil;
-    if (!error_) {
-      try {
-        sink_(line_);
-      } catch (py::error_already_set& e) {
-        error_ = std::move(e);
-      }
-    }
-    line_.clear();
-  }
-  py::object sink_;
-  std::string line_;
-  std::optional<py::error_already_set> error_;
-};
-
-/// The progress callable: `progress`, or the logger "saltus" at INFO when None.
-py::object progress_sink(py::object progress) {
-  if (progress.is_none()) progress = py::module_::import("logging").attr("getLogger")("saltus").attr("info");
-  SALTUS_REQUIRE(PyCallable_Check(progress.ptr()), "progress must be a callable taking one line (str) or None");
-  return progress;
-}
 
 py::dict point_mass_to_the_target(py::object progress) {
   using namespace timefreezing;
@@ -197,6 +148,45 @@ py::dict plank_box_flat_landing(py::object progress, int max_edits, int runs) {
   return result;
 }
 
+/// The hopper's chain (scenes::run_hopper_chain) on `task`: its report as `hopper --json` prints it
+/// (to_json(HopperChain)) as a dict, with the task, the event times and the refined reference.
+py::dict hopper_chain(scenes::HopperTask task, py::object progress, const std::string& initialisation, int runs,
+                      int deviation_times) {
+  SALTUS_REQUIRE(initialisation == "paper" || initialisation == "hop_guess",
+                 "initialisation must be 'paper' or 'hop_guess', got '", initialisation, "'");
+  SALTUS_REQUIRE(runs >= 1, "runs must be >= 1, got ", runs);
+  SALTUS_REQUIRE(deviation_times >= 0, "deviation_times must be >= 0, got ", deviation_times);
+  scenes::HopperChainOptions options = scenes::hopper_chain_options(task);
+  options.initialisation =
+      initialisation == "hop_guess" ? scenes::HopperInitialisation::HopGuess : scenes::HopperInitialisation::Paper;
+  options.runs = runs;
+  options.deviation_times = deviation_times;
+  PythonLines lines(progress_sink(std::move(progress)));
+  std::ostream out(&lines);
+  options.progress = &out;
+  std::optional<scenes::HopperChain> chain;
+  {
+    py::gil_scoped_release release;
+    chain.emplace(scenes::run_hopper_chain(options));
+    out.flush();
+  }
+  lines.rethrow();
+  py::dict result = py::module_::import("json").attr("loads")(to_json(*chain).dump()).cast<py::dict>();
+  result["task"] = task == scenes::HopperTask::OneHole ? "one hole" : "three holes";
+  if (chain->refined) result["event_times"] = chain->refined->event_times;
+  if (chain->refined && chain->refined->converged) {
+    auto reference = std::make_shared<PyTrajectory<scenes::Hopper>>();
+    reference->scene = std::make_shared<const scenes::Hopper>();
+    reference->options = scenes::hopper_monte_carlo_simulation();  // the analysis' simulation options
+    reference->options.breakpoints = chain->refined->element_times;  // the optimal input is piecewise smooth
+    reference->name = std::string("hopper over ") + (task == scenes::HopperTask::OneHole ? "one hole" : "three holes") +
+                      " (refined)";
+    reference->trajectory = std::move(chain->refined->trajectory);
+    result["reference"] = reference;
+  }
+  return result;
+}
+
 }  // namespace
 
 void bind_optimal_control(py::module_& m) {
@@ -225,6 +215,50 @@ void bind_optimal_control(py::module_& m) {
          "refinement_json, and when refined: reference (a PlankBoxTrajectory) and analysis (the analysis report as a "
          "dict: events with their jump gains, design, verdict, bounds, monte_carlo). Raises InvalidArgument for "
          "max_edits < 0, runs < 1 or a progress that is not callable.");
+  const char* hopper_keys =
+      "Returns a dict, the report of `hopper --json`: converged, initialisation, stage ('refined' when every check "
+      "passed, 'converged, checks failed: ...', 'discovery (<why>)' or 'refinement (<why>)'), relaxed_objective, "
+      "discovery_seconds, discovery (the homotopy's steps), footholds [m]; when refined: objective (the integral of "
+      "u'u, N^2 m^2 s), schedule, schedule_edits, mode_validity_violation, max_path_violation, target_error, "
+      "phase_resim_max_error (the per-phase re-simulation's distance, state units), events and event_times [s], "
+      "refinement_seconds, solve_seconds, refinement (the C++ report); when it converged: analysis (the analysis "
+      "report as a dict: events with their saltation norms, design, verdict, upper_bound, lower_bound, "
+      "predicted_rate [1/s], monte_carlo, agree, seconds) and reference (the refined reference as a "
+      "HopperTrajectory, q = (x, z, phi_hip, phi_knee) [m, rad], u = hip and knee torques [N m]); and task. "
+      "`progress`: as point_mass_to_the_target. Raises InvalidArgument for runs < 1, deviation_times < 0 or a "
+      "progress that is not callable";
+  oc.def(
+      "hopper_over_three_holes",
+      [](py::object progress, const std::string& initialisation, int runs, int deviation_times) {
+        return hopper_chain(scenes::HopperTask::ThreeHoles, std::move(progress), initialisation, runs, deviation_times);
+      },
+      py::arg("progress") = py::none(), py::arg("initialisation") = "paper", py::arg("runs") = 200,
+      py::arg("deviation_times") = 60,
+      (std::string("The flagship OCP of the time-freezing paper (Section 6): the one-legged hopper from rest at x = 0 "
+                   "to x = 3 m in T = 2.5 s over three holes, minimising the integral of u'u (|u_i| <= 60 N m), "
+                   "optimised and analysed as `hopper --json` does it (the same C++ function, "
+                   "scenes::run_hopper_chain): discovery by the time-freezing homotopy after the continuation on "
+                   "the holes (initialisation 'paper': the start state at every node, zero torques) or from the "
+                   "kinematic guess of three hops ('hop_guess'), the footsteps of its schedule, their mode-schedule "
+                   "refinement (Radau IIA n_s = 4, mesh refined to local error 2e-8), then the library's analysis "
+                   "(jump gains, LQR design R = I, stability check, `runs` (>= 1) closed-loop Monte Carlo runs at "
+                   "eps = 1e-6 on one thread, each recording its deviation at `deviation_times` (>= 0) times). "
+                   "About 5 minutes on one core. ") +
+       hopper_keys + ", or an initialisation other than 'paper' and 'hop_guess'.")
+          .c_str());
+  oc.def(
+      "hopper_over_one_hole",
+      [](py::object progress, int runs, int deviation_times) {
+        return hopper_chain(scenes::HopperTask::OneHole, std::move(progress), "paper", runs, deviation_times);
+      },
+      py::arg("progress") = py::none(), py::arg("runs") = 30, py::arg("deviation_times") = 0,
+      (std::string("The hopper's one-hole bed (HopperOverOneHole: from rest at x = 0 to (1, 0.4, 0, 0) in T = 1 s "
+                   "over the first hole, N = 8 control intervals): the chain of hopper_over_three_holes (the same "
+                   "C++ function) from the paper's initialisation, the refinement's mesh to local error 2e-7, "
+                   "`runs` Monte Carlo runs (default 30), no deviation times by default. About a minute on one "
+                   "core. ") +
+       hopper_keys + ".")
+          .c_str());
 }
 
 }  // namespace saltus::python

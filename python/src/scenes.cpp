@@ -126,7 +126,15 @@ void bind_scenes(py::module_& m) {
       .def_readwrite("max_events", &SimulationOptions::max_events)
       .def_readwrite("rest_velocity", &SimulationOptions::rest_velocity,
                      "m/s: impacts slower than this are inelastic; 0 disables the rest criterion")
-      .def_readwrite("zeno_bounces", &SimulationOptions::zeno_bounces)
+      .def_readwrite("zeno_bounces", &SimulationOptions::zeno_bounces,
+                     "consecutive geometrically shrinking intervals between touchdowns that signal a Zeno "
+                     "accumulation (default 12)")
+      .def_readwrite("zeno_completion", &SimulationOptions::zeno_completion,
+                     "at a detected accumulation: False (default), the run ends with status 'zeno'; True, it is "
+                     "continued past it in the persistent contact mode of the accumulating contacts, from the "
+                     "projected limit state at the predicted accumulation time, and recorded in "
+                     "Trajectory.zeno_completions (an accumulation predicted at or after t_final ends the run with "
+                     "status 'zeno' either way)")
       .def_readwrite("record_dense_output", &SimulationOptions::record_dense_output)
       .def_readwrite("breakpoints", &SimulationOptions::breakpoints,
                      "s: times where the input law is not smooth (the integrator stops there)")
@@ -140,7 +148,7 @@ void bind_scenes(py::module_& m) {
             return py::make_tuple(static_cast<int>(o.integrator.kind), o.integrator.relative_tolerance,
                                   o.integrator.absolute_tolerance, o.integrator.max_step, o.integrator.max_steps,
                                   o.simultaneity, o.max_events, o.rest_velocity, o.zeno_bounces,
-                                  o.record_dense_output, o.breakpoints);
+                                  o.record_dense_output, o.breakpoints, o.zeno_completion);
           },
           [](const py::tuple& t) {
             SimulationOptions o;
@@ -155,6 +163,7 @@ void bind_scenes(py::module_& m) {
             o.zeno_bounces = t[8].cast<int>();
             o.record_dense_output = t[9].cast<bool>();
             o.breakpoints = t[10].cast<std::vector<double>>();
+            if (t.size() > 11) o.zeno_completion = t[11].cast<bool>();  // absent from the 11-field pickles
             return o;
           }));
 

@@ -225,7 +225,31 @@ void bind_tracking(py::module_& m) {
             return r;
           }));
 
-  bind_scene_tracking<scenes::PointMass>(m, "PointMass");
+  bind_scene_tracking<scenes::PointMass>(
+      m, "PointMass",
+      "The analysis of `reference` (a trajectory of the scene with its input law: a simulation, a library reference, "
+      "an optimised reference) in one call, the C++ analyse_reference: (1) its linearisation with the segments "
+      "extended by `spreading` s both ways (reference spreading), the input as a signal; (2) the jump gain of every "
+      "event, reported by |G_z|_2 (a simultaneous event: its conewise gain, pieces and face continuity); (3) a "
+      "time-varying LQR design: Q, Q_final (nx, nx) symmetric PSD, R (nu, nu) SPD (default identities), gains "
+      "sampled every `sample_step` s; (4) the stability check on [t0, t_final] (default: the reference's end): "
+      "bounds on a(T) = |z(T)|_Wout / |z(t0)|_W, weight W (nx, nx) SPD, output_weight W_out (nx, nx) PSD (default "
+      "W), over the initial deviations in range(initial_subspace) (nx, r) of full column rank (default: all); (5) "
+      "`runs` closed-loop simulations of the reference-spreading controller from x(t0) + size d, d_j ~ N(0, "
+      "scale_j^2) (scale (nx,), default ones; projected orthogonally onto range(initial_subspace) when given; "
+      "keep_initial_contacts projects each start onto the contacts closed at t0), drawn from `seed`, on `threads` "
+      "threads (0: all cores), measured against the nominal run (relative_to_nominal_run) or the reference, and "
+      "whether they agree with the verdict. `simulation`: the plant's options (default the reference's). "
+      "`progress`: a callable given each progress line (str), or None for the logger 'saltus' (INFO). Returns a "
+      "dict, the C++ report's JSON (reference_analysis_io.hpp): events [{t [s], guards, conewise, saltation_norm "
+      "or pieces, unrealisable_orders, face_discontinuity}], design, verdict ('stable', 'unstable', 'undecided'), "
+      "upper_bound, lower_bound, predicted_rate [1/s], peak_amplification, monte_carlo {runs, "
+      "kept_event_sequence, failed, grew, shrank, observed_rate_max, max_log_discrepancy, ...}, agree, seconds "
+      "(per stage and total), failed_at and failure when a stage threw (a grazing event, ...: the stages before "
+      "it are kept); plus completed (bool) and gains (the design's GainSchedule, for tracking()). Raises "
+      "saltus.InvalidArgument before any stage runs: weights, subspace or scale of the wrong shape or not "
+      "finite, spreading < 0, sample_step <= 0, runs < 1, size <= 0, threads < 0, a seed outside [0, 2^64), "
+      "t_final outside the reference, a progress that is not callable.");
   bind_scene_tracking<scenes::PlankBox>(m, "PlankBox");
   bind_scene_tracking<scenes::Hopper>(m, "Hopper");
 }

@@ -359,3 +359,41 @@ def test_ocp_drivers_refuse_bad_arguments_before_solving():
     for runs in [0, -3]:
         with pytest.raises(saltus.InvalidArgument, match=f"runs must be >= 1, got {runs}"):
             oc.plank_box_flat_landing(runs=runs)
+    with pytest.raises(saltus.InvalidArgument, match="runs must be >= 1, got 0"):
+        oc.hopper_over_one_hole(runs=0)
+    with pytest.raises(saltus.InvalidArgument, match="deviation_times must be >= 0, got -2"):
+        oc.hopper_over_three_holes(deviation_times=-2)
+    with pytest.raises(saltus.InvalidArgument, match="initialisation must be 'paper' or 'hop_guess', got 'guess'"):
+        oc.hopper_over_three_holes(initialisation="guess")
+    with pytest.raises(saltus.InvalidArgument, match="progress must be a callable"):
+        oc.hopper_over_one_hole(progress=1.5)
+
+
+@pytest.mark.parametrize("kwargs, message", [
+    ({"Q": np.eye(3)}, r"Q has shape \(3, 3\), expected \(4, 4\)"),
+    ({"R": np.eye(4)}, r"R has shape \(4, 4\), expected \(2, 2\)"),
+    ({"Q_final": np.ones((4, 1))}, r"Q_final has shape \(4, 1\), expected \(4, 4\)"),
+    ({"spreading": -0.1}, "spreading"),
+    ({"spreading": NAN}, "spreading"),
+    ({"sample_step": 0.0}, "sample_step must be > 0 s, got 0"),
+    ({"weight": np.eye(2)}, r"weight has shape \(2, 2\), expected \(4, 4\)"),
+    ({"output_weight": np.eye(5)}, r"output_weight has shape \(5, 5\), expected \(4, 4\)"),
+    ({"initial_subspace": np.ones((3, 1))}, r"initial_subspace has shape \(3, 1\), expected \(nx, r\) = \(4, r\)"),
+    ({"initial_subspace": np.zeros((4, 0))}, r"initial_subspace has shape \(4, 0\)"),
+    ({"initial_subspace": np.full((4, 1), NAN)}, "initial_subspace is not finite"),
+    ({"initial_subspace": np.ones((4, 2))}, "initial_subspace must have full column rank 2, has rank 1"),
+    ({"runs": 0}, "runs"),
+    ({"size": 0.0}, "size"),
+    ({"scale": np.ones(3)}, "scale has size 3, expected nx = 2 nq = 4"),
+    ({"scale": np.full(4, NAN)}, "scale is not finite"),
+    ({"threads": -1}, "threads must be >= 0"),
+    ({"seed": -1}, r"seed must be an integer in \[0, 2\^64\), got -1"),
+    ({"t_final": 99.0}, r"t_final must be a time in the reference \(0, 2\] s, got 99"),
+    ({"t_final": NAN}, "t_final must be a time in the reference"),
+    ({"progress": 3}, "progress must be a callable"),
+])
+def test_analyse_reference_refuses_bad_arguments_before_any_stage(example3, kwargs, message):
+    ref = example3[0]
+    kwargs = {"runs": 2, "threads": 1, "progress": lambda line: None, **kwargs}
+    with pytest.raises(saltus.InvalidArgument, match=message):
+        saltus.analyse_reference(ref, **kwargs)

@@ -156,8 +156,42 @@ def test_scenes_and_options_pickle():
         assert repr(back) == repr(scene)
     o = tight()
     o.breakpoints = [0.5]
+    o.zeno_completion = True
+    o.zeno_bounces = 20
     back = pickle.loads(pickle.dumps(o))
     assert back.relative_tolerance == 1e-12 and back.breakpoints == [0.5]
+    assert back.zeno_completion is True and back.zeno_bounces == 20
+    assert saltus.SimulationOptions().zeno_completion is False  # the C++ default
+
+
+def test_bouncing_ball_with_zeno_completion_rests_on_the_ground_past_its_accumulation(ball_trajectory):
+    """As ZenoCompletion.OneBallOnASpringRestsPastItsAccumulation in C++: continued past the
+    accumulation at the closed-form t_inf = sqrt(2 h / g) (1 + e) / (1 - e) (within the stated
+    uncertainty), the ball rests on the ground in persistent contact until t_final."""
+    t_inf = math.sqrt(2.0 / G) * 1.5 / 0.5
+    for bounces in (12, 40):
+        o = tight()
+        o.zeno_completion = True
+        o.zeno_bounces = bounces
+        traj = saltus.simulate(saltus.BouncingBall(restitution=0.5), [1.0, 0.0], 0.0, 5.0, options=o)
+        assert traj.status == "completed"
+        assert traj.t_end == 5.0
+        (z,) = traj.zeno_completions
+        assert z["contacts"] == ["ground"] and z["contact_indices"] == [0]
+        assert abs(z["t"] - t_inf) <= z["uncertainty"] + 1e-12
+        assert z["uncertainty"] < 1e-9
+        assert z["last_touchdown"] < z["t"]
+        assert traj.zeno_time == z["t"]
+        completion = traj.events[z["event"]]
+        assert completion.t == z["t"] and completion.guards == []
+        assert traj.segments[-1].mode == "ground:closed"
+        np.testing.assert_array_equal(traj.final_state, [0.0, 0.0])
+        rest = traj.sample(np.linspace(z["t"] + 1e-6, 5.0, 20))
+        assert np.abs(rest).max() <= 1e-12  # at rest on the ground, in contact
+        # Without completion the same run stops at the accumulation.
+        assert ball_trajectory.status == "zeno" and ball_trajectory.zeno_completions == []
+        j = json.loads(traj.to_json())
+        assert j["zeno_completions"][0]["contacts"] == ["ground"] and j["zeno_completions"][0]["t"] == z["t"]
 
 
 def test_a_reference_written_as_csv_is_read_back_and_polished():
@@ -169,3 +203,89 @@ def test_a_reference_written_as_csv_is_read_back_and_polished():
     assert out["state_distance"] < 1e-9  # the input is piecewise linear: its samples interpolate it exactly
     with pytest.raises(saltus.InvalidArgument, match="no column 'v0'"):
         saltus.polish(ref.scene, "t,segment,mode,q0\n0,0,\"table:open\",x\n")
+
+
+def _round_trip_cases():
+    box = saltus.PlankBox()
+    spatial = saltus.SpatialBox()
+    x0 = np.zeros(12)
+    x0[2] = 0.5 * spatial.size[2] + 0.1
+    x0[6:8] = [2.0, 1.0]  # lands on four corners, slides diagonally: slip directions (dx, dy)
+    completing = tight()
+    completing.zeno_completion = True
+    return {
+        "ball (zeno)": lambda: saltus.simulate(saltus.BouncingBall(), [1.0, 0.0], 0.0, 5.0, options=tight()),
+        "ball (completed)": lambda: saltus.simulate(saltus.BouncingBall(), [1.0, 0.0], 0.0, 5.0, options=completing),
+        "example 3": saltus.references.example3,
+        "point mass with friction": saltus.references.point_mass_with_friction,
+        "plank-box flat landing": lambda: saltus.simulate(box, box.flat_state(), 0.0, 0.3, input=box.lowering_input(),
+                                                          options=tight()),
+        "hopper push-off": saltus.references.hopper_push_off,
+        "spatial box": lambda: saltus.simulate(spatial, x0, 0.0, 1.0, options=tight()),
+    }
+
+
+@pytest.mark.parametrize("case", list(_round_trip_cases()))
+def test_a_trajectory_written_as_complete_json_is_read_back_exactly(case, tmp_path):
+    """to_json(complete=True), then read_trajectory, from the text and from a file: every segment's
+    times and states bit for bit, every event's fields, the dense output between the steps, the
+    Zeno fields; written again, the same JSON."""
+    traj = _round_trip_cases()[case]()
+    text = traj.to_json(complete=True)
+    path = tmp_path / "trajectory.json"
+    path.write_text(text)
+    for back in (saltus.read_trajectory(text, traj.scene), saltus.read_trajectory(path, traj.scene),
+                 saltus.read_trajectory(str(path), traj.scene)):
+        assert type(back) is type(traj) and back.name == "read from JSON"
+        assert back.to_json(complete=True) == text and back.to_json() == traj.to_json()
+        assert back.status == traj.status and len(back) == len(traj)
+        for a, b in zip(traj.segments, back.segments):
+            assert b.mode == a.mode and b.contact_modes == a.contact_modes and b.sliding_contact == a.sliding_contact
+            assert b.t_begin == a.t_begin and b.t_end == a.t_end
+            np.testing.assert_array_equal(b.times, a.times)
+            np.testing.assert_array_equal(b.states, a.states)
+            inside = 0.5 * (a.times[:-1] + a.times[1:])  # between the step points: the dense output
+            np.testing.assert_array_equal(back.sample(inside), traj.sample(inside))
+        assert len(back.events) == len(traj.events)
+        for a, b in zip(traj.events, back.events):
+            for field in ["t", "impact", "input_jump", "guards", "mode_before", "mode_after", "contact_modes_before",
+                          "contact_modes_after"]:
+                assert getattr(b, field) == getattr(a, field), field
+            np.testing.assert_array_equal(b.x_minus, a.x_minus)
+            np.testing.assert_array_equal(b.x_plus, a.x_plus)
+        np.testing.assert_array_equal(back.final_state, traj.final_state)
+        np.testing.assert_array_equal(back.event_times, traj.event_times)
+        for name in ["zeno_time", "zeno_time_uncertainty"]:
+            a, b = getattr(traj, name), getattr(back, name)
+            assert a == b or (math.isnan(a) and math.isnan(b)), name
+        assert back.zeno_completions == traj.zeno_completions
+        assert back.statistics == traj.statistics
+        assert back.options.breakpoints == traj.options.breakpoints or not traj.options.breakpoints
+    if traj.scene.nu > 0:
+        with pytest.raises(saltus.InvalidArgument, match="does not hold its input law"):
+            back.inputs([traj.t_begin])
+    else:
+        assert back.inputs([traj.t_begin]).shape == (1, 0)
+
+
+def test_read_trajectory_refuses_what_it_cannot_rebuild(ball_trajectory, tmp_path):
+    ball = saltus.BouncingBall()
+    with pytest.raises(saltus.InvalidArgument, match="not written complete"):
+        saltus.read_trajectory(ball_trajectory.to_json(), ball)
+    j = json.loads(ball_trajectory.to_json(complete=True))
+    del j["events"][0]["x_minus"]
+    with pytest.raises(saltus.InvalidArgument, match=r"events\[0\] has no 'x_minus'"):
+        saltus.read_trajectory(json.dumps(j), ball)
+    with pytest.raises(saltus.InvalidArgument, match="trajectory JSON: .*parse error"):
+        saltus.read_trajectory("{ not json", ball)
+    with pytest.raises(saltus.InvalidArgument, match=r"x_plus is not an array of 4 numbers"):
+        saltus.read_trajectory(saltus.references.example3().to_json(complete=True).replace(
+            '"x_plus":[', '"x_plus":[0.5,'), saltus.PointMass())
+    with pytest.raises(saltus.InvalidArgument, match=r"segments\[0\]\.pieces\[0\]\.c\[0\] is not an array of 4 numbers"):
+        saltus.read_trajectory(ball_trajectory.to_json(complete=True), saltus.PointMass())  # another scene's
+    with pytest.raises(TypeError):
+        saltus.read_trajectory(ball_trajectory.to_json(complete=True), "ball")
+    with pytest.raises(FileNotFoundError):
+        saltus.read_trajectory(tmp_path / "missing.json", ball)
+    with pytest.raises(TypeError, match="source must be JSON text or a path"):
+        saltus.read_trajectory(3, ball)

@@ -131,3 +131,78 @@ def test_a_reference_under_a_python_input_law_gives_the_same_design(example3):
     batches = [d.monte_carlo(runs=6, threads=2) for d in designs]
     assert batches[1].failed == 0 and batches[1].threads == 2
     np.testing.assert_allclose(batches[1].observed, batches[0].observed, rtol=1e-6)
+
+
+def test_analyse_reference_is_the_step_by_step_analysis(example3, lqr):
+    """analyse_reference in one call on Example 3 (LQR Q = I, R = 0.1 I, Q_final = I, spreading 0.1 s)
+    gives what the bindings give step by step on the same reference: the events' |G_z|_2 of
+    jump_gains, the check's verdict and bounds, the Monte Carlo batch run for run (the same seed and
+    perturbations), and the design's gains."""
+    ref, lin = example3
+    lines = []
+    a = saltus.analyse_reference(ref, Q=np.eye(4), R=0.1 * np.eye(2), Q_final=np.eye(4), spreading=0.1, runs=24,
+                                 threads=1, design_name="LQR R = 0.1 I", progress=lines.append)
+    assert a["completed"] and "failed_at" not in a
+    assert a["design"] == "LQR R = 0.1 I"
+    gains = saltus.jump_gains(ref, feedback="signal")
+    assert [e["t"] for e in a["events"]] == list(ref.event_times)
+    assert [e["conewise"] for e in a["events"]] == [False, False]
+    for row, g in zip(a["events"], gains):
+        assert row["saltation_norm"] == pytest.approx(np.linalg.norm(g.G_z, 2), rel=1e-12)
+    check = lqr.check_stability()
+    assert a["verdict"] == check.verdict == "stable"
+    assert a["upper_bound"] == pytest.approx(check.upper_bound, rel=1e-12)
+    assert a["lower_bound"] == pytest.approx(check.lower_bound, rel=1e-12)
+    assert a["predicted_rate"] == pytest.approx(check.upper_rate, rel=1e-12)
+    batch = lqr.monte_carlo(runs=24, threads=1)
+    mc = a["monte_carlo"]
+    assert mc["runs"] == 24 and mc["failed"] == 0 and mc["kept_event_sequence"] == batch.kept_event_sequence == 24
+    assert mc["shrank"] == batch.shrank and mc["grew"] == batch.grew == 0
+    assert mc["observed_rate_max"] == pytest.approx(batch.observed_rate_max, rel=1e-12)
+    assert mc["max_log_discrepancy"] == pytest.approx(batch.max_log_discrepancy, rel=1e-9)
+    np.testing.assert_allclose(mc["amplifications"]["observed"], batch.observed, rtol=1e-12)
+    assert a["agree"] is True
+    step_gains = saltus.lqr_design(lin, Q=np.eye(4), R=0.1 * np.eye(2), Q_final=np.eye(4))
+    for segment, t in [(0, 0.2), (1, 1.0), (2, 1.8)]:
+        np.testing.assert_allclose(a["gains"].gain(segment, t), step_gains.gain(segment, t), rtol=1e-12, atol=1e-14)
+    assert lines[0].startswith("analysis: 2 events linearised")
+    assert any(line.startswith("analysis: stable, a(T) in [") for line in lines), lines
+
+
+def test_analyse_reference_of_a_python_simulation_and_of_a_failing_design(example3):
+    """A reference simulated from Python under a Python input law is analysed as the C++ law's (the
+    batch on two threads, each calling the law under the GIL); a design the library refuses (R not
+    positive definite) ends the analysis at its stage, the jump gains before it kept."""
+    ref, _ = example3
+    options = ref.options
+    options.breakpoints = [1.0]
+    law = lambda t, x: np.array([7.0, 0.0 if t < 1.0 else 2.0 * 9.81 * (t - 1.0)])  # noqa: E731
+    py_ref = saltus.simulate(ref.scene, [0.0, 1.0, 0.0, 0.0], 0.0, 2.0, input=law, options=options)
+    a, b = (saltus.analyse_reference(r, R=0.1 * np.eye(2), spreading=0.1, runs=6, threads=2, progress=lambda s: None)
+            for r in (ref, py_ref))
+    assert b["completed"] and b["verdict"] == a["verdict"] == "stable"
+    assert b["upper_bound"] == pytest.approx(a["upper_bound"], rel=1e-8)
+    assert b["monte_carlo"]["threads"] == 2 and b["monte_carlo"]["failed"] == 0
+    np.testing.assert_allclose(b["monte_carlo"]["amplifications"]["observed"],
+                               a["monte_carlo"]["amplifications"]["observed"], rtol=1e-6)
+    failed = saltus.analyse_reference(ref, R=-np.eye(2), runs=2, progress=lambda s: None)
+    assert not failed["completed"]
+    assert failed["failed_at"] == "tracking design" and "R" in failed["failure"]
+    assert len(failed["events"]) == 2 and "verdict" not in failed and "gains" not in failed
+
+
+def test_analyse_reference_perturbs_inside_the_initial_subspace():
+    """The periodic hop starts on the table: a batch that perturbs every coordinate puts the mass
+    inside it and every run fails; with the initial subspace of the horizontal position and
+    velocity (the gap and its rate left at zero) every run completes, and the check bounds the same
+    subspace."""
+    hop = saltus.references.point_mass_hop()
+    everywhere = saltus.analyse_reference(hop, R=0.1 * np.eye(2), runs=4, threads=1, progress=lambda s: None)
+    assert everywhere["monte_carlo"]["failed"] == 4
+    E = np.zeros((4, 2))
+    E[0, 0] = E[2, 1] = 1.0
+    inside = saltus.analyse_reference(hop, R=0.1 * np.eye(2), initial_subspace=E, runs=4, threads=1,
+                                      progress=lambda s: None)
+    assert inside["completed"] and inside["monte_carlo"]["failed"] == 0
+    assert inside["monte_carlo"]["kept_event_sequence"] == 4
+    assert inside["upper_bound"] <= everywhere["upper_bound"] * (1 + 1e-12)  # a bound over a subset

@@ -1,12 +1,18 @@
 // Binding a scene's linearisation and tracking designs for Python: linearise (with the first-order
 // prediction and the state-transition matrix), lqr_design, constant_gains, tracking and the
-// <scene>Tracking class (stability check, periodic check, Monte Carlo in chunks). The report
+// <scene>Tracking class (stability check, periodic check, Monte Carlo in chunks), and
+// analyse_reference, the whole analysis of a reference in one call (the library's
+// analyse_reference: jump gains, LQR design, stability check, Monte Carlo, agreement). The report
 // classes (StabilityReport, PeriodicStabilityReport, MonteCarloReport) are saltus._saltus's.
 #pragma once
 
+#include <saltus/python/progress.hpp>
 #include <saltus/python/trajectory.hpp>
+#include <saltus/sensitivity/analysis/reference_analysis_io.hpp>
 #include <saltus/sensitivity/linearisation.hpp>
 #include <saltus/sensitivity/tracking.hpp>
+
+#include <Eigen/QR>
 
 #include <limits>
 #include <mutex>
@@ -193,10 +199,85 @@ PyMonteCarlo monte_carlo_chunk(PyTracking<S>& tr, int runs, double size, const s
   return out;
 }
 
-/// Binds the classes <scene_name>GainSchedule, <scene_name>Linearisation, <scene_name>Tracking and
-/// the overloads linearise, lqr_design, constant_gains, tracking for the scene in m.
+/// analyse_reference from Python (the binding's docstring): the options from the arguments, the
+/// report as a dict (its JSON, reference_analysis_io.hpp) with the design's gain schedule.
 template <Scene S>
-void bind_scene_tracking(py::module_& m, const std::string& scene_name) {
+py::dict analyse(const std::shared_ptr<PyTrajectory<S>>& reference, const std::optional<Eigen::MatrixXd>& Q,
+                 const std::optional<Eigen::MatrixXd>& R, const std::optional<Eigen::MatrixXd>& Q_final,
+                 double spreading, double sample_step, const std::optional<Eigen::MatrixXd>& weight,
+                 const std::optional<Eigen::MatrixXd>& output_weight,
+                 const std::optional<Eigen::MatrixXd>& initial_subspace, int runs, double size,
+                 const std::optional<Eigen::VectorXd>& scale, const py::object& seed, int threads,
+                 std::optional<double> t_final, bool keep_initial_contacts, bool relative_to_nominal_run,
+                 const std::optional<SimulationOptions>& simulation, const std::string& design_name,
+                 py::object progress) {
+  constexpr int nx = 2 * S::nq, nu = S::nu;
+  const HybridTrajectory<S>& ref = reference->trajectory;
+  ReferenceAnalysisOptions<S> o;
+  o.spreading = spreading;
+  o.design.name = design_name;
+  o.design.weights.Q = to_square<nx>(Q, o.design.weights.Q, "Q");
+  o.design.weights.R = to_square<nu>(R, o.design.weights.R, "R");
+  o.design.weights.Q_final = to_square<nx>(Q_final, o.design.weights.Q_final, "Q_final");
+  SALTUS_REQUIRE(sample_step > 0 && std::isfinite(sample_step), "sample_step must be > 0 s, got ", sample_step);
+  o.design.lqr.sample_step = sample_step;
+  o.stability.weight = to_square<nx>(weight, o.stability.weight, "weight");
+  if (output_weight) o.stability.output_weight = to_square<nx>(output_weight, o.stability.weight, "output_weight");
+  MonteCarloOptions<S>& mc = o.monte_carlo;
+  mc.weight = o.stability.weight;
+  mc.output_weight = o.stability.output_weight;
+  if (initial_subspace) {
+    const Eigen::MatrixXd& E = *initial_subspace;
+    SALTUS_REQUIRE(E.rows() == nx && E.cols() >= 1 && E.cols() <= nx, "initial_subspace has shape (", E.rows(), ", ",
+                   E.cols(), "), expected (nx, r) = (", nx, ", r) with 1 <= r <= ", nx);
+    SALTUS_REQUIRE(E.allFinite(), "initial_subspace is not finite");
+    const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(E);
+    SALTUS_REQUIRE(qr.rank() == E.cols(), "initial_subspace must have full column rank ", E.cols(), ", has rank ",
+                   qr.rank());
+    o.stability.initial_subspace = E;
+    // The batch perturbs inside range(E), as the check bounds: each draw projected orthogonally.
+    const Eigen::MatrixXd basis = Eigen::HouseholderQR<Eigen::MatrixXd>(E).householderQ() *
+                                  Eigen::MatrixXd::Identity(nx, E.cols());
+    const Mat<nx, nx> P = basis * basis.transpose();
+    mc.project = [P](const Vec<nx>& d) { return Vec<nx>(P * d); };
+  }
+  mc.runs = runs;
+  mc.size = size;
+  if (scale) mc.scale = to_state<S>(*scale, "scale");
+  SALTUS_REQUIRE(mc.scale.allFinite(), "scale is not finite");
+  mc.seed = to_seed(seed);
+  SALTUS_REQUIRE(threads >= 0, "threads must be >= 0 (0: all cores), got ", threads);
+  mc.threads = threads;
+  if (t_final) {
+    SALTUS_REQUIRE(std::isfinite(*t_final) && *t_final > ref.t_begin() && *t_final <= ref.t_end(),
+                   "t_final must be a time in the reference (", ref.t_begin(), ", ", ref.t_end(), "] s, got ",
+                   *t_final);
+    mc.t_final = *t_final;
+  }
+  mc.keep_initial_contacts = keep_initial_contacts;
+  mc.relative_to_nominal_run = relative_to_nominal_run;
+  PythonLines lines(progress_sink(std::move(progress)));
+  std::ostream out(&lines);
+  o.progress = &out;
+  const SimulationOptions plant = simulation.value_or(reference->options);
+  std::optional<ReferenceAnalysis<S>> a;
+  {
+    py::gil_scoped_release release;
+    a.emplace(analyse_reference(*reference->scene, ref, plant, o));
+    out.flush();
+  }
+  lines.rethrow();
+  py::dict d = py::module_::import("json").attr("loads")(to_json(*a).dump()).template cast<py::dict>();
+  d["completed"] = a->completed();
+  if (a->design) d["gains"] = a->design->gains;
+  return d;
+}
+
+/// Binds the classes <scene_name>GainSchedule, <scene_name>Linearisation, <scene_name>Tracking and
+/// the overloads linearise, lqr_design, constant_gains, tracking, analyse_reference (docstring
+/// `analyse_doc`: give it once, for the first scene bound) for the scene in m.
+template <Scene S>
+void bind_scene_tracking(py::module_& m, const std::string& scene_name, const char* analyse_doc = "") {
   static constexpr int nx = 2 * S::nq;  // static: the lambdas use it without capture
   using Schedule = GainSchedule<S>;
   py::class_<Schedule>(m, (scene_name + "GainSchedule").c_str(),
@@ -342,6 +423,14 @@ void bind_scene_tracking(py::module_& m, const std::string& scene_name) {
       [](const L& lin, const Eigen::MatrixXd& K) { return Schedule(lin.system->segment_count(), to_gain<S>(K)); },
       py::arg("linearisation"), py::arg("K"));
   m.def("tracking", &tracking<S>, py::arg("linearisation"), py::arg("gains"), py::arg("plant_options") = py::none());
+  m.def("analyse_reference", &analyse<S>, py::arg("reference"), py::arg("Q") = py::none(), py::arg("R") = py::none(),
+        py::arg("Q_final") = py::none(), py::arg("spreading") = 0.02, py::arg("sample_step") = 1e-3,
+        py::arg("weight") = py::none(), py::arg("output_weight") = py::none(),
+        py::arg("initial_subspace") = py::none(), py::arg("runs") = 200, py::arg("size") = 1e-4,
+        py::arg("scale") = py::none(), py::arg("seed") = py::int_(20261130), py::arg("threads") = 0,
+        py::arg("t_final") = py::none(), py::arg("keep_initial_contacts") = false,
+        py::arg("relative_to_nominal_run") = true, py::arg("simulation") = py::none(), py::arg("design_name") = "",
+        py::arg("progress") = py::none(), analyse_doc);
 }
 
 

@@ -244,11 +244,35 @@ void bind_trajectory(py::module_& m, const std::string& scene_name, const char* 
       .def_property_readonly("status", [](const T& t) { return std::string(to_string(t.trajectory.status)); },
                              "'completed', 'zeno' (accumulating impacts) or 'max-events'")
       .def_property_readonly("zeno_time", [](const T& t) { return t.trajectory.zeno_time; },
-                             "s: the predicted accumulation time (NaN unless status is 'zeno')")
+                             "s: the predicted accumulation time (status 'zeno', or the last accumulation the run was continued "
+                             "past, see zeno_completions; NaN otherwise)")
       .def_property_readonly("zeno_time_uncertainty", [](const T& t) { return t.trajectory.zeno_time_uncertainty; },
                              "s: how far zeno_time may be from the accumulation time (the change of its "
                              "extrapolation between the last two orders; inf: too few touchdowns, zeno_time is "
-                             "the geometric estimate; NaN unless status is 'zeno')")
+                             "the geometric estimate; NaN without an accumulation)")
+      .def_property_readonly(
+          "zeno_completions",
+          [](const T& t) {
+            py::list out;
+            for (const ZenoCompletion& z : t.trajectory.zeno_completions) {
+              py::dict d;
+              d["t"] = z.t;
+              d["uncertainty"] = z.uncertainty;
+              d["last_touchdown"] = z.last_touchdown;
+              std::vector<std::string> names;
+              for (int i : z.contacts) names.push_back(t.scene->contact(i).name);
+              d["contact_indices"] = z.contacts;
+              d["contacts"] = names;
+              d["event"] = z.event;
+              out.append(d);
+            }
+            return out;
+          },
+          "the accumulations the run was continued past (SimulationOptions.zeno_completion), in time order: dicts "
+          "with t (s: the accumulation time the motion was continued from), uncertainty (s: how far t may be from "
+          "it; inf for the geometric estimate), last_touchdown (s: the last touchdown resolved before it), "
+          "contacts (the accumulating contacts' names), contact_indices, event (the index of the completion's "
+          "event in events)")
       .def_property_readonly("t_begin", [](const T& t) { return t.trajectory.t_begin(); })
       .def_property_readonly("t_end", [](const T& t) { return t.trajectory.t_end(); })
       .def_property_readonly("final_state", [](const T& t) { return Eigen::VectorXd(t.trajectory.final_state()); },
@@ -297,8 +321,13 @@ void bind_trajectory(py::module_& m, const std::string& scene_name, const char* 
            "x at the given times [s] from the dense output: (n,) -> (n, nx); at an event time the state after it")
       .def("inputs", &inputs<S>, py::arg("times"), "u at the given times [s]: (n,) -> (n, nu)")
       .def(
-          "to_json", [](const T& t) { return to_json(t.trajectory, *t.scene).dump(); },
-          "the C++ side's JSON (saltus::to_json): status, segments, events, zeno_time, statistics")
+          "to_json",
+          [](const T& t, bool complete) { return to_json(t.trajectory, *t.scene, TrajectoryJsonOptions{complete}).dump(); },
+          py::arg("complete") = false,
+          "the C++ side's JSON (saltus::to_json) as a str: status, segments, events, zeno_time, zeno_completions, "
+          "statistics; complete=True adds what saltus.read_trajectory needs to rebuild the trajectory exactly (every "
+          "segment's dense output, every transition, the final state; non-finite numbers as \"inf\", \"-inf\", "
+          "\"nan\"). The input law is never written.")
       .def(
           "to_csv",
           [](const T& t, double dt) {
@@ -347,6 +376,36 @@ void bind_trajectory(py::module_& m, const std::string& scene_name, const char* 
       "trajectory (the re-simulation), state_distance (max over the samples of |x_imported - x_simulated|_inf), "
       "worst_sample_time [s], event_time_distance [s], imported_events, simulated_events. Raises "
       "saltus.InvalidArgument naming the line of a malformed CSV.");
+
+  m.def(
+      "trajectory_from_json",
+      [](const S& scene, const std::string& text) {
+        nlohmann::json j;
+        try {
+          j = nlohmann::json::parse(text);
+        } catch (const nlohmann::json::parse_error& e) {
+          throw InvalidArgument(std::string("trajectory JSON: ") + e.what());
+        }
+        auto out = std::make_shared<T>();
+        out->scene = std::make_shared<const S>(scene);
+        out->trajectory = trajectory_from_json(j, scene);
+        out->options.breakpoints = out->trajectory.input_breakpoints;
+        out->name = "read from JSON";
+        if constexpr (S::nu == 0) {
+          out->trajectory.input = zero_input<S>();  // no input to lose
+        } else {
+          out->trajectory.input = [](double t, const VecT<double, 2 * S::nq>&, const Mode<S::nc>&) -> VecT<double, S::nu> {
+            throw InvalidArgument(detail::concat("the trajectory was read from JSON, which does not hold its input law: "
+                                                 "no input at t = ",
+                                                 t, " (simulate it again, or polish its CSV, to analyse it)"));
+          };
+        }
+        return out;
+      },
+      py::arg("scene"), py::arg("text"),
+      "The trajectory that Trajectory.to_json(complete=True) wrote, rebuilt exactly for `scene` (its class must be "
+      "the trajectory's); see saltus.read_trajectory, which also reads files. Raises saltus.InvalidArgument naming "
+      "the key of a JSON it cannot rebuild from (not written complete, a missing key, a state of the wrong size, ...).");
 
   m.def("simulate", &simulate<S>, py::arg("scene"), py::arg("x0"), py::arg("t0"), py::arg("t_final"),
         py::arg("input") = py::none(), py::arg("options") = py::none(), simulate_doc);

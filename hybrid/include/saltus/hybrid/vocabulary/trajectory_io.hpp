@@ -1,6 +1,8 @@
 // Reading and writing trajectories (the data types are in trajectory.hpp): samples of t, mode,
 // x and u as CSV (write_csv), read back as an ImportedReference (read_reference_csv); and the
-// segments and events of a HybridTrajectory as JSON (to_json, write_json; nlohmann-json).
+// segments and events of a HybridTrajectory as JSON (to_json, write_json; nlohmann-json), written
+// complete (TrajectoryJsonOptions::complete: the dense output and every transition) to be read back
+// exactly (trajectory_from_json, read_json).
 #pragma once
 
 #include <algorithm>
@@ -8,6 +10,7 @@
 #include <exception>
 #include <iomanip>
 #include <istream>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <ostream>
 #include <saltus/hybrid/vocabulary/trajectory.hpp>
@@ -55,10 +58,46 @@ void write_csv(std::ostream& os, const HybridTrajectory<S>& traj, double dt, con
   });
 }
 
+/// What to_json writes.
+struct TrajectoryJsonOptions {
+  /// Also everything trajectory_from_json needs to rebuild the trajectory exactly (the keys marked
+  /// [complete] in to_json), and non-finite numbers as the strings "inf", "-inf", "nan" instead of
+  /// null. The input law is a function: it is never written.
+  bool complete = false;
+};
+
+namespace detail {
+/// A number as JSON: its value when finite; otherwise null, or with `exact` the string "inf",
+/// "-inf" or "nan" (JSON has no non-finite numbers).
+inline nlohmann::ordered_json json_number(double v, bool exact) {
+  if (std::isfinite(v)) return v;
+  if (!exact) return nullptr;
+  return std::isnan(v) ? "nan" : (v > 0 ? "inf" : "-inf");
+}
+/// A mode contact by contact: [{mode ("open", "stick", "slip"), slip_direction [dx, dy]}].
+template <int NC>
+nlohmann::ordered_json mode_json(const Mode<NC>& mode) {
+  auto a = nlohmann::ordered_json::array();
+  for (const ContactState& c : mode.contacts)
+    a.push_back({{"mode", to_string(c.mode)}, {"slip_direction", {c.slip_direction[0], c.slip_direction[1]}}});
+  return a;
+}
+template <int N>
+nlohmann::ordered_json vector_json(const VecT<double, N>& x) {
+  auto a = nlohmann::ordered_json::array();
+  for (int j = 0; j < x.size(); ++j) a.push_back(x[j]);
+  return a;
+}
+}  // namespace detail
+
 /// Segments (mode, interval) and events (time, guards, x-, x+, modes) as a JSON object:
 ///   status           "completed", "zeno" or "max-events"
 ///   segments         [{mode, t_begin, t_end, steps}]: mode as describe() writes it, the
-///                    interval in s, steps the pieces of its dense output
+///                    interval in s, steps the pieces of its dense output; [complete] contact_modes
+///                    (the mode contact by contact: [{mode, slip_direction [dx, dy]}]),
+///                    sliding_contact, sliding_open_mode, sliding_force_floor (Segment's), pieces
+///                    [{t0, t1, t_ref, h, degree, c}] (the dense output, PolynomialPiece: c the
+///                    degree + 1 coefficient columns, each of size 2 nq)
 ///   events           [{t, impact, input_jump, guards: [{contact, kind}], mode_before, mode_after,
 ///                    x_minus, x_plus, impulses}]: input_jump true where a jump of the input at a
 ///                    breakpoint fired the event (Event::input_jump: its time is fixed, not a
@@ -66,27 +105,49 @@ void write_csv(std::ostream& os, const HybridTrajectory<S>& traj, double dt, con
 ///                    x- and x+ of size 2 nq (q then v); impulses [{contact, normal, tangent}] of the
 ///                    contacts that took one, per impact of the event's chain in the order applied
 ///                    (N s; tangent in the contact's tangent coordinates, as many entries as it
-///                    has tangents), empty without an impact
+///                    has tangents), empty without an impact; [complete] contact_modes_before,
+///                    contact_modes_after, transitions [{guards [{contact (index), kind}],
+///                    mode_before, mode_after (contact by contact), x_before, x_after, impact,
+///                    impulse_mode [{role, slip_direction}], impulse [{normal, tangent [2]}] (every
+///                    contact), selection_solutions, sliding_contact, zeno_completion}]
 ///   zeno_time        the predicted accumulation time in s, null when not finite
 ///   zeno_time_uncertainty  its uncertainty in s (HybridTrajectory), null when not finite
 ///   zeno_completions [{t, uncertainty, last_touchdown, contacts, event}]: the accumulations the run
 ///                    was continued past (ZenoCompletion): times in s (uncertainty null when not
-///                    finite), the accumulating contacts by scene name, the completion's event index
+///                    finite), the accumulating contacts by scene name, the completion's event index;
+///                    [complete] contact_indices
 ///   steps, rhs_evaluations, wall_seconds   the simulation's statistics
+///   [complete] complete (true), rejected_steps, ambiguous_selections, sliding_events (the other
+///                    statistics), input_breakpoints [s], final_state (2 nq)
 /// Numbers keep their double values (a dump writes the shortest text that reads back exactly);
 /// keys keep this order (nlohmann::ordered_json).
 template <Scene S>
-nlohmann::ordered_json to_json(const HybridTrajectory<S>& traj, const S& scene) {
+nlohmann::ordered_json to_json(const HybridTrajectory<S>& traj, const S& scene, const TrajectoryJsonOptions& options = {}) {
   constexpr int nx = 2 * S::nq;
-  auto state = [](const typename HybridTrajectory<S>::State& x) {
-    auto a = nlohmann::ordered_json::array();
-    for (int j = 0; j < nx; ++j) a.push_back(x[j]);
-    return a;
-  };
+  using detail::json_number;
+  using detail::mode_json;
+  const bool complete = options.complete;
+  auto state = [](const typename HybridTrajectory<S>::State& x) { return detail::vector_json<nx>(x); };
   auto segments = nlohmann::ordered_json::array();
-  for (const auto& s : traj.segments)
-    segments.push_back(
-        {{"mode", describe(scene, s.mode)}, {"t_begin", s.t_begin}, {"t_end", s.t_end}, {"steps", s.x.size()}});
+  for (const auto& s : traj.segments) {
+    nlohmann::ordered_json js{
+        {"mode", describe(scene, s.mode)}, {"t_begin", s.t_begin}, {"t_end", s.t_end}, {"steps", s.x.size()}};
+    if (complete) {
+      js["contact_modes"] = mode_json(s.mode);
+      js["sliding_contact"] = s.sliding_contact;
+      js["sliding_open_mode"] = mode_json(s.sliding_open_mode);
+      js["sliding_force_floor"] = json_number(s.sliding_force_floor, true);
+      auto pieces = nlohmann::ordered_json::array();
+      for (const auto& p : s.x.pieces()) {
+        auto c = nlohmann::ordered_json::array();
+        for (int k = 0; k <= p.degree; ++k) c.push_back(detail::vector_json<nx>(p.c.col(k)));
+        pieces.push_back(
+            {{"t0", p.t0}, {"t1", p.t1}, {"t_ref", p.t_ref}, {"h", p.h}, {"degree", p.degree}, {"c", std::move(c)}});
+      }
+      js["pieces"] = std::move(pieces);
+    }
+    segments.push_back(std::move(js));
+  }
   auto events = nlohmann::ordered_json::array();
   for (const auto& ev : traj.events) {
     auto guards = nlohmann::ordered_json::array();
@@ -101,48 +162,340 @@ nlohmann::ordered_json to_json(const HybridTrajectory<S>& traj, const S& scene) 
         impulses.push_back(
             {{"contact", scene.contact(i).name}, {"normal", tr.impulse[i].normal}, {"tangent", std::move(tangent)}});
       }
-    events.push_back({{"t", ev.t},
-                      {"impact", ev.impact()},
-                      {"input_jump", ev.input_jump},
-                      {"guards", std::move(guards)},
-                      {"mode_before", describe(scene, ev.mode_before)},
-                      {"mode_after", describe(scene, ev.mode_after)},
-                      {"x_minus", state(ev.x_minus)},
-                      {"x_plus", state(ev.x_plus)},
-                      {"impulses", std::move(impulses)}});
+    nlohmann::ordered_json je{{"t", ev.t},
+                              {"impact", ev.impact()},
+                              {"input_jump", ev.input_jump},
+                              {"guards", std::move(guards)},
+                              {"mode_before", describe(scene, ev.mode_before)},
+                              {"mode_after", describe(scene, ev.mode_after)},
+                              {"x_minus", state(ev.x_minus)},
+                              {"x_plus", state(ev.x_plus)},
+                              {"impulses", std::move(impulses)}};
+    if (complete) {
+      je["contact_modes_before"] = mode_json(ev.mode_before);
+      je["contact_modes_after"] = mode_json(ev.mode_after);
+      auto transitions = nlohmann::ordered_json::array();
+      for (const Transition<S>& tr : ev.transitions) {
+        auto tg = nlohmann::ordered_json::array();
+        for (const Guard& g : tr.guards) tg.push_back({{"contact", g.contact}, {"kind", to_string(g.kind)}});
+        auto roles = nlohmann::ordered_json::array();
+        auto impulse = nlohmann::ordered_json::array();
+        for (int i = 0; i < S::nc; ++i) {
+          const ImpulseMode& m = tr.impulse_mode[i];
+          roles.push_back({{"role", to_string(m.role)}, {"slip_direction", {m.slip_direction[0], m.slip_direction[1]}}});
+          impulse.push_back(
+              {{"normal", tr.impulse[i].normal}, {"tangent", {tr.impulse[i].tangent[0], tr.impulse[i].tangent[1]}}});
+        }
+        transitions.push_back({{"guards", std::move(tg)},
+                               {"mode_before", mode_json(tr.mode_before)},
+                               {"mode_after", mode_json(tr.mode_after)},
+                               {"x_before", state(tr.x_before)},
+                               {"x_after", state(tr.x_after)},
+                               {"impact", tr.impact},
+                               {"impulse_mode", std::move(roles)},
+                               {"impulse", std::move(impulse)},
+                               {"selection_solutions", tr.selection_solutions},
+                               {"sliding_contact", tr.sliding_contact},
+                               {"zeno_completion", tr.zeno_completion}});
+      }
+      je["transitions"] = std::move(transitions);
+    }
+    events.push_back(std::move(je));
   }
   nlohmann::ordered_json j = nlohmann::ordered_json::object();
   j["status"] = to_string(traj.status);
   j["segments"] = std::move(segments);
   j["events"] = std::move(events);
-  j["zeno_time"] =
-      std::isfinite(traj.zeno_time) ? nlohmann::ordered_json(traj.zeno_time) : nlohmann::ordered_json(nullptr);
-  j["zeno_time_uncertainty"] = std::isfinite(traj.zeno_time_uncertainty)
-                                   ? nlohmann::ordered_json(traj.zeno_time_uncertainty)
-                                   : nlohmann::ordered_json(nullptr);
+  j["zeno_time"] = json_number(traj.zeno_time, complete);
+  j["zeno_time_uncertainty"] = json_number(traj.zeno_time_uncertainty, complete);
   auto completions = nlohmann::ordered_json::array();
   for (const ZenoCompletion& z : traj.zeno_completions) {
     auto contacts = nlohmann::ordered_json::array();
     for (int i : z.contacts) contacts.push_back(scene.contact(i).name);
-    completions.push_back({{"t", z.t},
-                           {"uncertainty", std::isfinite(z.uncertainty) ? nlohmann::ordered_json(z.uncertainty)
-                                                                        : nlohmann::ordered_json(nullptr)},
-                           {"last_touchdown", z.last_touchdown},
-                           {"contacts", std::move(contacts)},
-                           {"event", z.event}});
+    nlohmann::ordered_json jz{{"t", z.t},
+                              {"uncertainty", json_number(z.uncertainty, complete)},
+                              {"last_touchdown", z.last_touchdown},
+                              {"contacts", std::move(contacts)},
+                              {"event", z.event}};
+    if (complete) jz["contact_indices"] = z.contacts;
+    completions.push_back(std::move(jz));
   }
   j["zeno_completions"] = std::move(completions);
   j["steps"] = traj.statistics.steps;
   j["rhs_evaluations"] = traj.statistics.rhs_evaluations;
   j["wall_seconds"] = traj.statistics.wall_seconds;
+  if (complete) {
+    j["complete"] = true;
+    j["rejected_steps"] = traj.statistics.rejected_steps;
+    j["ambiguous_selections"] = traj.statistics.ambiguous_selections;
+    j["sliding_events"] = traj.statistics.sliding_events;
+    j["input_breakpoints"] = traj.input_breakpoints;
+    j["final_state"] = state(traj.final_state());
+  }
   return j;
 }
 
-/// to_json(traj, scene) on one line, then a newline. Throws nlohmann::json::type_error if a
-/// contact name or mode description is not valid UTF-8.
+/// to_json(traj, scene, options) on one line, then a newline. Throws nlohmann::json::type_error if
+/// a contact name or mode description is not valid UTF-8.
 template <Scene S>
-void write_json(std::ostream& os, const HybridTrajectory<S>& traj, const S& scene) {
-  os << to_json(traj, scene).dump() << "\n";
+void write_json(std::ostream& os, const HybridTrajectory<S>& traj, const S& scene,
+                const TrajectoryJsonOptions& options = {}) {
+  os << to_json(traj, scene, options).dump() << "\n";
+}
+
+namespace detail {
+/// JSON of to_json(..., complete) read back; every failure an InvalidArgument naming the key.
+struct TrajectoryJsonReader {
+  static double number(const nlohmann::json& j, const std::string& what) {
+    if (j.is_number()) return j.get<double>();
+    if (j.is_string()) {
+      const std::string s = j.get<std::string>();
+      if (s == "inf") return std::numeric_limits<double>::infinity();
+      if (s == "-inf") return -std::numeric_limits<double>::infinity();
+      if (s == "nan") return std::numeric_limits<double>::quiet_NaN();
+    }
+    if (j.is_null()) return std::numeric_limits<double>::quiet_NaN();  // the summary's non-finite numbers
+    throw InvalidArgument(concat("trajectory JSON: ", what, " is not a number: ", j.dump()));
+  }
+  static const nlohmann::json& at(const nlohmann::json& j, const char* key, const std::string& where) {
+    SALTUS_REQUIRE(j.is_object() && j.contains(key), "trajectory JSON: ", where, " has no '", key, "'");
+    return j.at(key);
+  }
+  static const nlohmann::json& array(const nlohmann::json& j, const char* key, const std::string& where) {
+    const nlohmann::json& a = at(j, key, where);
+    SALTUS_REQUIRE(a.is_array(), "trajectory JSON: ", where, ".", key, " is not an array");
+    return a;
+  }
+  template <int N>
+  static VecT<double, N> vector(const nlohmann::json& j, const char* key, const std::string& where) {
+    return vector_of<N>(array(j, key, where), where + "." + key);
+  }
+  template <int N>
+  static VecT<double, N> vector_of(const nlohmann::json& a, const std::string& what) {
+    SALTUS_REQUIRE(a.is_array() && a.size() == static_cast<std::size_t>(N), "trajectory JSON: ", what,
+                   " is not an array of ", N, " numbers");
+    VecT<double, N> x;
+    for (int k = 0; k < N; ++k) x[k] = number(a[static_cast<std::size_t>(k)], what);
+    return x;
+  }
+  static int integer(const nlohmann::json& j, const char* key, const std::string& where) {
+    const nlohmann::json& v = at(j, key, where);
+    SALTUS_REQUIRE(v.is_number_integer(), "trajectory JSON: ", where, ".", key, " is not an integer");
+    return v.get<int>();
+  }
+  static bool boolean(const nlohmann::json& j, const char* key, const std::string& where) {
+    const nlohmann::json& v = at(j, key, where);
+    SALTUS_REQUIRE(v.is_boolean(), "trajectory JSON: ", where, ".", key, " is not true or false");
+    return v.get<bool>();
+  }
+  static std::string string(const nlohmann::json& j, const char* key, const std::string& where) {
+    const nlohmann::json& v = at(j, key, where);
+    SALTUS_REQUIRE(v.is_string(), "trajectory JSON: ", where, ".", key, " is not a string");
+    return v.get<std::string>();
+  }
+  template <int NC>
+  static Mode<NC> mode(const nlohmann::json& j, const char* key, const std::string& where) {
+    const nlohmann::json& a = array(j, key, where);
+    SALTUS_REQUIRE(static_cast<int>(a.size()) == NC, "trajectory JSON: ", where, ".", key, " has ", a.size(),
+                   " contacts, the scene ", NC);
+    Mode<NC> m;
+    for (int i = 0; i < NC; ++i) {
+      const std::string w = concat(where, ".", key, "[", i, "]");
+      const std::string name = string(a[static_cast<std::size_t>(i)], "mode", w);
+      if (name == "open")
+        m[i].mode = ContactMode::Open;
+      else if (name == "stick")
+        m[i].mode = ContactMode::Stick;
+      else if (name == "slip")
+        m[i].mode = ContactMode::Slip;
+      else
+        throw InvalidArgument(concat("trajectory JSON: ", w, ".mode '", name, "' is not open, stick or slip"));
+      m[i].slip_direction = vector<2>(a[static_cast<std::size_t>(i)], "slip_direction", w);
+    }
+    return m;
+  }
+  static int contact_index(const nlohmann::json& j, const char* key, const std::string& where, int nc) {
+    const int i = integer(j, key, where);
+    SALTUS_REQUIRE(i >= 0 && i < nc, "trajectory JSON: ", where, ".", key, " = ", i, " is not a contact index in [0, ",
+                   nc, ")");
+    return i;
+  }
+  static GuardKind guard_kind(const std::string& s, const std::string& where) {
+    for (GuardKind k : {GuardKind::Touchdown, GuardKind::Release, GuardKind::Stop, GuardKind::SlipOnset})
+      if (s == to_string(k)) return k;
+    throw InvalidArgument(concat("trajectory JSON: ", where, ".kind '", s, "' is not a guard kind"));
+  }
+  static ImpulseRole impulse_role(const std::string& s, const std::string& where) {
+    for (ImpulseRole r : {ImpulseRole::None, ImpulseRole::Stick, ImpulseRole::Slip})
+      if (s == to_string(r)) return r;
+    throw InvalidArgument(concat("trajectory JSON: ", where, ".role '", s, "' is not an impulse role"));
+  }
+};
+}  // namespace detail
+
+/// The trajectory that to_json(traj, scene, {.complete = true}) wrote, rebuilt exactly: every
+/// segment's mode, interval and dense output (so state() evaluates bit for bit as the original),
+/// every event with its transitions, the status, the Zeno fields and completions, the statistics,
+/// the input breakpoints and the final state. Its input law is empty (never written): set
+/// `input` before anything evaluates the input (input_at, a linearisation, analyse_reference).
+/// `scene` must be the one it was written for (its contact count; the names are not checked).
+/// @throws InvalidArgument naming the key: a JSON not written complete (no dense output), a
+/// missing key or one of the wrong type, a mode or state of the wrong size, an unknown status,
+/// mode, guard kind or impulse role, a contact index out of range, a piece of degree outside
+/// [0, 5] or with the wrong coefficient count, a count of events other than the segments' or one
+/// fewer.
+template <Scene S>
+HybridTrajectory<S> trajectory_from_json(const nlohmann::json& j, const S& scene) {
+  (void)scene;
+  constexpr int nx = 2 * S::nq, nc = S::nc;
+  using R = detail::TrajectoryJsonReader;
+  SALTUS_REQUIRE(j.is_object(), "trajectory JSON: not an object");
+  SALTUS_REQUIRE(j.contains("complete") && j.at("complete") == true,
+                 "trajectory JSON: not written complete (to_json with TrajectoryJsonOptions::complete, "
+                 "Trajectory.to_json(complete=True) in Python): it holds no dense output to rebuild the segments from");
+  HybridTrajectory<S> traj;
+  const std::string status = R::string(j, "status", "the trajectory");
+  if (status == "completed")
+    traj.status = SimulationStatus::Completed;
+  else if (status == "zeno")
+    traj.status = SimulationStatus::Zeno;
+  else if (status == "max-events")
+    traj.status = SimulationStatus::MaxEvents;
+  else
+    throw InvalidArgument(detail::concat("trajectory JSON: status '", status, "' is not completed, zeno or max-events"));
+  const nlohmann::json& segments = R::array(j, "segments", "the trajectory");
+  for (std::size_t i = 0; i < segments.size(); ++i) {
+    const nlohmann::json& js = segments[i];
+    const std::string w = detail::concat("segments[", i, "]");
+    Segment<S> s;
+    s.mode = R::mode<nc>(js, "contact_modes", w);
+    s.t_begin = R::number(R::at(js, "t_begin", w), w + ".t_begin");
+    s.t_end = R::number(R::at(js, "t_end", w), w + ".t_end");
+    s.sliding_contact = R::integer(js, "sliding_contact", w);
+    s.sliding_open_mode = R::mode<nc>(js, "sliding_open_mode", w);
+    s.sliding_force_floor = R::number(R::at(js, "sliding_force_floor", w), w + ".sliding_force_floor");
+    const nlohmann::json& pieces = R::array(js, "pieces", w);
+    s.x.reserve(pieces.size());
+    for (std::size_t k = 0; k < pieces.size(); ++k) {
+      const nlohmann::json& jp = pieces[k];
+      const std::string wp = detail::concat(w, ".pieces[", k, "]");
+      PolynomialPiece<nx> p;
+      p.t0 = R::number(R::at(jp, "t0", wp), wp + ".t0");
+      p.t1 = R::number(R::at(jp, "t1", wp), wp + ".t1");
+      p.t_ref = R::number(R::at(jp, "t_ref", wp), wp + ".t_ref");
+      p.h = R::number(R::at(jp, "h", wp), wp + ".h");
+      p.degree = R::integer(jp, "degree", wp);
+      SALTUS_REQUIRE(p.degree >= 0 && p.degree <= PolynomialPiece<nx>::max_degree, "trajectory JSON: ", wp,
+                     ".degree = ", p.degree, " is outside [0, ", PolynomialPiece<nx>::max_degree, "]");
+      const nlohmann::json& c = R::array(jp, "c", wp);
+      SALTUS_REQUIRE(static_cast<int>(c.size()) == p.degree + 1, "trajectory JSON: ", wp, ".c has ", c.size(),
+                     " columns, expected degree + 1 = ", p.degree + 1);
+      for (int col = 0; col <= p.degree; ++col)
+        p.c.col(col) = R::vector_of<nx>(c[static_cast<std::size_t>(col)], detail::concat(wp, ".c[", col, "]"));
+      s.x.append(p);
+    }
+    traj.segments.push_back(std::move(s));
+  }
+  const nlohmann::json& events = R::array(j, "events", "the trajectory");
+  SALTUS_REQUIRE(events.size() + 1 == segments.size() || (events.size() == segments.size() && !segments.empty()),
+                 "trajectory JSON: ", events.size(), " events for ", segments.size(),
+                 " segments (as many, or one fewer, expected)");
+  for (std::size_t i = 0; i < events.size(); ++i) {
+    const nlohmann::json& je = events[i];
+    const std::string w = detail::concat("events[", i, "]");
+    Event<S> ev;
+    ev.t = R::number(R::at(je, "t", w), w + ".t");
+    ev.x_minus = R::vector<nx>(je, "x_minus", w);
+    ev.x_plus = R::vector<nx>(je, "x_plus", w);
+    ev.mode_before = R::mode<nc>(je, "contact_modes_before", w);
+    ev.mode_after = R::mode<nc>(je, "contact_modes_after", w);
+    ev.input_jump = R::boolean(je, "input_jump", w);
+    const nlohmann::json& transitions = R::array(je, "transitions", w);
+    for (std::size_t k = 0; k < transitions.size(); ++k) {
+      const nlohmann::json& jt = transitions[k];
+      const std::string wt = detail::concat(w, ".transitions[", k, "]");
+      Transition<S> tr;
+      const nlohmann::json& guards = R::array(jt, "guards", wt);
+      for (std::size_t g = 0; g < guards.size(); ++g) {
+        const std::string wg = detail::concat(wt, ".guards[", g, "]");
+        tr.guards.push_back({R::contact_index(guards[g], "contact", wg, nc),
+                             R::guard_kind(R::string(guards[g], "kind", wg), wg)});
+      }
+      tr.mode_before = R::mode<nc>(jt, "mode_before", wt);
+      tr.mode_after = R::mode<nc>(jt, "mode_after", wt);
+      tr.x_before = R::vector<nx>(jt, "x_before", wt);
+      tr.x_after = R::vector<nx>(jt, "x_after", wt);
+      tr.impact = R::boolean(jt, "impact", wt);
+      const nlohmann::json& roles = R::array(jt, "impulse_mode", wt);
+      const nlohmann::json& impulse = R::array(jt, "impulse", wt);
+      SALTUS_REQUIRE(static_cast<int>(roles.size()) == nc && static_cast<int>(impulse.size()) == nc,
+                     "trajectory JSON: ", wt, ".impulse_mode and .impulse must have one entry per contact (", nc, ")");
+      for (int c = 0; c < nc; ++c) {
+        const std::string wr = detail::concat(wt, ".impulse_mode[", c, "]"), wi = detail::concat(wt, ".impulse[", c, "]");
+        const auto cc = static_cast<std::size_t>(c);
+        tr.impulse_mode[c].role = R::impulse_role(R::string(roles[cc], "role", wr), wr);
+        tr.impulse_mode[c].slip_direction = R::vector<2>(roles[cc], "slip_direction", wr);
+        tr.impulse[c].normal = R::number(R::at(impulse[cc], "normal", wi), wi + ".normal");
+        tr.impulse[c].tangent = R::vector<2>(impulse[cc], "tangent", wi);
+      }
+      tr.selection_solutions = R::integer(jt, "selection_solutions", wt);
+      tr.sliding_contact = R::integer(jt, "sliding_contact", wt);
+      tr.zeno_completion = R::boolean(jt, "zeno_completion", wt);
+      ev.transitions.push_back(std::move(tr));
+    }
+    traj.events.push_back(std::move(ev));
+  }
+  traj.zeno_time = R::number(R::at(j, "zeno_time", "the trajectory"), "zeno_time");
+  traj.zeno_time_uncertainty = R::number(R::at(j, "zeno_time_uncertainty", "the trajectory"), "zeno_time_uncertainty");
+  const nlohmann::json& completions = R::array(j, "zeno_completions", "the trajectory");
+  for (std::size_t k = 0; k < completions.size(); ++k) {
+    const nlohmann::json& jz = completions[k];
+    const std::string w = detail::concat("zeno_completions[", k, "]");
+    ZenoCompletion z;
+    z.t = R::number(R::at(jz, "t", w), w + ".t");
+    z.uncertainty = R::number(R::at(jz, "uncertainty", w), w + ".uncertainty");
+    z.last_touchdown = R::number(R::at(jz, "last_touchdown", w), w + ".last_touchdown");
+    const nlohmann::json& contacts = R::array(jz, "contact_indices", w);
+    for (std::size_t c = 0; c < contacts.size(); ++c) {
+      SALTUS_REQUIRE(contacts[c].is_number_integer() && contacts[c].get<int>() >= 0 && contacts[c].get<int>() < nc,
+                     "trajectory JSON: ", w, ".contact_indices[", c, "] is not a contact index in [0, ", nc, ")");
+      z.contacts.push_back(contacts[c].get<int>());
+    }
+    z.event = R::integer(jz, "event", w);
+    SALTUS_REQUIRE(z.event >= 0 && z.event < static_cast<int>(events.size()), "trajectory JSON: ", w, ".event = ",
+                   z.event, " is not an event index");
+    traj.zeno_completions.push_back(std::move(z));
+  }
+  const auto count = [&](const char* key) {
+    const nlohmann::json& v = R::at(j, key, "the trajectory");
+    SALTUS_REQUIRE(v.is_number_integer(), "trajectory JSON: ", key, " is not an integer");
+    return v.get<long>();
+  };
+  traj.statistics.steps = count("steps");
+  traj.statistics.rejected_steps = count("rejected_steps");
+  traj.statistics.rhs_evaluations = count("rhs_evaluations");
+  traj.statistics.wall_seconds = R::number(R::at(j, "wall_seconds", "the trajectory"), "wall_seconds");
+  traj.statistics.ambiguous_selections = static_cast<int>(count("ambiguous_selections"));
+  traj.statistics.sliding_events = static_cast<int>(count("sliding_events"));
+  const nlohmann::json& breakpoints = R::array(j, "input_breakpoints", "the trajectory");
+  for (std::size_t k = 0; k < breakpoints.size(); ++k)
+    traj.input_breakpoints.push_back(R::number(breakpoints[k], detail::concat("input_breakpoints[", k, "]")));
+  traj.set_final_state(R::vector<nx>(j, "final_state", "the trajectory"));
+  return traj;
+}
+
+/// trajectory_from_json of the JSON text read from `in` (write_json's output with complete).
+/// @throws InvalidArgument: text that is not JSON (with the parser's message), and as
+/// trajectory_from_json.
+template <Scene S>
+HybridTrajectory<S> read_json(std::istream& in, const S& scene) {
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(in);
+  } catch (const nlohmann::json::parse_error& e) {
+    throw InvalidArgument(std::string("trajectory JSON: ") + e.what());
+  }
+  return trajectory_from_json(j, scene);
 }
 
 namespace detail {
