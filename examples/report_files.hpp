@@ -5,7 +5,8 @@
 //                    trajectory.csv    samples: t, segment, mode, q.., v.., u..  (write_csv)
 //                    forces.csv        contact forces along it (write_contact_forces_csv)
 //                    report.json       a pipeline's report (demo.sh redirects a program's --json
-//                                      output there), or a scene's own numbers (jump_gains.json)
+//                                      output there)
+//                    jump_gains.json   the hopper hop's jump gains (hopper.cpp)
 //                    *.png             the figures plot_report.py draws there
 // and <report>/index.html, the page that shows them all. The folder names (docs/report.md):
 // bouncing_ball, guiding_example, plank_box, hopper, spatial_box, tracking_stability, and the two
