@@ -2,6 +2,7 @@
 // finite time (Zeno). The simulator stops with status "zeno" and predicts the accumulation time;
 // the closed form is t_inf = sqrt(2 h / g) (1 + e) / (1 - e).
 #include <saltus/hybrid/vocabulary/trajectory_report.hpp>
+#include "report_files.hpp"
 #include "scenes/all_scenes.hpp"
 
 #include <cmath>
@@ -24,6 +25,6 @@ int main() {
   const double t_inf = std::sqrt(2 * h0 / g) * (1 + e) / (1 - e);
   std::printf("  %zu bounces, status %s, accumulation predicted at %.12f s (closed form %.12f, error %.2e)\n",
               traj.events.size(), to_string(traj.status), traj.zeno_time, t_inf, std::abs(traj.zeno_time - t_inf));
-  write_trajectory_files(ball, traj, "bouncing_ball", 0.01);
+  examples::write_scene_trajectory(ball, traj, "bouncing_ball", 0.01);  // report/bouncing_ball/
   return traj.status == SimulationStatus::Zeno && std::abs(traj.zeno_time - t_inf) < 1e-6 ? 0 : 1;
 }

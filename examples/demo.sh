@@ -3,10 +3,10 @@
 # and the example programs it runs (not the tests, not the benchmarks: `bash bench/run.sh`), runs
 # the example scenes, the flagship pipelines of the plank-box and of the hopper over three holes
 # (discovery, refinement, analysis; the two side by side on two cores) and the tracking designs,
-# prints the results and writes the report files to report/ (trajectories as JSON and CSV, the
-# pipelines' reports as JSON, the refined references as CSV), the
-# figures (report/figures/*.png) and report/index.html, one page with all of them. One progress
-# line per stage on stderr.
+# prints the results and writes the report: one folder per scene, report/<scene>/, with its
+# trajectory (trajectory.json, trajectory.csv), its contact forces (forces.csv), its pipeline's
+# report (report.json) and its figures (*.png), and report/index.html, one page with all of them
+# (docs/report.md lists the folders and files). One progress line per stage on stderr.
 #   SALTUS_JOBS=N   parallel build jobs (default: nproc)
 set -euo pipefail
 here=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
@@ -21,7 +21,8 @@ examples=(bouncing_ball guiding_example plank_box hopper spatial_box tracking_st
 cmake --build "$build" -j "${SALTUS_JOBS:-$(nproc)}" --target "${examples[@]}"
 echo "built in $(( $(date +%s) - start )) s"
 export SALTUS_REPORT_DIR="$here/report"
-mkdir -p "$SALTUS_REPORT_DIR"
+report="$SALTUS_REPORT_DIR"
+mkdir -p "$report"/{guiding_example,plank_box_flat_landing,hopper_over_three_holes,tracking_stability}
 for example in bouncing_ball guiding_example plank_box hopper spatial_box; do
   echo
   "$build/examples/$example"
@@ -29,7 +30,7 @@ done
 # The guiding example's time-freezing OCP (a few seconds): JSON on stdout, progress on stderr.
 echo
 echo "== guiding_example --json (time-freezing OCP) =="
-OPENBLAS_NUM_THREADS=1 "$build/examples/guiding_example" --json | tee "$SALTUS_REPORT_DIR/guiding_example_ocp.json"
+OPENBLAS_NUM_THREADS=1 "$build/examples/guiding_example" --json | tee "$report/guiding_example/report.json"
 # The flagship pipeline of the plank-box flat landing, one thread (progress lines on stderr):
 # discovery by the time-freezing homotopy until its contact schedule settles, the mode-schedule
 # refinement (the exact reference), its re-simulations, then the analysis of the refined reference
@@ -37,7 +38,7 @@ OPENBLAS_NUM_THREADS=1 "$build/examples/guiding_example" --json | tee "$SALTUS_R
 # minutes. The hopper over three holes runs the same chain from the paper's initialisation
 # (`build/examples/hopper --json`: discovery of its footholds, their refinement, the analysis with
 # 200 runs; about 5 minutes) on the other core, beside it: its progress lines go to
-# report/hopper_progress.log (docs/refinement.md, "Hopper over three holes").
+# report/hopper_over_three_holes/progress.log (docs/refinement.md, "Hopper over three holes").
 ocp_summary() {
   python3 - "$1" <<'PY'
 import json, sys
@@ -67,7 +68,8 @@ if a is not None:
         print(f'  analysis of the reference failed at the {a["failed_at"]}: {a["failure"]}')
     else:
         for e in a["events"]:
-            gain = (f'conewise gain, {e["pieces"]} pieces' if e["conewise"]
+            gain = (f'conewise gain, {e["pieces"]} pieces, |G_z| = ' + ", ".join(f"{n:.5g}" for n in e["piece_norms"])
+                    if e["conewise"]
                     else f'saltation matrix, |G_z| = {e["saltation_norm"]:.5g}')
             print(f'  jump gain at t = {e["t"]:.6f} ({e["guards"]} guards): {gain}')
         m = a["monte_carlo"]
@@ -79,21 +81,22 @@ PY
 }
 echo
 echo "== hopper --json (over three holes: discovery, refinement, analysis), in the background =="
-OPENBLAS_NUM_THREADS=1 "$build/examples/hopper" --json > "$SALTUS_REPORT_DIR/hopper_ocp.json" \
-  2> "$SALTUS_REPORT_DIR/hopper_progress.log" &
+hopper_dir="$report/hopper_over_three_holes"
+OPENBLAS_NUM_THREADS=1 "$build/examples/hopper" --json > "$hopper_dir/report.json" 2> "$hopper_dir/progress.log" &
 hopper_job=$!
-echo "progress: $SALTUS_REPORT_DIR/hopper_progress.log"
+echo "progress: $hopper_dir/progress.log"
 echo
 echo "== plank_box --json (the flat landing: discovery, refinement, analysis) =="
-OPENBLAS_NUM_THREADS=1 "$build/examples/plank_box" --json > "$SALTUS_REPORT_DIR/plank_box_ocp.json" ||
-  echo "plank_box --json: the reference is not refined (see $SALTUS_REPORT_DIR/plank_box_ocp.json)"
+plank_box_json="$report/plank_box_flat_landing/report.json"
+OPENBLAS_NUM_THREADS=1 "$build/examples/plank_box" --json > "$plank_box_json" ||
+  echo "plank_box --json: the reference is not refined (see $plank_box_json)"
 echo "plank-box flat landing (the relaxed solution where discovery stopped, then the refinement):"
-ocp_summary "$SALTUS_REPORT_DIR/plank_box_ocp.json"
-echo "wrote $SALTUS_REPORT_DIR/plank_box_ocp.json"
+ocp_summary "$plank_box_json"
+echo "wrote $plank_box_json"
 echo
 echo "== hopper over three holes (waiting for its chain) =="
 wait "$hopper_job" || echo "hopper --json: the refined reference did not pass every check (the stage below says which)"
-python3 - "$SALTUS_REPORT_DIR/hopper_ocp.json" <<'PY'
+python3 - "$hopper_dir/report.json" <<'PY'
 import json, sys
 d = json.load(open(sys.argv[1]))
 r = d.get("refinement") or {}
@@ -107,19 +110,20 @@ if r:
 a = d.get("analysis")
 if a and "failure" not in a:
     m = a["monte_carlo"]
-    print(f'  jump gains: ' + ", ".join(f'{e["saltation_norm"]:.3g}' if not e["conewise"] else f'{e["pieces"]} pieces' for e in a["events"]))
+    print(f'  jump gains: ' + ", ".join(f'{e["saltation_norm"]:.3g}' if not e["conewise"]
+                                        else "pieces " + "/".join(f"{n:.3g}" for n in e["piece_norms"]) for e in a["events"]))
     print(f'  tracking ({a["design"]}): {a["verdict"]}, a(T) in [{a["lower_bound"]:.3g}, {a["upper_bound"]:.3g}];'
           f' {m["runs"]} perturbed runs: {m["kept_event_sequence"]} kept the event sequence, {m["failed"]} failed;'
           f' {"agree" if a["agree"] else "DISAGREE"}')
 PY
-echo "wrote $SALTUS_REPORT_DIR/hopper_ocp.json"
+echo "wrote $hopper_dir/report.json"
 # Tracking designs along references with impacts: the stability check against 200 nonlinear
 # closed-loop runs per design on all cores (a minute; progress lines on stderr).
 echo
 echo "== tracking_stability =="
-"$build/examples/tracking_stability" --json > "$SALTUS_REPORT_DIR/tracking_stability.json" || {
+"$build/examples/tracking_stability" --json > "$report/tracking_stability/report.json" || {
   echo "tracking_stability: a check and its Monte Carlo batch disagree (see the JSON)"; exit 1; }
-python3 - "$SALTUS_REPORT_DIR/tracking_stability.json" <<'PY'
+python3 - "$report/tracking_stability/report.json" <<'PY'
 import json, sys
 d = json.load(open(sys.argv[1]))
 for c in d["cases"]:
@@ -129,7 +133,7 @@ for c in d["cases"]:
 s = d["parallel_speedup"]
 print(f'Monte Carlo speed-up on {s["threads"]} threads: {s["speedup"]} ({s["one_thread_seconds"]} s -> {s["all_threads_seconds"]} s)')
 PY
-echo "wrote $SALTUS_REPORT_DIR/tracking_stability.json"
+echo "wrote $report/tracking_stability/report.json"
 # The figures and the page that shows them (Debian's python3 with python3-matplotlib); plot_report.py
 # checks each figure it must draw (a PNG of its size, shown on the page) and fails on a broken one:
 # the summary below is still printed, and the main job's exit status is then 1.
@@ -138,14 +142,14 @@ echo "== figures =="
 python=/usr/bin/python3
 [ -x "$python" ] || python=python3
 figures_status=0
-"$python" "$here/examples/plot_report.py" "$SALTUS_REPORT_DIR" || figures_status=$?
+"$python" "$here/examples/plot_report.py" "$report" || figures_status=$?
 echo
 echo "== summary =="
-python3 - "$SALTUS_REPORT_DIR" <<'PY'
+python3 - "$report" <<'PY'
 import json, os, sys
 rows = [("scene", "stage", "objective", "events", "verdict", "Monte Carlo", "seconds")]
-for scene, name in (("plank_box_ocp.json", "plank-box flat landing"), ("hopper_ocp.json", "hopper over three holes")):
-    path = os.path.join(sys.argv[1], scene)
+for scene, name in (("plank_box_flat_landing", "plank-box flat landing"), ("hopper_over_three_holes", "hopper over three holes")):
+    path = os.path.join(sys.argv[1], scene, "report.json")
     if not os.path.exists(path):
         rows.append((name, "no report", "", "", "", "", ""))
         continue
@@ -162,5 +166,5 @@ for row in rows:
     print("  ".join(str(v).ljust(w) for v, w in zip(row, widths)))
 PY
 echo
-echo "main job done in $(( $(date +%s) - start )) s; report files in $SALTUS_REPORT_DIR"
+echo "main job done in $(( $(date +%s) - start )) s; report in $report (one folder per scene), page $report/index.html"
 [ "$figures_status" = 0 ] || { echo "the figures are broken (plot_report.py above)"; exit 1; }

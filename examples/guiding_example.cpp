@@ -18,10 +18,10 @@
 // "mode_validity_violation", "phase_resim_max_error" and the whole result under "refinement"
 // (refinement_io.hpp); "objective" is then the refined one.
 #include <saltus/hybrid/reference/resimulation.hpp>
-#include <saltus/hybrid/dynamics/contact_forces_csv.hpp>
 #include <saltus/hybrid/vocabulary/trajectory_report.hpp>
 #include <saltus/timefreezing/drivers/optimal_control.hpp>
 #include <saltus/timefreezing/refinement/refinement_io.hpp>
+#include "report_files.hpp"
 #include "scenes/all_scenes.hpp"
 #include "scenes/time_freezing_examples.hpp"
 
@@ -126,7 +126,7 @@ int main(int argc, char** argv) {
   std::printf("  impact at %.15f (closed form %.15f), lift-off at %.15f (closed form 1.5)\n", traj.events.at(0).t,
               std::sqrt(2 / g), traj.events.at(1).t);
   std::printf("  final state error against the closed form: %.2e\n", error);
-  write_trajectory_files(mass, traj, "guiding_example", 0.01);
-  write_contact_forces_file(mass, traj, "guiding_example", 0.01, report_directory());
+  examples::write_scene_trajectory(mass, traj, "guiding_example", 0.01);  // report/guiding_example/
+  examples::write_scene_forces(mass, traj, "guiding_example", 0.01);
   return error < 1e-8 ? 0 : 1;
 }

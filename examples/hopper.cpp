@@ -29,14 +29,15 @@
 // "max_path_violation", "target_error", "objective", "relaxed_objective", "schedule",
 // "schedule_edits", "events", "footholds", "phase_resim_max_error", "discovery_seconds",
 // "refinement_seconds", "solve_seconds", "discovery", "refinement", "analysis"} (refinement_io.hpp,
-// reference_analysis_io.hpp) and writes the refined reference's files (report/hopper_refined_*;
-// from hop_guess report/hopper_refined_hop_guess_*).
+// reference_analysis_io.hpp) and writes the refined reference's trajectory and forces into
+// report/hopper_over_three_holes/ (from hop_guess report/hopper_over_three_holes_hop_guess/;
+// report_files.hpp), where the main job also puts that JSON as report.json.
 // Exit status 0 only when the reference is refined; the analysis's outcome is reported, not
 // reflected in it. About 5 minutes on one thread: discovery and refinement about 245 s, the
 // analysis about 60 s, most of it the Monte Carlo runs (docs/refinement.md, "Hopper over three holes").
 #include <saltus/hybrid/reference/resimulation.hpp>
-#include <saltus/hybrid/dynamics/contact_forces_csv.hpp>
 #include <saltus/hybrid/vocabulary/trajectory_report.hpp>
+#include "report_files.hpp"
 #include "scenes/all_scenes.hpp"
 #include "scenes/hopper_holes_refinement.hpp"
 
@@ -60,11 +61,11 @@ int optimal_hop_over_three_holes(bool from_hop_guess) {
   options.progress = &std::cerr;
   const scenes::HopperChain chain = scenes::run_hopper_chain(options);
   if (chain.refined && chain.refined->converged) {
-    // The refined reference's files: report/<name>.json, .csv, _forces.csv.
-    const char* name = from_hop_guess ? "hopper_refined_hop_guess" : "hopper_refined";
+    // The refined reference's files: report/<folder>/trajectory.json, trajectory.csv, forces.csv.
+    const char* folder = from_hop_guess ? "hopper_over_three_holes_hop_guess" : "hopper_over_three_holes";
     const scenes::Hopper hopper{};
-    write_trajectory_files(hopper, chain.refined->trajectory, name, 0.005, report_directory(), stderr);
-    write_contact_forces_file(hopper, chain.refined->trajectory, name, 0.005, report_directory(), stderr);
+    examples::write_scene_trajectory(hopper, chain.refined->trajectory, folder, 0.005, stderr);
+    examples::write_scene_forces(hopper, chain.refined->trajectory, folder, 0.005, stderr);
   }
   std::cout << to_json(chain).dump(2) << "\n";
   return chain.refined && chain.refined->stage == "refined" ? 0 : 1;
@@ -104,8 +105,8 @@ int main(int argc, char** argv) {
 
   std::printf("hopper: landing and one hop under a joint PD controller\n");
   print_events(hopper, traj);
-  write_trajectory_files(hopper, traj, "hopper", 0.005);
-  write_contact_forces_file(hopper, traj, "hopper", 0.005, report_directory());
+  examples::write_scene_trajectory(hopper, traj, "hopper", 0.005);  // report/hopper/
+  examples::write_scene_forces(hopper, traj, "hopper", 0.005);
   bool lift_off = false;
   for (const auto& ev : traj.events)
     for (const Guard& g : ev.guards()) lift_off = lift_off || g.kind == GuardKind::Release;
@@ -116,7 +117,7 @@ int main(int argc, char** argv) {
   lo.spreading.before = lo.spreading.after = 0.02;  // covers the perturbed event shifts below
   const LinearisedSystem<H> lin(hopper, traj, lo);
   std::printf("\njump gains z+ = G_z z- + G_v v- (closed loop), event-time shift dt = dt_dz z- + dt_dv v-:\n");
-  // report/hopper_gains.json: {"events": [{t, guard, G_z_minus_identity_max, G_v_max, dt_dz_norm}]},
+  // report/hopper/jump_gains.json: {"events": [{t, guard, G_z_minus_identity_max, G_v_max, dt_dz_norm}]},
   // numbers to 6 significant digits.
   const auto number = [](double x) -> nlohmann::ordered_json {
     if (!std::isfinite(x)) return nullptr;
@@ -137,7 +138,7 @@ int main(int argc, char** argv) {
                      {"G_v_max", number(g.G_v.cwiseAbs().maxCoeff())},
                      {"dt_dz_norm", number(g.dt_dz.norm())}});
   }
-  std::ofstream json(report_directory() / "hopper_gains.json");
+  std::ofstream json(examples::scene_directory("hopper") / "jump_gains.json");
   json << nlohmann::ordered_json{{"events", gains}}.dump() << "\n";
 
   // A perturbed hop: initial state x0 + eps z0, torques + eps v(t). The reference-spreading

@@ -17,8 +17,9 @@
 // smooth multi-phase OCP on the plank-box's own flows, guards and jump maps, its re-simulations. Keys "stage", "relaxed_objective",
 // "discovery_seconds", "refinement_seconds", "schedule", "schedule_edits",
 // "mode_validity_violation", "phase_resim_max_error" and "refinement" (refinement_io.hpp); when
-// the refinement converged, the analysis is of the refined reference and "objective" its cost.
-#include <saltus/hybrid/dynamics/contact_forces_csv.hpp>
+// the refinement converged, the analysis is of the refined reference and "objective" its cost,
+// and the refined reference's trajectory and forces go to report/plank_box_flat_landing/
+// (report_files.hpp), where the main job also puts that JSON as report.json.
 #include <saltus/hybrid/vocabulary/trajectory_report.hpp>
 #include <saltus/sensitivity/analysis/reference_analysis_io.hpp>
 #include <saltus/timefreezing/drivers/optimal_control.hpp>
@@ -27,6 +28,7 @@
 #include "scenes/plank_box_landing.hpp"
 #include "scenes/plank_box_tracking.hpp"
 #include "ocp_report.hpp"
+#include "report_files.hpp"
 
 #include <cstdio>
 #include <cstring>
@@ -74,9 +76,9 @@ int optimal_flat_landing() {
   }
   const HybridTrajectory<scenes::PlankBox>* reference =
       refined && refined->converged ? &refined->trajectory : (resim ? &resim->trajectory : nullptr);
-  if (refined && refined->converged) {  // the refined reference's files (stdout carries the JSON report)
-    write_trajectory_files(scene, refined->trajectory, "plank_box_refined", 0.005, report_directory(), stderr);
-    write_contact_forces_file(scene, refined->trajectory, "plank_box_refined", 0.005, report_directory(), stderr);
+  if (refined && refined->converged) {  // report/plank_box_flat_landing/ (stdout carries the JSON report)
+    examples::write_scene_trajectory(scene, refined->trajectory, "plank_box_flat_landing", 0.005, stderr);
+    examples::write_scene_forces(scene, refined->trajectory, "plank_box_flat_landing", 0.005, stderr);
   }
   if (reference) {
     ReferenceAnalysisOptions<scenes::PlankBox> analysis = scenes::plank_box_tracking(200);
@@ -111,7 +113,7 @@ int main(int argc, char** argv) {
   const auto& landing = traj.events.at(0);
   std::printf("  landing: %zu guards at once, box velocity after (%.3e, %.3e) m/s, plank rate %.4f rad/s\n",
               landing.guards().size(), landing.x_plus[4], landing.x_plus[5], landing.x_plus[7]);
-  write_trajectory_files(plank_box, traj, "plank_box", 0.005);
-  write_contact_forces_file(plank_box, traj, "plank_box", 0.005, report_directory());
+  examples::write_scene_trajectory(plank_box, traj, "plank_box", 0.005);  // report/plank_box/
+  examples::write_scene_forces(plank_box, traj, "plank_box", 0.005);
   return landing.guards().size() == 2 ? 0 : 1;
 }

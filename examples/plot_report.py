@@ -1,28 +1,32 @@
 #!/usr/bin/env python3
-"""Figures of the main job's report (examples/demo.sh): PNGs made with matplotlib and one offline
-page, report/index.html, that shows them with a caption each and the flagships' summary tables.
+"""Figures of the main job's report (examples/demo.sh): PNGs made with matplotlib, each in its
+scene's folder, and one offline page, REPORT_DIR/index.html, that shows them all with a one-line
+caption each, the summary table of the pipelines and links into the folders.
 
     python3 examples/plot_report.py [REPORT_DIR] [--scene NAME ...]     (default: report/)
 
-Reads what the example programs write into REPORT_DIR (trajectory_io.hpp's formats):
-  <scene>.csv   the trajectory sampled in time: t, segment, mode, q0.., v0.., u0..
-  <scene>.json  its segments and events (time, impact, guards with contact and kind, modes,
-                impulses)
-  <scene>_forces.csv   the contact forces along it (contact_forces_csv.hpp): t, segment, <contact>_n,
-                <contact>_t0..
-  plank_box_ocp.json   the plank-box pipeline's report (discovery, refinement, analysis)
-  hopper_ocp.json      the hopper-over-three-holes pipeline's report (the same stages)
-  hopper_gains.json    the hopper hop's jump gains per event
-  tracking_stability.json   the tracking designs' stability checks and Monte Carlo batches
-                       (build/examples/tracking_stability --json)
-and writes REPORT_DIR/figures/*.png and REPORT_DIR/index.html, then checks them: every figure that
-the files present call for (expected_figures) must be drawn as a PNG of its figsize x DPI pixels and
-shown on the page with a caption, with each flagship's summary table; otherwise it exits with an
-error listing what is broken (ctest example_plot_report, example_plot_report_flagships).
-The scenes are the main job's unless --scene names others (a user's own trajectory files, written by
-write_trajectory_files and write_contact_forces_file): each gets its states and, when its forces
-file is there, its forces. A file that is missing leaves its figure out (the page says which); a
-file that is there but malformed is an error naming it.
+REPORT_DIR holds one folder per scene (examples/report_files.hpp, docs/report.md):
+  <scene>/trajectory.csv    the trajectory sampled in time: t, segment, mode, q0.., v0.., u0..
+  <scene>/trajectory.json   its segments and events (time, impact, guards with contact and kind,
+                            modes, impulses)
+  <scene>/forces.csv        the contact forces along it (write_contact_forces_csv): t, segment,
+                            <contact>_n, <contact>_t0..
+  <scene>/report.json       a pipeline's report: discovery, refinement and analysis of the
+                            flagships (plank_box_flat_landing, hopper_over_three_holes), the
+                            guiding example's time-freezing OCP, or the tracking designs' checks and
+                            Monte Carlo batches (tracking_stability)
+  <scene>/jump_gains.json   the hopper hop's jump gains per event
+and this script writes each figure into its scene's folder (states.png, forces.png, motion.png,
+jump_gains.png, analysis.png, monte_carlo.png, deviations.png, stability.png) and the page, then
+checks them: every figure that the files present call for (expected_figures) must be drawn as a PNG
+of its figsize x DPI pixels and shown on the page with a one-line caption, with a summary table of
+each pipeline report; otherwise it exits with an error listing what is broken (ctest
+example_plot_report, example_plot_report_flagships).
+The scenes are the main job's unless --scene names others: a user's own folders, each with the
+trajectory files (saltus::write_trajectory_files(scene, traj, "trajectory", dt, folder)) and, when
+there, forces.csv (saltus::write_contact_forces_csv); each gets its states and its forces. A file
+that is missing leaves its figure out (the page says which); a file that is there but malformed is
+an error naming it.
 Geometry of the drawings: scenes/plank_box.hpp and scenes/hopper.hpp (their default parameters).
 """
 import csv
@@ -30,6 +34,7 @@ import html
 import json
 import math
 import os
+import re
 import sys
 
 import matplotlib
@@ -37,45 +42,49 @@ import matplotlib
 matplotlib.use("Agg")  # files only, no display
 import matplotlib.pyplot as plt  # noqa: E402
 
-SCENES = ["bouncing_ball", "guiding_example", "hopper", "spatial_box", "plank_box", "plank_box_refined",
-          "hopper_refined"]
+SCENES = ["bouncing_ball", "guiding_example", "plank_box", "hopper", "spatial_box", "plank_box_flat_landing",
+          "hopper_over_three_holes", "tracking_stability"]
+# Names on the page and in the captions (the folder name, underscores as spaces, otherwise).
+TITLES = {"plank_box": "plank-box", "plank_box_flat_landing": "plank-box flat landing"}
 # scenes/plank_box.hpp: box 0.3 x 0.1 m, plank 1 m hinged at its left end (origin).
 BOX_LENGTH, BOX_HEIGHT, PLANK_LENGTH = 0.3, 0.1, 1.0
 # scenes/hopper.hpp: thigh and shank 0.2 m; scenes/hopper_holes.hpp: holes at 0.5, 1.5, 2.5.
 THIGH, SHANK = 0.2, 0.2
 HOLES, HOLE_HALF_WIDTH, HOLE_DEPTH = (0.5, 1.5, 2.5), 0.25, 0.1
-# The flagship pipelines' reports: file, prefix of their figures, name in captions and on the page.
-FLAGSHIPS = [("plank_box_ocp.json", "plank_box", "plank-box flat landing"),
-             ("hopper_ocp.json", "hopper_refined", "hopper over three holes")]
+# The scenes whose motion is drawn: the drawing and its figsize [in].
+MOTIONS = {"plank_box": ("plank box", (8, 3.5)), "plank_box_flat_landing": ("plank box", (8, 3.5)),
+           "hopper": ("hopper", (8, 4.5)), "hopper_over_three_holes": ("hopper over holes", (12, 4.5))}
 # figsize [in] of the figures of a fixed size (states_size, forces_size, tracking_size: the others).
-SIZES = {"plank_box_motion": (8, 3.5), "hopper_motion": (8, 4.5), "hopper_refined_motion": (12, 4.5),
-         "jump_gains": (6, 3), "analysis": (10, 3.4), "monte_carlo": (5, 4.2), "deviations": (8, 3.8)}
-
+SIZES = {"jump_gains": (6, 3), "analysis": (10, 3.4), "monte_carlo": (5, 4.2), "deviations": (8, 3.8)}
 
 DPI = 110  # every figure: figsize [in] x DPI pixels (no tight bounding box), checked by check_report
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 
 
-def save(fig, figures, name):
-    """Writes the figure to figures/name and returns name."""
+def title(scene):
+    return TITLES.get(scene, scene.replace("_", " "))
+
+
+def save(fig, report, scene, name):
+    """Writes the figure to REPORT_DIR/scene/name and returns its path on the page, scene/name."""
     fig.tight_layout()
-    fig.savefig(os.path.join(figures, name), dpi=DPI)
+    fig.savefig(os.path.join(report, scene, name), dpi=DPI)
     plt.close(fig)
-    return name
+    return f"{scene}/{name}"
 
 
 def states_size(columns):
-    """figsize of <scene>_states.png: one row per group of q, v and u columns."""
+    """figsize of states.png: one row per group of q, v and u columns."""
     return 8, 2.4 * sum(any(k[0] == p and k[1:].isdigit() for k in columns) for p in "qvu")
 
 
 def forces_size(events):
-    """figsize of <scene>_forces.png: a second row for the impulses when an event has some."""
+    """figsize of forces.png: a second row for the impulses when an event has some."""
     return (8, 5) if any(e.get("impulses") for e in events) else (8, 3)
 
 
 def tracking_size(cases):
-    """figsize of tracking_stability.png: a row per design."""
+    """figsize of stability.png: a row per design."""
     return 11, 1.4 + 0.42 * len(cases)
 
 
@@ -87,25 +96,42 @@ def load_json(path):
         raise SystemExit(f"plot_report: {path} is not valid JSON ({e})")
 
 
-def read_trajectory(report, scene):
-    """(columns, rows as float lists except 'mode', events) of <scene>.csv/.json, or None."""
-    path_csv = os.path.join(report, scene + ".csv")
-    path_json = os.path.join(report, scene + ".json")
-    if not (os.path.exists(path_csv) and os.path.exists(path_json)):
-        return None
-    with open(path_csv, newline="") as f:
+def scene_json(report, scene, name):
+    """REPORT_DIR/scene/name read as JSON, or None when the file is not there."""
+    path = os.path.join(report, scene, name)
+    return load_json(path) if os.path.exists(path) else None
+
+
+def read_columns(path, first, text=()):
+    """{column: values} of a CSV file whose header starts with `first`; floats except the `text` columns."""
+    with open(path, newline="") as f:
         rows = list(csv.reader(f))
-    if len(rows) < 2 or rows[0][:3] != ["t", "segment", "mode"]:
-        raise ValueError(f"{path_csv}: expected a header t,segment,mode,... and samples")
+    if len(rows) < 2 or rows[0][:len(first)] != first or len(rows[0]) <= len(first):
+        raise ValueError(f"{path}: expected a header {','.join(first)},... and samples")
     header = rows[0]
     columns = {name: [] for name in header}
     for line, row in enumerate(rows[1:], start=2):
         if len(row) != len(header):
-            raise ValueError(f"{path_csv}: line {line} has {len(row)} fields, the header {len(header)}")
+            raise ValueError(f"{path}: line {line} has {len(row)} fields, the header {len(header)}")
         for name, value in zip(header, row):
-            columns[name].append(value if name == "mode" else float(value))
-    events = load_json(path_json).get("events", [])
-    return columns, events
+            columns[name].append(value if name in text else float(value))
+    return columns
+
+
+def read_trajectory(report, scene):
+    """(columns, events) of scene/trajectory.csv and trajectory.json, or None without both."""
+    path_csv = os.path.join(report, scene, "trajectory.csv")
+    path_json = os.path.join(report, scene, "trajectory.json")
+    if not (os.path.exists(path_csv) and os.path.exists(path_json)):
+        return None
+    columns = read_columns(path_csv, ["t", "segment", "mode"], text=("mode",))
+    return columns, load_json(path_json).get("events", [])
+
+
+def read_forces(report, scene):
+    """Columns of scene/forces.csv as float lists, or None when the file is not there."""
+    path = os.path.join(report, scene, "forces.csv")
+    return read_columns(path, ["t", "segment"]) if os.path.exists(path) else None
 
 
 def event_label(event):
@@ -121,7 +147,7 @@ def mark_events(ax, events, label=False):
                         fontsize=7, va="top", ha="right", color="0.3")
 
 
-def plot_states(report, figures, scene, columns, events):
+def plot_states(report, scene, columns, events):
     """q, v and u against time, the events marked and named."""
     groups = [(prefix, sorted(k for k in columns if k[0] == prefix and k[1:].isdigit())) for prefix in "qvu"]
     groups = [(p, names) for p, names in groups if names]
@@ -136,30 +162,13 @@ def plot_states(report, figures, scene, columns, events):
         ax.legend(fontsize=7, loc="upper right", ncol=len(names))
         ax.grid(alpha=0.3)
     axes[-1].set_xlabel("t [s]")
-    fig.suptitle(f"{scene}: states and inputs (dashed: events)")
-    name = save(fig, figures, f"{scene}_states.png")
-    return name, f"{scene}: positions, velocities and inputs against time; dashed lines are the events ({len(events)}), named at the top."
+    fig.suptitle(f"{title(scene)}: states and inputs (dashed: events)")
+    return save(fig, report, scene, "states.png"), (
+        f"{title(scene)}: positions, velocities and inputs against time; the dashed lines are its "
+        f"{len(events)} events, named at the top.")
 
 
-def read_forces(report, scene):
-    """Columns of <scene>_forces.csv as float lists, or None when the file is not there."""
-    path = os.path.join(report, scene + "_forces.csv")
-    if not os.path.exists(path):
-        return None
-    with open(path, newline="") as f:
-        rows = list(csv.reader(f))
-    if len(rows) < 2 or rows[0][:2] != ["t", "segment"] or len(rows[0]) < 3:
-        raise ValueError(f"{path}: expected a header t,segment,<contact>_n,... and samples")
-    columns = {name: [] for name in rows[0]}
-    for line, row in enumerate(rows[1:], start=2):
-        if len(row) != len(rows[0]):
-            raise ValueError(f"{path}: line {line} has {len(row)} fields, the header {len(rows[0])}")
-        for name, value in zip(rows[0], row):
-            columns[name].append(float(value))
-    return columns
-
-
-def plot_forces(report, figures, scene, forces, events):
+def plot_forces(report, scene, forces, events):
     """Contact forces against time (normal and tangential per contact) and the impulses as stems."""
     impulses = [(e["t"], i) for e in events for i in e.get("impulses", [])]
     fig, axes = plt.subplots(2 if impulses else 1, 1, sharex=True, figsize=forces_size(events))
@@ -180,10 +189,10 @@ def plot_forces(report, figures, scene, forces, events):
         axes[1].legend(fontsize=7, loc="upper right")
         axes[1].grid(alpha=0.3)
     axes[-1].set_xlabel("t [s]")
-    fig.suptitle(f"{scene}: contact forces" + (" and impulses" if impulses else ""))
-    name = save(fig, figures, f"{scene}_forces.png")
-    return name, (f"{scene}: the contact forces of the flow in each segment's mode (zero on open contacts)"
-                  + (f"; below, the normal impulses of the {len(impulses)} impulse(s) at the impacts." if impulses else "."))
+    fig.suptitle(f"{title(scene)}: contact forces" + (" and impulses" if impulses else ""))
+    return save(fig, report, scene, "forces.png"), (
+        f"{title(scene)}: the contact forces of the flow in each segment's mode (zero on open contacts)"
+        + (f"; below, the normal impulses of its {len(impulses)} impulse(s) at the impacts." if impulses else "."))
 
 
 def snapshot_times(t, events, count=6):
@@ -199,9 +208,9 @@ def sample_at(columns, time):
     return {name: values[k] for name, values in columns.items()}
 
 
-def plot_plank_box(report, figures, scene, columns, events):
+def plot_plank_box(report, scene, columns, events):
     """The box (centre, angle) and the plank (angle about its hinge) at the events and between."""
-    fig, ax = plt.subplots(figsize=SIZES["plank_box_motion"])
+    fig, ax = plt.subplots(figsize=MOTIONS[scene][1])
     times = snapshot_times(columns["t"], events)
     cmap = plt.get_cmap("viridis")
     for k, time in enumerate(times):
@@ -219,11 +228,10 @@ def plot_plank_box(report, figures, scene, columns, events):
     ax.set_xlabel("x [m]")
     ax.set_ylabel("y [m]")
     ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))
-    ax.set_title(f"{scene}: box and plank poses (the hinge at the origin)")
-    name = save(fig, figures, f"{scene}_motion.png")
-    what = ("the refined optimal reference: landing flat, sliding and lifting off to the target" if scene.endswith("refined")
-            else "the box lowered onto the compliant plank")
-    return name, f"{scene}: {what}; the poses at the events and at even times."
+    ax.set_title(f"{title(scene)}: box and plank poses (the hinge at the origin)")
+    what = ("the refined optimal reference: landing flat, sliding and lifting off to the target"
+            if scene == "plank_box_flat_landing" else "the box lowered onto the compliant plank")
+    return save(fig, report, scene, "motion.png"), f"{title(scene)}: {what}; the poses at the events and at even times."
 
 
 def leg(s):
@@ -233,11 +241,18 @@ def leg(s):
     return (x, z), (kx, kz), (fx, fz)
 
 
-def plot_hopper(report, figures, columns, events, holes=False):
-    """Hip, knee and foot paths, the leg drawn at the events (holes: the hopper over three holes)."""
-    fig, ax = plt.subplots(figsize=SIZES["hopper_refined_motion" if holes else "hopper_motion"])
-    samples = [sample_at(columns, time) for time in columns["t"]]
-    paths = list(zip(*[leg(s) for s in samples]))
+def draw_holes(ax):
+    for c in HOLES:
+        xs = [c + HOLE_HALF_WIDTH * math.cos(a * math.pi / 50) for a in range(51)]
+        ys = [-HOLE_DEPTH * math.sin(a * math.pi / 50) for a in range(51)]
+        ax.fill(xs, ys, color="0.85")
+
+
+def plot_hopper(report, scene, columns, events):
+    """Hip, knee and foot paths, the leg drawn at the events (and the holes of the hopper over them)."""
+    holes = MOTIONS[scene][0] == "hopper over holes"
+    fig, ax = plt.subplots(figsize=MOTIONS[scene][1])
+    paths = list(zip(*[leg(sample_at(columns, time)) for time in columns["t"]]))
     for path, name in zip(paths, ["hip", "knee", "foot"]):
         ax.plot([p[0] for p in path], [p[1] for p in path], lw=1, label=name)
     for k, e in enumerate(events):
@@ -246,41 +261,36 @@ def plot_hopper(report, figures, columns, events, holes=False):
         if not holes:  # a dozen events over 3 m: the leg drawings alone, the times are in the states figure
             ax.annotate(f'{e["t"]:.3f} s: {event_label(e)}', hip, fontsize=7, xytext=(8, 8 + 10 * k),
                         textcoords="offset points", arrowprops={"arrowstyle": "-", "color": "0.6"})
-    xmin = min(p[0] for p in paths[2]) - 0.1
-    xmax = max(p[0] for p in paths[0]) + 0.1
     ax.axhline(0.0, color="0.3", lw=1)
     if holes:
-        for c in HOLES:
-            xs = [c + HOLE_HALF_WIDTH * math.cos(a * math.pi / 50) for a in range(51)]
-            ys = [-HOLE_DEPTH * math.sin(a * math.pi / 50) for a in range(51)]
-            ax.fill(xs, ys, color="0.85")
-    ax.set_xlim(xmin, xmax)
+        draw_holes(ax)
+    ax.set_xlim(min(p[0] for p in paths[2]) - 0.1, max(p[0] for p in paths[0]) + 0.1)
     ax.set_aspect("equal")
     ax.set_xlabel("x [m]")
     ax.set_ylabel("z [m]")
     ax.legend(fontsize=7, loc="upper right")
     if holes:
         ax.set_title("hopper over three holes, refined reference: hip, knee and foot paths; the leg at each event")
-        return save(fig, figures, "hopper_refined_motion.png"), (
-            "hopper over three holes (T = 2.5 s, from rest at x = 0 to rest at x = 3): the refined optimal reference "
-            "(discovery by the time-freezing homotopy, then the mode-schedule refinement); hip, knee and foot paths, "
-            "the leg drawn at every touchdown and release, the holes shaded.")
+        return save(fig, report, scene, "motion.png"), (
+            "hopper over three holes (T = 2.5 s, from rest at x = 0 to rest at x = 3): the refined optimal reference; "
+            "hip, knee and foot paths, the leg drawn at every touchdown and release, the holes shaded.")
     ax.set_title("hopper: hip, knee and foot paths; the leg at each event")
-    return save(fig, figures, "hopper_motion.png"), "hopper: one hop (touchdown, stance, push-off); hip, knee and foot paths, the leg drawn at each event."
+    return save(fig, report, scene, "motion.png"), (
+        "hopper: one hop (touchdown, stance, push-off); hip, knee and foot paths, the leg drawn at each event.")
 
 
-def plot_hopper_gains(report, figures):
-    path = os.path.join(report, "hopper_gains.json")
-    if not os.path.exists(path):
-        return None
-    events = load_json(path)["events"]
+def plot_jump_gains(report, scene, gains):
+    """jump_gains.json (the hopper hop's): the largest entry of G_z - I per event."""
+    events = gains["events"]
     fig, ax = plt.subplots(figsize=SIZES["jump_gains"])
     labels = [f'{e["guard"]}\nt = {e["t"]:.3f}' for e in events]
     ax.bar(labels, [max(e["G_z_minus_identity_max"], 1e-16) for e in events])
     ax.set_yscale("log")
     ax.set_ylabel("max |G_z - I|")
-    ax.set_title("hopper hop: jump gain (saltation matrix) per event")
-    return save(fig, figures, "hopper_jump_gains.png"), "hopper hop: the largest entry of G_z - I of each event's saltation matrix (the touchdown's impact dominates; a slip onset and a release without impact are continuous, ~1e-11)."
+    ax.set_title(f"{title(scene)}: jump gain (saltation matrix) per event")
+    return save(fig, report, scene, "jump_gains.png"), (
+        f"{title(scene)}: the largest entry of G_z - I of each event's closed-loop saltation matrix (an impact "
+        "dominates; a slip onset or a release without impact is continuous, about 1e-11).")
 
 
 def event_name(e, trajectory_events):
@@ -302,6 +312,53 @@ def norm_ranges(events, names):
     return "; ".join(parts)
 
 
+def number(x):
+    return x if isinstance(x, (int, float)) else math.nan
+
+
+def event_norms(e, where):
+    """[|G_z|_2] of a linear event; of a conewise event, one norm per piece (its piece_norms)."""
+    if not e.get("conewise"):
+        return [number(e.get("saltation_norm"))]
+    norms = e.get("piece_norms")
+    if not isinstance(norms, list) or len(norms) != e.get("pieces"):
+        raise ValueError(f'{where}: the conewise event at t = {e["t"]} has no piece_norms for its '
+                         f'{e.get("pieces")} pieces (one |G_z| per piece, reference_analysis_io.hpp)')
+    return [number(n) for n in norms]
+
+
+def gain_bars(ax, events, names, where):
+    """Per event a bar of its |G_z|; at a conewise event one bar per piece, side by side."""
+    for i, e in enumerate(events):
+        norms = event_norms(e, where)
+        width = 0.7 / len(norms)
+        xs = [i - 0.35 + width * (k + 0.5) for k in range(len(norms))]
+        bars = ax.bar(xs, norms, width=0.9 * width, color="tab:orange" if e.get("conewise") else "tab:blue")
+        ax.bar_label(bars, [f"{n:.3g}" if len(norms) == 1 else f"#{k + 1}: {n:.5g}" for k, n in enumerate(norms)],
+                     fontsize=6 if len(norms) > 1 else 7,
+                     rotation=90 if len(norms) > 3 else 0)
+    labels = [f'{e["t"]:.3f} s\n{name}' + (f'\n{e["pieces"]} pieces' if e.get("conewise") else "")
+              for e, name in zip(events, names)]
+    ax.set_xticks(range(len(events)), labels)
+    ax.set_yscale("log")
+    finite = [n for e in events for n in event_norms(e, where) if n == n and n > 0]
+    ax.set_ylim(top=10 * max(finite or [1.0]))  # room for the labels
+    ax.set_ylabel("|G_z|_2")
+    ax.tick_params(axis="x", labelsize=7, rotation=45 if len(events) > 4 else 0)
+    ax.set_title("jump gain per event" + (" (orange: a conewise gain, one bar per piece)"
+                                          if any(e.get("conewise") for e in events) else ""), fontsize=9)
+
+
+def conewise_summary(events, names):
+    """'the 2 x touchdown event at 0.111 s: 2 pieces, |G_z| 3.246 and 3.2461': the conewise events' pieces."""
+    parts = []
+    for e, name in zip(events, names):
+        if e.get("conewise"):
+            norms = " and ".join(f"{n:.5g}" for n in event_norms(e, "analysis"))
+            parts.append(f'the {name} event at {e["t"]:.3f} s: {e["pieces"]} pieces, |G_z| {norms}')
+    return "; ".join(parts)
+
+
 def monte_carlo_counts(ax, a):
     """Bars of the Monte Carlo runs under the design, its verdict and its bounds."""
     m = a.get("monte_carlo", {})
@@ -316,46 +373,38 @@ def monte_carlo_counts(ax, a):
     ax.tick_params(axis="x", labelsize=7)
 
 
-def plot_analysis(figures, prefix, title, a, trajectory_events):
-    """Each event's jump gain (|G_z|, or the pieces of a conewise gain) and the Monte Carlo runs."""
+def plot_analysis(report, scene, a, trajectory_events):
+    """Each event's jump gain (|G_z|, or the norm of each piece of a conewise gain) and the Monte Carlo runs."""
     fig, (ax1, ax2) = plt.subplots(1, 2, figsize=SIZES["analysis"], gridspec_kw={"width_ratios": [2, 1]})
     events = a["events"]
-    conewise = [e for e in events if e.get("conewise")]
     names = [event_name(e, trajectory_events) for e in events]
-    labels = [f'{e["t"]:.3f} s\n{name}' for e, name in zip(events, names)]
-    norms = [1.0 if e.get("conewise") else e.get("saltation_norm") or math.nan for e in events]
-    bars = ax1.bar(labels, norms, color=["tab:orange" if e.get("conewise") else "tab:blue" for e in events])
-    ax1.bar_label(bars, [f'{e["pieces"]} pieces' if e.get("conewise") else f"{n:.3g}" for e, n in zip(events, norms)],
-                  fontsize=7)
-    ax1.set_yscale("log")
-    ax1.set_ylim(top=10 * max(n for n in norms if n == n))  # room for the labels
-    ax1.set_ylabel("|G_z| (saltation matrix)")
-    ax1.tick_params(axis="x", labelsize=7, rotation=45 if len(events) > 4 else 0)
-    ax1.set_title("jump gain per event" + (" (orange: conewise, its number of pieces)" if conewise else ""), fontsize=9)
+    gain_bars(ax1, events, names, os.path.join(report, scene, "report.json"))
     monte_carlo_counts(ax2, a)
-    fig.suptitle(f"{title}, refined reference: jump gains and tracking analysis", fontsize=10)
-    caption = (f"{title}, refined reference: the norm of each event's saltation matrix ({norm_ranges(events, names)})"
-               + (" (a conewise event, a simultaneous impact or release, is drawn at 1 with its number of linear "
-                  "pieces; the report gives no norm per piece)" if conewise else "")
-               + "; the tracking design's Monte Carlo runs (kept the event sequence, shrank, failed) under the "
-               "stability check's verdict and bounds on a(T).")
-    return save(fig, figures, f"{prefix}_analysis.png"), caption
+    fig.suptitle(f"{title(scene)}, refined reference: jump gains and tracking analysis", fontsize=10)
+    conewise = conewise_summary(events, names)
+    caption = (f"{title(scene)}, refined reference: the norm |G_z|_2 of each event's saltation matrix "
+               f"({norm_ranges(events, names)})"
+               + (f", and at a simultaneous event one bar per piece of its conewise gain ({conewise})"
+                  if conewise else "")
+               + "; right, the tracking design's Monte Carlo runs under the stability check's verdict and bounds "
+               "on a(T).")
+    return save(fig, report, scene, "analysis.png"), caption
 
 
-def finish(fig, ax, figures, name, xlabel, ylabel):
-    """Labels, legend and log grid of a Monte Carlo figure; saves it as `name`."""
+def finish(fig, ax, report, scene, name, xlabel, ylabel):
+    """Labels, legend and log grid of a Monte Carlo figure; saves it as scene/name."""
     ax.set_xlabel(xlabel)
     ax.set_ylabel(ylabel)
     ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))
     ax.grid(alpha=0.3, which="both")
-    return save(fig, figures, name)
+    return save(fig, report, scene, name)
 
 
 def positive(values):
     return [x if isinstance(x, (int, float)) and x > 0 else math.nan for x in values]
 
 
-def plot_deviations(figures, prefix, title, analysis):
+def plot_deviations(report, scene, analysis):
     """Each Monte Carlo run's deviation over time against its first-order prediction and the bounds."""
     dev = analysis.get("monte_carlo", {}).get("deviations")
     if not dev or not dev.get("t") or not dev.get("observed"):
@@ -378,20 +427,17 @@ def plot_deviations(figures, prefix, title, analysis):
             ax.plot([], [], color=colour, label=f"simulated, {label} ({kept.count(flag)})")
     ax.plot([], [], color="0.55", ls="--", label="first order (same deviation)")
     ax.plot([], [], color="tab:blue", ls=":", label="reference events")
-    ax.set_title(f"{title}: Monte Carlo deviations over time ({len(dev['observed'])} runs)", fontsize=9)
+    ax.set_title(f"{title(scene)}: Monte Carlo deviations over time ({len(dev['observed'])} runs)", fontsize=9)
     nominal = analysis["monte_carlo"].get("relative_to_nominal_run", False)
     ylabel = "|e(t) - e_0(t)| / |eps d|,  e = x - x_ref" if nominal else "|x(t) - x_ref(t)| / |eps d|"
-    name = finish(fig, ax, figures, f"{prefix}_deviations.png", "t [s]", ylabel)
-    against = (" less the nominal (unperturbed) closed-loop run's own error, which removes the reference's defect"
-               if nominal else "")
-    return name, (f"{title} tracking analysis: every Monte Carlo run's deviation from the reference over time "
-                  "(relative to its initial deviation, the plant compared with the reference segment of its own "
-                  f"phase{against}), against the first-order prediction of the same initial deviation (dashed); the "
-                  "stability check's bound a(T) at the horizon and the peak of its bound over time; the "
-                  "reference's events dotted.")
+    name = finish(fig, ax, report, scene, "deviations.png", "t [s]", ylabel)
+    against = " less the nominal closed-loop run's own error" if nominal else ""
+    return name, (f"{title(scene)} tracking analysis: each Monte Carlo run's deviation from the reference over time "
+                  f"(relative to its initial deviation{against}) against the first-order prediction of the same "
+                  "deviation (dashed), with the stability check's bound a(T) and its peak over time.")
 
 
-def plot_amplifications(figures, prefix, title, analysis):
+def plot_amplifications(report, scene, analysis):
     """Each Monte Carlo run's simulated amplification against its first-order prediction."""
     amp = analysis.get("monte_carlo", {}).get("amplifications")
     if not amp or not amp.get("predicted"):
@@ -409,54 +455,40 @@ def plot_amplifications(figures, prefix, title, analysis):
     upper = analysis.get("upper_bound")
     if isinstance(upper, (int, float)):
         ax.axvline(upper, color="tab:blue", lw=0.8, label="stability check's upper bound")
-    ax.set_title(f"{title}: amplification at T", fontsize=9)
+    ax.set_title(f"{title(scene)}: amplification at T", fontsize=9)
     ax.legend(fontsize=7)
     ax.set_xlabel("first-order amplification |z(T)| / |d|")
     nominal = analysis["monte_carlo"].get("relative_to_nominal_run", False)
     ax.set_ylabel("simulated |e(T) - e_0(T)| / |eps d|" if nominal else "simulated |x(T) - x_ref(T)| / |eps d|")
     ax.grid(alpha=0.3, which="both")
-    name = save(fig, figures, f"{prefix}_monte_carlo.png")
-    return name, (f"{title} tracking analysis: each Monte Carlo run's simulated amplification of its initial "
-                  "deviation at T against the first-order prediction of the same deviation (on the dashed line "
-                  "they agree), and the stability check's upper bound a(T).")
+    return save(fig, report, scene, "monte_carlo.png"), (
+        f"{title(scene)} tracking analysis: each Monte Carlo run's simulated amplification of its initial deviation "
+        "at T against the first-order prediction (on the dashed line they agree), and the stability check's upper "
+        "bound a(T).")
 
 
-def plot_flagship(report, figures, file, prefix, title):
-    """The figures of a flagship pipeline's report (file) and the report, or ([], None) without it."""
-    path = os.path.join(report, file)
-    if not os.path.exists(path):
-        return [], None
-    d = load_json(path)
+def plot_pipeline(report, scene, d, trajectory_events):
+    """The figures of a pipeline report's analysis (report.json's "analysis"), none without one."""
     a = d.get("analysis")
     if not a or "events" not in a:
-        return [], d
-    trajectory = read_trajectory(report, prefix if prefix.endswith("refined") else prefix + "_refined")
-    made = [plot_analysis(figures, prefix, title, a, trajectory[1] if trajectory else [])]
-    for figure in (plot_amplifications, plot_deviations):
-        drawn = figure(figures, prefix, title, a)
-        if drawn:
-            made.append(drawn)
-    return made, d
+        return []
+    made = [plot_analysis(report, scene, a, trajectory_events)]
+    return made + [m for m in (plot_amplifications(report, scene, a), plot_deviations(report, scene, a)) if m]
 
 
-def plot_tracking_stability(report, figures):
-    """tracking_stability.json: per design the stability check's bounds and the Monte Carlo rates."""
-    path = os.path.join(report, "tracking_stability.json")
-    if not os.path.exists(path):
-        return None
-    cases = load_json(path)["cases"]
+def plot_tracking_stability(report, scene, cases):
+    """tracking_stability/report.json: per design the stability check's bounds and the Monte Carlo rates."""
     fig, (ax1, ax2) = plt.subplots(1, 2, sharey=True, figsize=tracking_size(cases))
     rows = list(range(len(cases)))[::-1]
     for y, c in zip(rows, cases):
         colour = "tab:green" if c["verdict"] == "stable" else "tab:red"
-        periodic = "period" in c
         lo, hi = c.get("lower_bound"), c.get("upper_bound")
         if isinstance(lo, (int, float)) and isinstance(hi, (int, float)) and lo > 0:
             ax1.plot([lo, hi], [y, y], "-", color=colour, lw=3)
-            ax1.plot([hi], [y], "s" if periodic else "o", color=colour, ms=6)
+            ax1.plot([hi], [y], "s" if "period" in c else "o", color=colour, ms=6)
         for key, style in (("predicted_rate", {"marker": "o", "mfc": "none", "color": colour, "ms": 7}),
                            ("observed_rate", {"marker": "x", "color": "k", "ms": 6})):
-            ax2.plot([c[key] if isinstance(c.get(key), (int, float)) else math.nan], [y], ls="none", **style)
+            ax2.plot([number(c.get(key))], [y], ls="none", **style)
         ax2.annotate(f'{c["kept_event_sequence"]}/{c["runs"]} kept, {"agree" if c["agree"] else "DISAGREE"}',
                      (1.01, y), xycoords=("axes fraction", "data"), fontsize=7, va="center")
     ax1.axvline(1.0, color="0.3", lw=0.8, ls="--")
@@ -469,86 +501,156 @@ def plot_tracking_stability(report, figures):
     ax2.set_title("Monte Carlo against the prediction", fontsize=9)
     for ax in (ax1, ax2):
         ax.grid(alpha=0.3, which="both", axis="x")
-    caption = ("tracking designs along references with impacts (build/examples/tracking_stability): per design, the "
-               "stability check's bounds (lower to upper; on a(T), the amplification over the horizon, or on the "
-               "spectral radius of the periodic hop's monodromy; below 1 is stable), and the growth rate it predicts "
-               "against the largest rate of the nonlinear closed-loop runs, with how many kept the event sequence.")
-    return save(fig, figures, "tracking_stability.png"), caption
+    return save(fig, report, scene, "stability.png"), (
+        "tracking designs along references with impacts: per design the stability check's bounds on a(T) or on the "
+        "periodic hop's monodromy (below 1 is stable), and its predicted growth rate against the largest rate of the "
+        "nonlinear closed-loop runs, with how many kept the event sequence.")
 
 
 def summary_rows(d):
-    if d is None:
-        return []
+    """(key, value) rows of a pipeline report's table: discovery, refinement and analysis."""
     r = d.get("refinement") or {}
     a = d.get("analysis") or {}
     rows = [("stage", d.get("stage", "")), ("schedule", d.get("schedule", "")),
             ("relaxed objective", d.get("relaxed_objective")), ("refined objective", r.get("objective")),
-            ("mode validity", r.get("mode_validity_violation")), ("per-phase re-simulation", r.get("phase_resim_max_error")),
+            ("mode validity", r.get("mode_validity_violation")),
+            ("per-phase re-simulation", r.get("phase_resim_max_error")),
             ("open-loop re-simulation", (r.get("open_loop") or {}).get("max_error")),
             ("discovery [s]", d.get("discovery_seconds")), ("refinement [s]", r.get("refinement_seconds")),
             ("tracking verdict", a.get("verdict")), ("Monte Carlo agrees", a.get("agree"))]
     return [(k, v) for k, v in rows if v is not None]
 
 
-def table_heading(title):
-    return f"<h2>{html.escape(title[0].upper() + title[1:])}: discovery, refinement, analysis</h2><table>"
+def overview_row(scene, d):
+    """One row of the page's summary table: a pipeline report's stage, objective, events, verdict, seconds."""
+    r, a = d.get("refinement") or {}, d.get("analysis") or {}
+    m = a.get("monte_carlo") or {}
+    events = len(r.get("event_times") or []) if r else len(d.get("events", []))
+    agree = "agree" if a.get("agree") else "no agreement"
+    mc = f'{m.get("kept_event_sequence", "?")}/{m.get("runs", "?")} kept, {agree}' if m else ""
+    seconds = (d.get("discovery_seconds") or 0) + (r.get("refinement_seconds") or 0)
+    return (f"<a href='#{scene}'>{html.escape(title(scene))}</a>", d.get("stage", ""), d.get("objective"), events,
+            a.get("verdict", ""), mc, seconds)
 
 
-def write_index(report, figures_made, missing, tables):
-    def fmt(v):
-        return f"{v:.4g}" if isinstance(v, float) else html.escape(str(v))
+def is_pipeline(d):
+    return isinstance(d, dict) and "stage" in d
+
+
+def table_heading(scene):
+    return f"<h3>{html.escape(title(scene)[0].upper() + title(scene)[1:])}: the pipeline's summary</h3><table>"
+
+
+def draw_folder(report, scene):
+    """The figures of one scene's folder from the files in it, and its report.json (None without one)."""
+    made, events = [], []
+    data = read_trajectory(report, scene)
+    if data is not None:
+        columns, events = data
+        made.append(plot_states(report, scene, columns, events))
+        forces = read_forces(report, scene)
+        if forces is not None:
+            made.append(plot_forces(report, scene, forces, events))
+        if scene in MOTIONS:
+            draw = plot_plank_box if MOTIONS[scene][0] == "plank box" else plot_hopper
+            made.append(draw(report, scene, columns, events))
+    gains = scene_json(report, scene, "jump_gains.json")
+    if gains is not None:
+        made.append(plot_jump_gains(report, scene, gains))
+    d = scene_json(report, scene, "report.json")
+    if isinstance(d, dict) and "cases" in d:
+        made.append(plot_tracking_stability(report, scene, d["cases"]))
+    elif isinstance(d, dict):
+        made += plot_pipeline(report, scene, d, events)
+    return made, d
+
+
+def expected_in_folder(report, scene):
+    """{figure: figsize [in]} that draw_folder must draw from the files in scene's folder (its own reading)."""
+    out = {}
+    data = read_trajectory(report, scene)
+    if data is not None:
+        columns, events = data
+        out["states.png"] = states_size(columns)
+        if os.path.exists(os.path.join(report, scene, "forces.csv")):
+            out["forces.png"] = forces_size(events)
+        if scene in MOTIONS:
+            out["motion.png"] = MOTIONS[scene][1]
+    if os.path.exists(os.path.join(report, scene, "jump_gains.json")):
+        out["jump_gains.png"] = SIZES["jump_gains"]
+    d = scene_json(report, scene, "report.json")
+    if isinstance(d, dict) and "cases" in d:
+        out["stability.png"] = tracking_size(d["cases"])
+    a = (d.get("analysis") or {}) if isinstance(d, dict) else {}
+    m = a.get("monte_carlo") or {}
+    if "events" in a:
+        out["analysis.png"] = SIZES["analysis"]
+        if (m.get("amplifications") or {}).get("predicted"):
+            out["monte_carlo.png"] = SIZES["monte_carlo"]
+        if (m.get("deviations") or {}).get("t") and m["deviations"].get("observed"):
+            out["deviations.png"] = SIZES["deviations"]
+    return out
+
+
+def expected_figures(report, scenes):
+    """{scene/figure: figsize [in]} that main must draw from the files present in report."""
+    return {f"{scene}/{name}": size for scene in scenes for name, size in expected_in_folder(report, scene).items()}
+
+
+def fmt(v):
+    return "" if v is None else f"{v:.4g}" if isinstance(v, float) else html.escape(str(v))
+
+
+def overview_table(rows):
+    """The page's summary table: one row per pipeline report (overview_row)."""
+    header = ("scene", "stage", "objective", "events", "verdict", "Monte Carlo", "discovery + refinement [s]")
+    parts = ["<h2>Summary</h2><table>", "<tr>" + "".join(f"<th>{h}</th>" for h in header) + "</tr>"]
+    for row in rows:
+        cells = [row[0]] + [fmt(v) if k != 6 else f"{v:.0f}" for k, v in enumerate(row) if k > 0]
+        parts.append("<tr>" + "".join(f"<td>{c}</td>" for c in cells) + "</tr>")
+    return parts + ["</table>"]
+
+
+def figure_html(path, caption):
+    """A figure on the page: the image and its one-line caption."""
+    one_line = html.escape(" ".join(caption.split()))
+    return f"<figure><img src='{path}' alt='{html.escape(path)}'><figcaption>{one_line}</figcaption></figure>"
+
+
+def scene_section(report, scene, made, d):
+    """A scene's section of the page: links to its folder's files, its pipeline's table, its figures."""
+    files = sorted(f for f in os.listdir(os.path.join(report, scene)) if not f.endswith(".png"))
+    links = ", ".join(f"<a href='{scene}/{html.escape(f)}'>{html.escape(f)}</a>" for f in files)
+    parts = [f"<section id='{scene}'><h2>{html.escape(title(scene))}</h2>",
+             f"<p>Folder <a href='{scene}/'>{scene}/</a>: {links}</p>"]
+    if is_pipeline(d):
+        parts.append(table_heading(scene))
+        parts += [f"<tr><th>{html.escape(k)}</th><td>{fmt(v)}</td></tr>" for k, v in summary_rows(d)]
+        parts.append("</table>")
+    parts += [figure_html(path, caption) for path, caption in made]
+    return parts + ["</section>"]
+
+
+def write_index(report, sections, missing):
+    """REPORT_DIR/index.html from sections [(scene, figures, report.json)] and the scenes not drawn."""
     parts = ["<!DOCTYPE html><html><head><meta charset='utf-8'><title>Saltus report</title>",
              "<style>body{font-family:sans-serif;max-width:60em;margin:auto}figure{margin:1.5em 0}"
              "img{max-width:100%}td,th{padding:2px 8px;border-bottom:1px solid #ddd;text-align:left}</style>",
-             "</head><body><h1>Saltus: the main job's report</h1>"]
-    for title, table in tables:
-        if not table:
-            continue
-        parts.append(table_heading(title))
-        parts += [f"<tr><th>{html.escape(k)}</th><td>{fmt(v)}</td></tr>" for k, v in table]
-        parts.append("</table>")
-    parts.append("<h2>Figures</h2>")
-    for name, caption in figures_made:
-        parts.append(f"<figure><img src='figures/{name}' alt='{html.escape(name)}'>"
-                     f"<figcaption>{html.escape(caption)}</figcaption></figure>")
+             "</head><body><h1>Saltus: the main job's report</h1>",
+             "<p>One folder per scene beside this page: its trajectory (trajectory.csv, trajectory.json), its "
+             "contact forces (forces.csv), its pipeline's report (report.json) and its figures.</p>"]
+    overview = [overview_row(scene, d) for scene, _, d in sections if is_pipeline(d)]
+    if overview:
+        parts += overview_table(overview)
+    links = (f"<a href='#{s}'>{html.escape(title(s))}</a>" for s, _, _ in sections)
+    parts.append("<p>Scenes: " + ", ".join(links) + "</p>")
+    for scene, made, d in sections:
+        parts += scene_section(report, scene, made, d)
     if missing:
         parts.append("<p>Not drawn (their files are not in the report): " + html.escape(", ".join(missing)) + "</p>")
     parts.append("</body></html>")
     with open(os.path.join(report, "index.html"), "w") as f:
         f.write("\n".join(parts))
-
-
-def expected_figures(report, scenes):
-    """{figure: figsize [in]} that main must draw from the inputs present in report (its own reading)."""
-    out = {}
-    for scene in scenes:
-        data = read_trajectory(report, scene)
-        if data is None:
-            continue
-        columns, events = data
-        out[f"{scene}_states.png"] = states_size(columns)
-        if os.path.exists(os.path.join(report, scene + "_forces.csv")):
-            out[f"{scene}_forces.png"] = forces_size(events)
-        if scene.startswith("plank_box"):
-            out[f"{scene}_motion.png"] = SIZES["plank_box_motion"]
-        if scene in ("hopper", "hopper_refined"):
-            out[f"{scene}_motion.png"] = SIZES[f"{scene}_motion"]
-    if os.path.exists(os.path.join(report, "hopper_gains.json")):
-        out["hopper_jump_gains.png"] = SIZES["jump_gains"]
-    for file, prefix, _ in FLAGSHIPS:
-        path = os.path.join(report, file)
-        a = (load_json(path).get("analysis") or {}) if os.path.exists(path) else {}
-        m = a.get("monte_carlo") or {}
-        if "events" in a:
-            out[f"{prefix}_analysis.png"] = SIZES["analysis"]
-            if (m.get("amplifications") or {}).get("predicted"):
-                out[f"{prefix}_monte_carlo.png"] = SIZES["monte_carlo"]
-            if (m.get("deviations") or {}).get("t") and m["deviations"].get("observed"):
-                out[f"{prefix}_deviations.png"] = SIZES["deviations"]
-    path = os.path.join(report, "tracking_stability.json")
-    if os.path.exists(path):
-        out["tracking_stability.png"] = tracking_size(load_json(path)["cases"])
-    return out
 
 
 def png_size(path):
@@ -560,10 +662,24 @@ def png_size(path):
     return int.from_bytes(head[16:20], "big"), int.from_bytes(head[20:24], "big")
 
 
-def check_report(report, expected, drawn=None):
-    """Problems (a list of messages) of report/figures and report/index.html against expected
-    ({figure: figsize}) and, when given, the names drawn: each figure a PNG of figsize x DPI pixels
-    (+-2), shown on the page with a caption; the summary table of each flagship report present."""
+def figure_problems(report, page, name, size):
+    """What is wrong with one expected figure: its file (a PNG of size x DPI pixels, +-2) and its place on the page."""
+    path = os.path.join(report, name)
+    found = png_size(path) if os.path.exists(path) else f"{path} is missing"
+    problems = [found] if isinstance(found, str) else []
+    if not problems and (abs(found[0] - size[0] * DPI) > 2 or abs(found[1] - size[1] * DPI) > 2):
+        problems.append(f"{path} is {found[0]} x {found[1]} px, expected {size[0] * DPI:.0f} x {size[1] * DPI:.0f}")
+    shown = f"<img src='{re.escape(name)}'[^>]*><figcaption>[^<\n]*[^<\\s][^<\n]*</figcaption>"
+    if page and not re.search(shown, page):
+        problems.append(f"index.html does not show {name} with a one-line caption")
+    return problems
+
+
+def check_report(report, expected, scenes, drawn=None):
+    """Problems (a list of messages) of the figures and REPORT_DIR/index.html against expected
+    ({scene/figure: figsize}) and, when given, the names drawn: each figure a PNG of figsize x DPI
+    pixels (+-2), shown on the page with a one-line caption; a summary table of each pipeline report
+    in the scenes' folders, and the page's summary table."""
     problems = []
     if drawn is not None and set(drawn) != set(expected):
         problems.append(f"drawn {sorted(set(drawn) - set(expected))} not expected, "
@@ -572,37 +688,18 @@ def check_report(report, expected, drawn=None):
     page = open(page_path).read() if os.path.exists(page_path) else ""
     if not page:
         problems.append(f"{page_path} is missing or empty")
-    for name, (w, h) in sorted(expected.items()):
-        path = os.path.join(report, "figures", name)
-        size = png_size(path) if os.path.exists(path) else f"{path} is missing"
-        if isinstance(size, str):
-            problems.append(size)
-        elif abs(size[0] - w * DPI) > 2 or abs(size[1] - h * DPI) > 2:
-            problems.append(f"{path} is {size[0]} x {size[1]} px, expected {w * DPI:.0f} x {h * DPI:.0f}")
-        if page and f"<img src='figures/{name}'" not in page:
-            problems.append(f"{page_path} does not show {name}")
-    if page and page.count("<figcaption>") < len(expected):
-        problems.append(f"{page_path} has {page.count('<figcaption>')} captions for {len(expected)} figures")
-    problems += [f"{page_path} has no summary table of the {title}" for file, _, title in FLAGSHIPS
-                 if page and os.path.exists(os.path.join(report, file)) and table_heading(title) not in page]
+    for name, size in sorted(expected.items()):
+        problems += figure_problems(report, page, name, size)
+    pipelines = [s for s in scenes if is_pipeline(scene_json(report, s, "report.json"))]
+    problems += [f"{page_path} has no summary table of {s}/report.json" for s in pipelines
+                 if page and table_heading(s) not in page]
+    if page and pipelines and "<h2>Summary</h2>" not in page:
+        problems.append(f"{page_path} has no summary table of the pipelines")
     return problems
 
 
-def draw_scene(report, figures, scene, columns, events):
-    """The figures of one trajectory: states, forces when its file is there, the motion."""
-    made = [plot_states(report, figures, scene, columns, events)]
-    forces = read_forces(report, scene)
-    if forces is not None:
-        made.append(plot_forces(report, figures, scene, forces, events))
-    if scene.startswith("plank_box"):
-        made.append(plot_plank_box(report, figures, scene, columns, events))
-    if scene in ("hopper", "hopper_refined"):
-        made.append(plot_hopper(report, figures, columns, events, holes=(scene == "hopper_refined")))
-    return made
-
-
-def main(argv):
-    args = argv[1:]
+def parse_args(args):
+    """(report directory, scenes) of the command line."""
     scenes = SCENES
     if "--scene" in args:
         at = args.index("--scene")
@@ -613,36 +710,33 @@ def main(argv):
     report = args[0] if args else "report"
     if not os.path.isdir(report):
         raise SystemExit(f"plot_report: {report} is not a directory (run examples/demo.sh first)")
-    figures = os.path.join(report, "figures")
-    os.makedirs(figures, exist_ok=True)
-    made, missing, tables = [], [], []
+    return report, scenes
+
+
+def main(argv):
+    report, scenes = parse_args(argv[1:])
+    sections, missing = [], []
     for scene in scenes:
-        data = read_trajectory(report, scene)
-        if data is None:
+        made, d = draw_folder(report, scene) if os.path.isdir(os.path.join(report, scene)) else ([], None)
+        if made or d is not None:
+            sections.append((scene, made, d))
+        else:
             missing.append(scene)
-            continue
-        made += draw_scene(report, figures, scene, *data)
-    made += [m for m in (plot_hopper_gains(report, figures), plot_tracking_stability(report, figures)) if m]
-    for file, prefix, title in FLAGSHIPS:
-        drawn, d = plot_flagship(report, figures, file, prefix, title)
-        made += drawn
-        tables.append((title, summary_rows(d)))
-        if d is None:
-            missing.append(file)
-    if not os.path.exists(os.path.join(report, "tracking_stability.json")):
-        missing.append("tracking_stability.json")
-    write_index(report, made, missing, tables)
-    for scene in missing:
-        if not scene.endswith(".json"):
-            print(f"plot_report: no figures of {scene}: {report} needs {scene}.csv and {scene}.json "
-                  "(saltus::write_trajectory_files writes both)", file=sys.stderr)
-    problems = check_report(report, expected_figures(report, scenes), [name for name, _ in made])
+            print(f"plot_report: no figures of {scene}: {os.path.join(report, scene)} has no trajectory "
+                  "(trajectory.csv and trajectory.json, saltus::write_trajectory_files), report.json or "
+                  "jump_gains.json", file=sys.stderr)
+    write_index(report, sections, missing)
+    made = [name for _, figures, _ in sections for name, _ in figures]
+    problems = check_report(report, expected_figures(report, scenes), scenes, made)
     if problems:
         raise SystemExit("plot_report: broken report:\n  " + "\n  ".join(problems))
-    print(f"plot_report: {len(made)} figures in {figures} (each checked: PNG, size), "
+    print(f"plot_report: {len(made)} figures in the scene folders of {report} (each checked: PNG, size, caption), "
           f"page {os.path.join(report, 'index.html')}")
     return 0
 
 
 if __name__ == "__main__":
-    sys.exit(main(sys.argv))
+    try:
+        sys.exit(main(sys.argv))
+    except ValueError as e:  # a malformed input file, named in the message
+        raise SystemExit(f"plot_report: {e}")

@@ -3,6 +3,7 @@
 // mu times the normal impulse off the sliding speed, the box slides and comes to rest at
 // t_stop = t_impact + (v_x - mu v_n) / (mu g).
 #include <saltus/hybrid/vocabulary/trajectory_report.hpp>
+#include "report_files.hpp"
 #include "scenes/all_scenes.hpp"
 
 #include <cmath>
@@ -29,6 +30,6 @@ int main() {
   const double t_stop = t_impact + (vx - mu * vn) / (mu * g);
   std::printf("  stop at %.12f s (closed form %.12f, error %.2e)\n", traj.events.at(1).t, t_stop,
               std::abs(traj.events.at(1).t - t_stop));
-  write_trajectory_files(box, traj, "spatial_box", 0.01);
+  examples::write_scene_trajectory(box, traj, "spatial_box", 0.01);  // report/spatial_box/
   return std::abs(traj.events.at(1).t - t_stop) < 1e-8 ? 0 : 1;
 }

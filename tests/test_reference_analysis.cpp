@@ -2,10 +2,13 @@
 // reference, so that it also runs under the sanitizers, the point mass of Example 3 (impact into a
 // closed contact, slide, release; single-guard events) with an LQR design and a small batch; a
 // failing stage reported by name, not thrown; the JSON writer's keys (reference_analysis_io.hpp);
-// and the refusals of bad input. The conewise rows of a simultaneous event are checked on the
-// plank-box's optimal reference (test_flagship_ocps.cpp).
+// the norms of a conewise event's pieces (the plank-box's box landing flat); and the refusals of
+// bad input. The conewise rows of the plank-box's optimal reference are checked in
+// test_flagship_ocps.cpp.
 #include "scenes/references.hpp"
 
+#include <Eigen/Eigenvalues>  // operatorNorm
+#include <Eigen/SVD>
 #include <gtest/gtest.h>
 #include <saltus/sensitivity/analysis/reference_analysis.hpp>
 #include <saltus/sensitivity/analysis/reference_analysis_io.hpp>
@@ -129,7 +132,51 @@ TEST(ReferenceAnalysis, JsonKeepsTheKeysOfEachCompletedStage) {
   EXPECT_EQ(f["failed_at"].get<std::string>(), "tracking design");
 }
 
-// A conewise row (written by hand: the writer's own contract) has its pieces, unrealisable orders
+// The plank-box's box lowered flat onto the plank: both corners land at once, a conewise event of
+// two pieces (one per corner landing first). Its row carries the spectral norm of each piece's G_z,
+// in the order of the conewise gain's pieces(): checked against the pieces of the same linearisation
+// built here (and each norm against the largest singular value), in the report and in its JSON.
+// The design is refused (R negative), so the analysis stops after the jump gains.
+TEST(ReferenceAnalysis, ConewiseRowHasTheNormOfEachPiece) {
+  using scenes::PlankBox;
+  const PlankBox plank_box;
+  const SimulationOptions simulation = references::tight();
+  Simulator<PlankBox> simulator(plank_box, simulation);
+  const auto traj = simulator.run(plank_box.flat_state(), 0.0, 0.3,
+                                  open_loop<PlankBox>([&](double) { return plank_box.lowering_input(); }));
+  ASSERT_EQ(traj.events.size(), 1u) << "one event: the flat landing";
+  ReferenceAnalysisOptions<PlankBox> options;
+  options.design.name = "refused: R negative";
+  options.design.weights.R = -options.design.weights.R;
+  const ReferenceAnalysis<PlankBox> a = analyse_reference(plank_box, traj, simulation, options);
+  const nlohmann::ordered_json j = to_json(a);
+  ASSERT_EQ(a.failed_at, AnalysisStage::TrackingDesign) << j.dump(2);
+  ASSERT_EQ(a.events.size(), 1u);
+  const EventGainSummary& row = a.events[0];
+  ASSERT_TRUE(row.conewise) << j.dump(2);
+
+  LinearisationOptions lo;  // analyse_reference's linearisation
+  lo.gains.feedback = FeedbackTreatment::Signal;
+  lo.simulation = simulation;
+  lo.spreading.before = lo.spreading.after = options.spreading;
+  const LinearisedSystem<PlankBox> lin(plank_box, traj, lo);
+  ASSERT_TRUE(lin.conewise(0));
+  ConewiseJumpGain<PlankBox>& gain = lin.conewise_gain(0);
+  ASSERT_EQ(gain.build_all(), 2);
+  ASSERT_EQ(row.pieces, 2);
+  ASSERT_EQ(row.piece_norms.size(), gain.pieces().size());
+  ASSERT_EQ(j["events"][0]["piece_norms"].size(), gain.pieces().size());
+  for (std::size_t k = 0; k < gain.pieces().size(); ++k) {
+    const Mat<8, 8>& G_z = gain.pieces()[k]->G_z;
+    const double largest_singular_value = Eigen::JacobiSVD<Mat<8, 8>>(G_z).singularValues()[0];
+    EXPECT_EQ(row.piece_norms[k], G_z.operatorNorm()) << "piece " << k << "\nG_z =\n" << G_z;
+    EXPECT_NEAR(row.piece_norms[k], largest_singular_value, 1e-12 * largest_singular_value) << "piece " << k;
+    EXPECT_EQ(j["events"][0]["piece_norms"][k].get<double>(), row.piece_norms[k]);
+  }
+  EXPECT_NE(row.piece_norms[0], row.piece_norms[1]) << "the two landing orders have different gains";
+}
+
+// A conewise row (written by hand: the writer's own contract) has its pieces, their norms, unrealisable orders
 // and face discontinuity, null when no face was compared; a failure in the first stage leaves only
 // the failure and the time.
 TEST(ReferenceAnalysis, JsonOfConewiseRowsAndOfAFailedLinearisation) {
@@ -139,6 +186,7 @@ TEST(ReferenceAnalysis, JsonOfConewiseRowsAndOfAFailedLinearisation) {
   compared.guards = 2;
   compared.conewise = true;
   compared.pieces = 2;
+  compared.piece_norms = {1.5, 3.25};
   compared.unrealisable_orders = 1;
   compared.face_discontinuity = 2.5e-15;
   uncompared = compared;
@@ -148,8 +196,9 @@ TEST(ReferenceAnalysis, JsonOfConewiseRowsAndOfAFailedLinearisation) {
   a.failure = "stopped here";
   const nlohmann::ordered_json j = to_json(a);
   ASSERT_EQ(j["events"].size(), 2u);
-  EXPECT_EQ(keys(j["events"][0]),
-            (std::vector<std::string>{"t", "guards", "conewise", "pieces", "unrealisable_orders", "face_discontinuity"}));
+  EXPECT_EQ(keys(j["events"][0]), (std::vector<std::string>{"t", "guards", "conewise", "pieces", "piece_norms",
+                                                            "unrealisable_orders", "face_discontinuity"}));
+  EXPECT_EQ(j["events"][0]["piece_norms"].get<std::vector<double>>(), (std::vector<double>{1.5, 3.25}));
   EXPECT_EQ(j["events"][0]["face_discontinuity"].get<double>(), 2.5e-15);
   EXPECT_TRUE(j["events"][1]["face_discontinuity"].is_null());
   EXPECT_EQ(j["events"][0]["pieces"].get<int>(), 2);

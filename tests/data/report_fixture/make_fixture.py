@@ -5,12 +5,13 @@ of an event kept), numbers to 7 significant digits, a dozen of the Monte Carlo r
 flagship's analysis, and the pipelines' reports without the keys plot_report.py does not read
 (homotopy steps, solves, failure messages).
 
-    python3 make_fixture.py REPORT_DIR [TRACKING_JSON]     writes ./report/ beside this script
+    python3 make_fixture.py REPORT_DIR [SCENE ...]     writes ./report/<SCENE>/ beside this script
 
-REPORT_DIR holds what `bash examples/demo.sh` writes: plank_box_refined{.csv,.json,_forces.csv},
-hopper_refined{.csv,.json,_forces.csv}, plank_box_ocp.json and hopper_ocp.json. TRACKING_JSON is
-report/tracking_stability.json (default: REPORT_DIR's). The committed fixture was made from the
-runs of the main job's two pipelines and of `build/examples/tracking_stability --json`.
+REPORT_DIR holds what `bash examples/demo.sh` writes, one folder per scene: the flagship pipelines'
+plank_box_flat_landing/ and hopper_over_three_holes/ (report.json, trajectory.csv, trajectory.json,
+forces.csv) and tracking_stability/report.json. SCENE names the folders to remake (default: all
+three; a folder that REPORT_DIR does not have is left as it is). The committed fixture was made from
+the runs of the main job's two pipelines and of `build/examples/tracking_stability --json`.
 """
 import csv
 import json
@@ -74,26 +75,34 @@ def thin_ocp(src, dst):
         json.dump(rounded(d), f, indent=1)
 
 
+def thin_pipeline(src, dst):
+    """A flagship's folder: its report, trajectory and forces, thinned."""
+    os.makedirs(dst, exist_ok=True)
+    for name in ("trajectory.csv", "forces.csv"):
+        thin_csv(os.path.join(src, name), os.path.join(dst, name))
+    with open(os.path.join(src, "trajectory.json")) as f:
+        trajectory = json.load(f)
+    with open(os.path.join(dst, "trajectory.json"), "w") as f:
+        json.dump(rounded(trajectory), f, indent=1)
+    thin_ocp(os.path.join(src, "report.json"), os.path.join(dst, "report.json"))
+
+
 def main(argv):
     src = argv[1]
-    tracking = argv[2] if len(argv) > 2 else os.path.join(src, "tracking_stability.json")
+    scenes = argv[2:] or ["plank_box_flat_landing", "hopper_over_three_holes", "tracking_stability"]
     out = os.path.join(os.path.dirname(os.path.abspath(__file__)), "report")
-    os.makedirs(out, exist_ok=True)
-    for scene in ("plank_box_refined", "hopper_refined"):
-        thin_csv(os.path.join(src, scene + ".csv"), os.path.join(out, scene + ".csv"))
-        thin_csv(os.path.join(src, scene + "_forces.csv"), os.path.join(out, scene + "_forces.csv"))
-        with open(os.path.join(src, scene + ".json")) as f:
-            trajectory = json.load(f)
-        with open(os.path.join(out, scene + ".json"), "w") as f:
-            json.dump(rounded(trajectory), f, indent=1)
-    for name in ("plank_box_ocp.json", "hopper_ocp.json"):
-        thin_ocp(os.path.join(src, name), os.path.join(out, name))
-    if os.path.exists(tracking):
-        with open(tracking) as f:
-            t = json.load(f)
-        with open(os.path.join(out, "tracking_stability.json"), "w") as f:
-            json.dump(t, f, indent=1)
-    print(f"wrote {out}")
+    for scene in scenes:
+        if not os.path.isdir(os.path.join(src, scene)):
+            continue
+        if scene == "tracking_stability":
+            os.makedirs(os.path.join(out, scene), exist_ok=True)
+            with open(os.path.join(src, scene, "report.json")) as f:
+                t = json.load(f)
+            with open(os.path.join(out, scene, "report.json"), "w") as f:
+                json.dump(t, f, indent=1)
+        else:
+            thin_pipeline(os.path.join(src, scene), os.path.join(out, scene))
+        print(f"wrote {os.path.join(out, scene)}")
 
 
 if __name__ == "__main__":

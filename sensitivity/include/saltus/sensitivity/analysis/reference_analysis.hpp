@@ -10,9 +10,9 @@
 //     whatever law produced it; linearisation.hpp);
 //  2. jump gains: per event its saltation matrix G_z (thesis C.37-C.39, jump_gain.hpp), reported
 //     by its spectral norm |G_z|_2; at an event whose guards fire at once and admit no single
-//     linear gain (two corners landing flat), the conewise gain with all its pieces built, the
-//     orders no nearby motion realises, and the measured continuity across shared cone faces
-//     (thesis appendix D, conewise_gain.hpp);
+//     linear gain (two corners landing flat), the conewise gain with all its pieces built (each
+//     reported by the spectral norm of its G_z), the orders no nearby motion realises, and the
+//     measured continuity across shared cone faces (thesis appendix D, conewise_gain.hpp);
 //  3. tracking design: a time-varying LQR along the reference with cost-to-go jumps (lqr_design,
 //     tracking.hpp);
 //  4. stability check: bounds on the amplification a(T) = |z(T)|_Wout / |z(t0)|_W of a first-order
@@ -81,6 +81,9 @@ struct EventGainSummary {
   /// |G_z|_2 of a linear gain (dimensionless in the scene's units); NaN at a conewise event.
   double saltation_norm = std::numeric_limits<double>::quiet_NaN();
   int pieces = 0;               ///< conewise: the linear pieces (ConewiseJumpGain::build_all)
+  /// Conewise: |G_z|_2 of each piece, in the order ConewiseJumpGain::pieces() lists them (one per
+  /// piece); empty at a linear event.
+  std::vector<double> piece_norms;
   int unrealisable_orders = 0;  ///< conewise: orders no nearby motion realises
   /// Conewise: max |H_a(p) - H_b(p)| / |p| across shared cone faces over 200 sampled directions
   /// (ConewiseJumpGain::face_discontinuity); none when no face was compared or the event is linear.

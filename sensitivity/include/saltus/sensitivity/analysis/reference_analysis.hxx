@@ -54,7 +54,7 @@ void require_analysable(const HybridTrajectory<S>& reference, const ReferenceAna
                    "the verdict does not cover");
 }
 
-// The row of event e: its saltation norm, or its conewise gain's pieces.
+// The row of event e: its saltation norm, or its conewise gain's pieces and their norms.
 template <Scene S>
 EventGainSummary event_gain_summary(const LinearisedSystem<S>& open_loop, const Event<S>& event, int e) {
   EventGainSummary row;
@@ -67,6 +67,7 @@ EventGainSummary event_gain_summary(const LinearisedSystem<S>& open_loop, const 
   }
   ConewiseJumpGain<S>& gain = open_loop.conewise_gain(e);
   row.pieces = gain.build_all();
+  for (const ConewisePiece<S>* piece : gain.pieces()) row.piece_norms.push_back(piece->G_z.operatorNorm());
   row.unrealisable_orders = static_cast<int>(gain.unrealisable_orders().size());
   int faces = 0;
   const double jump = gain.face_discontinuity(200, &faces);

@@ -13,7 +13,8 @@ namespace saltus {
 /// The report as a JSON object; a stage's keys are written only when it completed:
 ///   linearisation_seconds
 ///   events               [{t (s), guards (their count), conewise; linear events: saltation_norm
-///                        (|G_z|_2); conewise events: pieces, unrealisable_orders (their count),
+///                        (|G_z|_2); conewise events: pieces, piece_norms (|G_z|_2 of each piece,
+///                        in the order of ConewiseJumpGain::pieces), unrealisable_orders (their count),
 ///                        face_discontinuity (null when no face was compared)}]: every row built,
 ///                        also when the jump gains' stage failed after some of them
 ///   jump_gain_seconds
@@ -57,6 +58,7 @@ nlohmann::ordered_json to_json(const ReferenceAnalysis<S>& analysis) {
       json row{{"t", e.t}, {"guards", e.guards}, {"conewise", e.conewise}};
       if (e.conewise) {
         row["pieces"] = e.pieces;
+        row["piece_norms"] = e.piece_norms;
         row["unrealisable_orders"] = e.unrealisable_orders;
         row["face_discontinuity"] = e.face_discontinuity ? json(*e.face_discontinuity) : json(nullptr);
       } else {
