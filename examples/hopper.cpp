@@ -33,8 +33,9 @@
 // report/hopper_over_three_holes/ (from hop_guess report/hopper_over_three_holes_hop_guess/;
 // report_files.hpp), where the main job also puts that JSON as report.json.
 // Exit status 0 only when the reference is refined; the analysis's outcome is reported, not
-// reflected in it. About 5 minutes on one thread: discovery and refinement about 245 s, the
-// analysis about 60 s, most of it the Monte Carlo runs (docs/refinement.md, "Hopper over three holes").
+// reflected in it. About 3 minutes on one thread, the machine otherwise idle: discovery and
+// refinement 141 s, the analysis 30 s, most of it the Monte Carlo runs (beside a compilation on the
+// other core 245 s and 60 s; docs/refinement.md, "Hopper over three holes").
 #include <saltus/hybrid/reference/resimulation.hpp>
 #include <saltus/hybrid/vocabulary/trajectory_report.hpp>
 #include "report_files.hpp"

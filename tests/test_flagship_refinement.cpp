@@ -98,7 +98,7 @@ TEST(HopperOverOneHole, IsTheThreeHoleOcpWithAnotherTarget) {
 }
 
 // The whole chain on the one-hole bed (T = 1 s, target (1, 0.4, 0, 0), N = 8; HopperOverOneHole)
-// in about a minute (measured below, before the mesh rounds' dual warm start): run_hopper_chain, the
+// in 32 s on an idle machine (measured below): run_hopper_chain, the
 // code of examples/hopper.cpp --json and of the Python binding, with hopper_chain_options(OneHole),
 // the three-hole chain's settings (docs/refinement.md, "Hopper over three holes") but for three:
 //  - discovery: the hole continuation and two homotopy steps (sigma = 1, 0.1) with the one-hole
@@ -109,10 +109,10 @@ TEST(HopperOverOneHole, IsTheThreeHoleOcpWithAnotherTarget) {
 //    measured 2.8e-7; at 1e-6 it failed with 1.4e-6; at 2e-8 the refinement took 64 s instead of 36);
 //  - analysis: the LQR design (R = I) and its stability check as the flagship's, 30 Monte Carlo runs
 //    at eps = 1e-6 (not 200) and no deviation times (60 of them cost the batch about 11 s).
-// Measured (release, one thread, the other core busy; docs/refinement.md, "The whole chain on the
-// one-hole bed"): 58-62 s, discovery 18-21 s (its first hole stage 12 s), refinement 32-35 s (4 mesh
-// rounds, 169 elements, 196 Ipopt iterations), analysis 6-7 s, by the machine's load;
-// none of the variants measured there was faster. Footholds 0, 0.246, 0.750, 1 from the discovered
+// Measured (release, one thread; docs/refinement.md, "The whole chain on the one-hole bed"): alone on
+// the machine 31.9 s, discovery 11.9 s, refinement 16.6 s (4 mesh rounds, 169 elements, 183 Ipopt
+// iterations), analysis 3.3 s; beside other work up to 62 s; none of the variants measured there
+// was faster. Footholds 0, 0.246, 0.750, 1 from the discovered
 // slides; refined objective 39.20 (the relaxed 13.27), mode validity 7e-13, per-phase
 // re-simulation 2.8e-7; a hop in place (lift-off 0.40 s, touchdown at foot x 0.2498, on the hole's
 // edge), the jump over the hole (0.55 s to 0.75 s, touchdown at x = 0.834), a hop to x = 1

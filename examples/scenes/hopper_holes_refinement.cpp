@@ -163,7 +163,13 @@ nlohmann::ordered_json to_json(const HopperChain& chain) {
     j["solve_seconds"] = discovery.seconds + r.seconds;
     j["refinement"] = rj;
   }
-  if (chain.analysis) j["analysis"] = to_json(*chain.analysis);
+  if (chain.analysis) {
+    j["analysis"] = to_json(*chain.analysis);
+    // The batch's size and how many runs kept the events, beside the verdict (as well as in its
+    // "monte_carlo" block): the figures a reader of the report compares first.
+    if (j["analysis"].contains("monte_carlo"))
+      for (const char* key : {"runs", "kept_event_sequence"}) j["analysis"][key] = j["analysis"]["monte_carlo"][key];
+  }
   return j;
 }
 

@@ -145,7 +145,8 @@ HopperChain run_hopper_chain(const HopperChainOptions& options);
 /// "refinement (<why>)"), relaxed_objective, discovery_seconds, discovery, footholds; when refined:
 /// mode_validity_violation, objective, schedule, schedule_edits, phase_resim_max_error,
 /// refinement_seconds, events (the event times, s), max_path_violation, target_error,
-/// solve_seconds, refinement (refinement_io.hpp); analysis (reference_analysis_io.hpp)}.
+/// solve_seconds, refinement (refinement_io.hpp); analysis (reference_analysis_io.hpp, with its
+/// batch's runs and kept_event_sequence also at its top level)}.
 nlohmann::ordered_json to_json(const HopperChain& chain);
 
 }  // namespace saltus::scenes

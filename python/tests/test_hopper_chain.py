@@ -69,6 +69,8 @@ def test_the_analysis_is_stable_and_the_monte_carlo_batch_agrees(chain):
     assert mc["kept_event_sequence"] >= 10 and mc["grew"] == 0
     assert mc["max_log_discrepancy"] <= 0.05
     assert a["agree"] is True
+    # hopper --json's keys: the batch's size and kept runs beside the verdict too.
+    assert a["runs"] == mc["runs"] and a["kept_event_sequence"] == mc["kept_event_sequence"]
     # The reference is analysed again from Python: its jump gains are the analysis's.
     gains = saltus.jump_gains(r["reference"], feedback="signal")
     for row, g in zip(a["events"], gains):

@@ -64,8 +64,8 @@ struct RefinementMesh {
   /// Measured on the hopper's chain (local error 2e-8; docs/refinement.md, "Where the refinement's
   /// time goes"), every round warm-started with its multipliers: the rounds that split 2 of 456
   /// and 7 of 448 elements took 8 and 17 iterations against 27 and 26, the one that split 41 of
-  /// 387 took 36 against 37, while the first two, which split a quarter and two fifths of their grids
-  /// and move the objective from 334 to 163 to 113, took 88 and 76 against 76 and 72: where most
+  /// 387 took 36 against 37, while the first two, which split 51 of 57 and 82 of 203 elements and
+  /// move the objective from 334 to 163 to 113, took 88 and 76 against 76 and 72: where most
   /// of the grid changes, the old multipliers belong to another solution.
   double dual_warm_start_split_fraction = 0.1;
   double dual_warm_start_mu = 1e-6;  ///< Ipopt's mu_init for a dual warm start, > 0
