@@ -35,7 +35,7 @@
 // Exit status 0 only when the reference is refined; the analysis's outcome is reported, not
 // reflected in it. About 3 minutes on one thread, the machine otherwise idle: discovery and
 // refinement 141 s, the analysis 30 s, most of it the Monte Carlo runs (beside a compilation on the
-// other core 245 s and 60 s; docs/refinement.md, "Hopper over three holes").
+// other core 243 s and 60 s; docs/refinement.md, "Hopper over three holes").
 #include <saltus/hybrid/reference/resimulation.hpp>
 #include <saltus/hybrid/vocabulary/trajectory_report.hpp>
 #include "report_files.hpp"

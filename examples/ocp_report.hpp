@@ -1,6 +1,6 @@
-// The JSON report of an optimal reference from the time-freezing OCP (`hopper --json`,
-// `plank_box --json`): the OCP's figures, one entry per Ipopt solve, the events read off the
-// discrete solution, and the re-simulation of the recovered reference by the event-driven
+// The JSON report of an optimal reference from the time-freezing OCP (`plank_box --json`): the
+// OCP's figures, one entry per Ipopt solve, the events read off the discrete solution, and the
+// re-simulation of the recovered reference by the event-driven
 // simulator (only for a converged solution: an unconverged one is not a motion to re-simulate).
 #pragma once
 

@@ -106,7 +106,8 @@ TEST(HopperOverOneHole, IsTheThreeHoleOcpWithAnotherTarget) {
 //    OCP type with the one-hole target (nothing else compiled);
 //  - refinement: the three-hole options (n_s = 4, elements of at most 0.05 s, ...) but the mesh
 //    refined to local error 2e-7 instead of 2e-8 (the per-phase re-simulation check needs 1e-6:
-//    measured 2.8e-7; at 1e-6 it failed with 1.4e-6; at 2e-8 the refinement took 64 s instead of 36);
+//    measured 2.8e-7; at 1e-6 it failed with 1.4e-6; at 2e-8 the refinement took 64 s instead of
+//    32-35 s, both beside another build);
 //  - analysis: the LQR design (R = I) and its stability check as the flagship's, 30 Monte Carlo runs
 //    at eps = 1e-6 (not 200) and no deviation times (60 of them cost the batch about 11 s).
 // Measured (release, one thread; docs/refinement.md, "The whole chain on the one-hole bed"): alone on

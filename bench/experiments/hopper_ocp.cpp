@@ -86,7 +86,7 @@ struct Variant {
 std::vector<Variant> variants() {
   using R = MpccSolverOptions::Relaxation;
   return {
-      {"default", "hopper --json: smoothing, cross-complementarity on the gap, continuation on the holes"},
+      {"default", "the default homotopy: smoothing, cross-complementarity on the gap, continuation on the holes"},
       {"paper", "the paper's formulation (NOSNOC): Scholtes, cross-complementarity on all, no continuation",
        R::Scholtes, true, false},
       {"no-continuation", "the default without the continuation on the holes", R::Smoothing, false, false},

@@ -2,7 +2,7 @@
 // and discover_schedule_by_continuation for scenes::HopperOverThreeHoles), declared here and
 // compiled once in hopper_holes_refinement.cpp, in its own library saltus_hopper_refinement: only
 // the programs that refine the hopper (examples/hopper.cpp --json, bench/experiments, the
-// release-stage test tests/test_flagship_refinement.cpp) link it, so the tests' scene library does
+// release-stage test tests/test_flagship_refinement.cpp and the Python module _saltus) link it, so the tests' scene library does
 // not compile it. The one-hole bed (HopperOverOneHole) runs on it too, as the three-hole type with
 // its target (HopperOverThreeHoles::target, HopperOverOneHole::on_three_hole_rows) and horizon.
 // With it, the settings of the hopper's chain (docs/refinement.md, "Hopper over three holes"):
@@ -95,8 +95,8 @@ struct HopperChainOptions {
   HopperInitialisation initialisation = HopperInitialisation::Paper;
   /// The refinement's mesh tolerance (RefinementOptions::mesh.local_error_tolerance): 2e-8 over three
   /// holes (hopper_refinement_options), 2e-7 on the one-hole bed (its per-phase re-simulation check
-  /// passes at 2.8e-7 measured, and the refinement takes 36 s instead of 64 s;
-  /// tests/test_flagship_refinement.cpp).
+  /// passes at 2.8e-7 measured, and the refinement takes 32-35 s instead of 64 s at 2e-8, both
+  /// beside another build; tests/test_flagship_refinement.cpp).
   double local_error_tolerance = 2e-8;
   /// Closed-loop Monte Carlo runs of the analysis (>= 1), at perturbation size `perturbation_size`
   /// (the touchdowns' saltation norms reach 5e4: at 1e-5 a third of the runs leave the friction
@@ -131,18 +131,20 @@ struct HopperChain {
 /// The hopper's whole chain (docs/refinement.md, "Hopper over three holes"): discovery with
 /// hopper_discovery_options(2) (by the hole continuation, or from hop_guess), the footsteps of its
 /// schedule and their guess (hopper_guess_from), their refinement (hopper_refinement_options with the
-/// options' mesh tolerance), and, when refined, analyse_reference under hopper_monte_carlo_simulation()
+/// options' mesh tolerance), and, when the refinement converged (its checks passed or not),
+/// analyse_reference under hopper_monte_carlo_simulation()
 /// with stance_start_lqr_analysis (R = I) at the options' runs, size and deviation times. A
 /// saltus::Error of the guess or the refinement is kept (refinement_failure), not thrown. Used by
 /// examples/hopper.cpp --json, tests/test_flagship_refinement.cpp and the Python bindings
 /// (saltus.optimal_control.hopper_over_three_holes, hopper_over_one_hole). Throws InvalidArgument
-/// for hop_guess on the one-hole bed, runs < 1, a perturbation size that is not finite and > 0,
-/// deviation_times < 0, a mesh tolerance that is not finite and > 0.
+/// for hop_guess on the one-hole bed, runs < 1, a perturbation size or a mesh tolerance that is not
+/// finite or not > 0, deviation_times < 0; a saltus::Error thrown by discovery propagates.
 HopperChain run_hopper_chain(const HopperChainOptions& options);
 
 /// The chain's report, as examples/hopper.cpp --json prints it: {converged, initialisation ("paper"
-/// or "hop_guess"), stage ("refined", "converged, checks failed: ...", "discovery (<why>)" or
-/// "refinement (<why>)"), relaxed_objective, discovery_seconds, discovery, footholds; when refined:
+/// or "hop_guess"), stage ("refined", "converged, checks failed: ...", "not converged", "discovery
+/// (<why>)" or "refinement (<why>)"), relaxed_objective, discovery_seconds, discovery, footholds; when
+/// the refinement ran (any stage but "discovery (...)" and "refinement (...)"):
 /// mode_validity_violation, objective, schedule, schedule_edits, phase_resim_max_error,
 /// refinement_seconds, events (the event times, s), max_path_violation, target_error,
 /// solve_seconds, refinement (refinement_io.hpp); analysis (reference_analysis_io.hpp, with its

@@ -113,7 +113,8 @@ def read_trajectory(source, scene):
     """The trajectory that ``Trajectory.to_json(complete=True)`` (C++: ``to_json`` with
     ``TrajectoryJsonOptions::complete``, ``write_json``) wrote, rebuilt exactly for ``scene``.
 
-    source: the JSON text (a ``str`` starting with ``{``), or a path (``str`` or ``os.PathLike``) of
+    source: the JSON text (a ``str`` starting with ``{``, or ``bytes`` in UTF-8), or a path (``str`` or
+    ``os.PathLike``) of
     a file holding it. scene: a scene of the trajectory's class (e.g. ``saltus.PointMass()``); the
     result is that scene's Trajectory, with every segment's times (n,) s and states (n, nx), its
     dense output (``sample`` gives the original's values bit for bit), every event (t s, guards,
@@ -122,7 +123,9 @@ def read_trajectory(source, scene):
     Raises ``saltus.InvalidArgument`` naming the key of a JSON it cannot rebuild from (not written
     complete, a missing key, a state of the wrong size, ...; the JSON of another scene's trajectory:
     its states have another size, or its modes another contact count), ``FileNotFoundError`` for a
-    missing file, ``TypeError`` for a scene that is not one of saltus' scenes.
+    missing file, ``TypeError`` for a source that is neither text nor a path, or a scene that is not
+    one of saltus' scenes (a scene bound with SALTUS_PYTHON_BIND_SCENE: its module's
+    ``trajectory_from_json(scene, text)``).
     """
     import os
 

@@ -217,13 +217,15 @@ void bind_optimal_control(py::module_& m) {
          "max_edits < 0, runs < 1 or a progress that is not callable.");
   const char* hopper_keys =
       "Returns a dict, the report of `hopper --json`: converged, initialisation, stage ('refined' when every check "
-      "passed, 'converged, checks failed: ...', 'discovery (<why>)' or 'refinement (<why>)'), relaxed_objective, "
-      "discovery_seconds, discovery (the homotopy's steps), footholds [m]; when refined: objective (the integral of "
+      "passed, 'converged, checks failed: ...', 'not converged', 'discovery (<why>)' or 'refinement (<why>)'), "
+      "relaxed_objective, discovery_seconds, discovery (the homotopy's steps), footholds [m]; when the refinement "
+      "ran (any stage but 'discovery (...)' and 'refinement (...)'): objective (the integral of "
       "u'u, N^2 m^2 s), schedule, schedule_edits, mode_validity_violation, max_path_violation, target_error, "
       "phase_resim_max_error (the per-phase re-simulation's distance, state units), events and event_times [s], "
       "refinement_seconds, solve_seconds, refinement (the C++ report); when it converged: analysis (the analysis "
       "report as a dict: events with their saltation norms, design, verdict, upper_bound, lower_bound, "
-      "predicted_rate [1/s], monte_carlo, agree, seconds) and reference (the refined reference as a "
+      "predicted_rate [1/s], runs and kept_event_sequence (also in monte_carlo), monte_carlo, agree, seconds) and "
+      "reference (the refined reference as a "
       "HopperTrajectory, q = (x, z, phi_hip, phi_knee) [m, rad], u = hip and knee torques [N m]); and task. "
       "`progress`: as point_mass_to_the_target. Raises InvalidArgument for runs < 1, deviation_times < 0 or a "
       "progress that is not callable";
@@ -243,7 +245,7 @@ void bind_optimal_control(py::module_& m) {
                    "refinement (Radau IIA n_s = 4, mesh refined to local error 2e-8), then the library's analysis "
                    "(jump gains, LQR design R = I, stability check, `runs` (>= 1) closed-loop Monte Carlo runs at "
                    "eps = 1e-6 on one thread, each recording its deviation at `deviation_times` (>= 0) times). "
-                   "About 5 minutes on one core. ") +
+                   "About 3 minutes on one core of an otherwise idle machine, about 5 beside other work. ") +
        hopper_keys + ", or an initialisation other than 'paper' and 'hop_guess'.")
           .c_str());
   oc.def(

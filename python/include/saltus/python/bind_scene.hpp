@@ -1,6 +1,7 @@
 // A user's own scene in Python, in an extension module of the user's own: one macro binds the
-// scene (default-constructed), simulate(), its trajectory, jump_gains(), conewise_gain() and the tracking designs
-// with their stability check and Monte Carlo batch, exactly as saltus binds the scene library's:
+// scene (default-constructed), simulate(), its trajectory (with trajectory_from_json()), jump_gains(),
+// conewise_gain(), the tracking designs with their stability check and Monte Carlo batch, and
+// analyse_reference(), exactly as saltus binds the scene library's:
 //
 //   // my_scene_python.cpp
 //   #include "my_scene.hpp"                       // the scene, with SALTUS_DECLARE_SCENE and
@@ -40,7 +41,7 @@ void bind_scene_functions(py::module_& m, const std::string& name) {
                      "(None, a constant u (nu,), or a Python callable u(t, x)); see saltus.simulate.");
   bind_jump_gains_of<S>(m, name, "The jump gain of every event of `trajectory`; see saltus.jump_gains.",
                         "The conewise gain of a simultaneous event; see saltus.conewise_gain.");
-  bind_scene_tracking<S>(m, name);
+  bind_scene_tracking<S>(m, name, "The whole analysis of a reference in one call; see saltus.analyse_reference.");
 }
 
 /// The scene class `name` (default constructor, nq, nx, nu, nc, the contacts' names) and

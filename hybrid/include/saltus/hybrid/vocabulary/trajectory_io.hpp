@@ -342,8 +342,8 @@ struct TrajectoryJsonReader {
 /// @throws InvalidArgument naming the key: a JSON not written complete (no dense output), a
 /// missing key or one of the wrong type, a mode or state of the wrong size, an unknown status,
 /// mode, guard kind or impulse role, a contact index out of range, a piece of degree outside
-/// [0, 5] or with the wrong coefficient count, a count of events other than the segments' or one
-/// fewer.
+/// [0, 5] or with the wrong coefficient count, an event count other than the segment count or one
+/// fewer (an empty trajectory included).
 template <Scene S>
 HybridTrajectory<S> trajectory_from_json(const nlohmann::json& j, const S& scene) {
   (void)scene;
