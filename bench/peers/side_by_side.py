@@ -17,13 +17,15 @@ after the other, with one BLAS/OpenMP thread. The parent prints one table row pe
 rows to a JSON file.
 
   python3 bench/peers/side_by_side.py [--problem particle|hopper|all] [--side nosnoc|saltus|both]
-      [--nosnoc-python /work/helperB/venv/bin/python] [--saltus-pythonpath build/python] [--json rows.json]
+      [--nosnoc-python VENV/bin/python] [--saltus-pythonpath build/python] [--runs 1] [--json rows.json]
 
 A benchmark only: nothing in the library, its CMake build or its tests uses this file.
 """
 from __future__ import annotations
 
 import argparse
+import contextlib
+import io
 import json
 import math
 import os
@@ -82,7 +84,7 @@ def _nosnoc_common_opts(ns):
     opts.mpcc_mode = ns.MpccMode.SCHOLTES_INEQ
     opts.homotopy_update_rule = ns.HomotopyUpdateRule.LINEAR
     opts.step_equilibration = ns.StepEquilibrationMode.HEURISTIC_MEAN
-    opts.print_level = 0
+    opts.print_level = 1  # one line per homotopy step, parsed by _homotopy
     # NosnocOpts keeps its Ipopt options in a class-level dict: give this instance a copy of its own.
     opts.opts_casadi_nlp = json.loads(json.dumps(opts.opts_casadi_nlp))
     opts.opts_casadi_nlp["ipopt"]["print_level"] = 0
@@ -113,11 +115,19 @@ def _nlp_violation(np, prob, w, p):
     return float(max(viol.max(initial=0.0), viol_w.max(initial=0.0)))
 
 
-def _homotopy(np, ca, solver, record):
-    """NosnocSolver.solve() and the statistics it computes but does not return: the complementarity
-    residual (max of the products, nosnoc_py's comp_res) and the NLP's constraint violation at the
-    last homotopy step's sigma."""
-    res = solver.solve()
+def _homotopy(np, solver, record):
+    """NosnocSolver.solve() and the statistics it computes but does not return: each homotopy step's
+    sigma, complementarity residual (max of the products, nosnoc_py's comp_res), objective, Ipopt
+    CPU time, iterations and return status (parsed from its print_level 1 lines), and the NLP's
+    constraint violation at the last step's sigma."""
+    buf = io.StringIO()
+    with contextlib.redirect_stdout(buf):
+        res = solver.solve()
+    for line in buf.getvalue().splitlines():
+        f = line.split()
+        if len(f) == 7 and f[0][0].isdigit():
+            record["steps"].append(dict(sigma=float(f[0]), complementarity=float(f[1]), objective=float(f[3]),
+                                        cpu_s=float(f[4]), ipopt_iterations=int(f[5]), status=f[6]))
     prob = solver.problem
     w = res["w_sol"]
     record["ipopt_iterations"] += int(sum(i for i in res["nlp_iter"] if i is not None))
@@ -127,6 +137,14 @@ def _homotopy(np, ca, solver, record):
     record["constraint_violation"] = max(record["constraint_violation"], _nlp_violation(np, prob, w, solver.p_val))
     record["ipopt_status"] = solver.solver.stats()["return_status"]
     return res
+
+
+def _step_summary(steps):
+    """Ipopt return statuses of the homotopy steps, counted."""
+    counts = {}
+    for st in steps:
+        counts[st["status"]] = counts.get(st["status"], 0) + 1
+    return counts
 
 
 def nosnoc_particle():
@@ -164,7 +182,7 @@ def nosnoc_particle():
     opts.max_iter_homotopy = 9
     opts.terminal_time = P["step"]
 
-    record = dict(ipopt_iterations=0, homotopy_steps=0, complementarity=0.0, constraint_violation=0.0)
+    record = dict(ipopt_iterations=0, homotopy_steps=0, complementarity=0.0, constraint_violation=0.0, steps=[])
     t0 = time.perf_counter()
     solver = ns.NosnocSolver(opts, model)
     setup = time.perf_counter() - t0
@@ -172,7 +190,7 @@ def nosnoc_particle():
     statuses = []
     for _ in range(P["steps"]):
         solver.set("x0", xk)
-        res = _homotopy(np, ca, solver, record)
+        res = _homotopy(np, solver, record)
         statuses.append(record["ipopt_status"])
         xk = np.asarray(res["x_list"][-1]).flatten()
     wall = time.perf_counter() - t0
@@ -183,6 +201,7 @@ def nosnoc_particle():
                 ipopt_iterations=record["ipopt_iterations"], homotopy_steps=record["homotopy_steps"],
                 complementarity=record["complementarity"], constraint_violation=record["constraint_violation"],
                 objective=None, final_state=xk.tolist(), final_state_error=err,
+                step_statuses=_step_summary(record["steps"]),
                 status="all steps solved" if not failed else "; ".join(f"step {k + 1} of {len(statuses)}: {s}" for k, s in failed),
                 note="20 FESD time-freezing steps of 0.125 s, 5 elements, n_s = 2, sigma 1 -> 1e-8 (9 steps); "
                      "complementarity and violation: the largest over the 20 steps")
@@ -294,11 +313,11 @@ def nosnoc_hopper():
     opts.time_freezing = False  # the terminal clock row only (the paper: no stage-wise clock rows)
     opts.opts_casadi_nlp["ipopt"]["max_iter"] = o["max_iter"]
 
-    record = dict(ipopt_iterations=0, homotopy_steps=0, complementarity=0.0, constraint_violation=0.0)
+    record = dict(ipopt_iterations=0, homotopy_steps=0, complementarity=0.0, constraint_violation=0.0, steps=[])
     t0 = time.perf_counter()
     solver = ns.NosnocSolver(opts, model, ocp)
     setup = time.perf_counter() - t0
-    res = _homotopy(np, ca, solver, record)
+    res = _homotopy(np, solver, record)
     wall = time.perf_counter() - t0
     prob, w = solver.problem, res["w_sol"]
     # Objective: the integral of u'u over physical time = sum_k s_k |u_k|^2 T / N.
@@ -327,6 +346,7 @@ def nosnoc_hopper():
                 objective=objective, nlp_objective=nlp_objective, min_hole_ellipse=float(holes.min()),
                 min_hole_ellipse_control_nodes=float(min(node_holes)),
                 min_foot_z=float(feet[:, 1].min()), target_error=target_error, clock_end=float(x_end[8]),
+                homotopy=record["steps"],
                 status=("converged" if converged else "not converged") + f" (last step: {record['ipopt_status']})",
                 note="objective: sum_k s_k |u_k|^2 T/N; hole value over all stage points and element boundaries")
 
@@ -369,8 +389,7 @@ def saltus_hopper(runs):
     wall = time.perf_counter() - t0
     steps = (r.get("discovery") or {}).get("steps", [])
     disc_iters = int(sum(s.get("ipopt_iterations", 0) for s in steps))
-    refinement = json.loads(r["refinement_json"]) if isinstance(r.get("refinement_json"), str) else r.get("refinement")
-    ref_iters = int((refinement or {}).get("ipopt_iterations", 0) or 0)
+    ref_iters = int((r.get("refinement") or {}).get("ipopt_iterations", 0) or 0)
     relaxed_comp = steps[-1].get("complementarity") if steps else None
     min_hole, min_foot_z = None, None
     ref = r.get("reference")
@@ -396,6 +415,10 @@ def saltus_hopper(runs):
                 objective=r.get("objective"), relaxed_objective=r.get("relaxed_objective"),
                 min_hole_ellipse=min_hole, min_foot_z=min_foot_z, target_error=r.get("target_error"),
                 schedule=r.get("schedule"), status=str(r.get("stage")),
+                homotopy=[dict(sigma=st.get("sigma"), complementarity=st.get("complementarity"),
+                               objective=st.get("objective"), cpu_s=st.get("seconds"),
+                               ipopt_iterations=st.get("ipopt_iterations"), status=st.get("ipopt_status"))
+                          for st in steps],
                 note="discovery (FESD time-freezing homotopy) + mode-schedule refinement; complementarity 0 by "
                      "construction when refined; violation: max(path rows, target error) of the refined reference; "
                      f"analysis with runs = {runs}; hole value sampled at 5001 times and the events")
@@ -466,7 +489,7 @@ def print_table(rows):
             print(f"| {r['problem']} | {r['implementation']} | - | - | - | - | - | - | failed: {r['error']} |")
             continue
         print("| " + " | ".join([
-            r["problem"], r["implementation"], fmt(r.get("wall_s"), ".2f"), fmt(r.get("ipopt_iterations"), "d"),
+            r["problem"], r["implementation"], fmt(r.get("wall_s"), ".2f" if (r.get("wall_s") or 0) >= 0.01 else ".1e"), fmt(r.get("ipopt_iterations"), "d"),
             fmt(r.get("complementarity"), ".2e"), fmt(r.get("constraint_violation"), ".2e"),
             fmt(r.get("objective"), ".4g"), fmt(r.get("min_hole_ellipse"), ".5f"), r.get("status", "")]) + " |")
     shown = {"problem", "implementation", "wall_s", "ipopt_iterations", "complementarity", "constraint_violation",
@@ -475,6 +498,13 @@ def print_table(rows):
         extra = {k: v for k, v in r.items() if k not in shown and k != "error"}
         print(f"\n{r['problem']} / {r['implementation']}:")
         for k, v in extra.items():
+            if k == "homotopy":
+                print("  homotopy (sigma, complementarity, objective, Ipopt s, iterations, status):")
+                for st in v:
+                    print(f"    {st['sigma']:.0e}  {fmt(st.get('complementarity'), '.2e')}  "
+                          f"{fmt(st.get('objective'), '.3g')}  {fmt(st.get('cpu_s'), '.1f')}  "
+                          f"{st.get('ipopt_iterations')}  {st.get('status')}")
+                continue
             print(f"  {k}: {fmt(v, '.6g') if isinstance(v, float) else v}")
         print(f"  versions: {r.get('versions')}")
 
@@ -483,8 +513,8 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--problem", choices=("particle", "hopper", "all"), default="all")
     ap.add_argument("--side", choices=("nosnoc", "saltus", "both"), default="both")
-    ap.add_argument("--nosnoc-python", default=os.environ.get("NOSNOC_PYTHON", "/work/helperB/venv/bin/python"),
-                    help="a Python with `pip install nosnoc` (default: $NOSNOC_PYTHON or the venv path)")
+    ap.add_argument("--nosnoc-python", default=os.environ.get("NOSNOC_PYTHON", sys.executable),
+                    help="a Python with `pip install nosnoc` (default: $NOSNOC_PYTHON, else this interpreter)")
     ap.add_argument("--saltus-python", default="/usr/bin/python3", help="the Python the bindings were built for")
     ap.add_argument("--saltus-pythonpath", default=os.path.join(ROOT, "build", "python"),
                     help="the directory holding the `saltus` package (the build's python/)")
