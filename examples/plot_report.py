@@ -699,7 +699,10 @@ def check_report(report, expected, scenes, drawn=None):
 
 
 def parse_args(args):
-    """(report directory, scenes) of the command line."""
+    """(report directory, scenes) of the command line; --help prints the usage (the module docstring)."""
+    if "--help" in args or "-h" in args:
+        print(__doc__)
+        raise SystemExit(0)
     scenes = SCENES
     if "--scene" in args:
         at = args.index("--scene")
@@ -725,6 +728,8 @@ def main(argv):
             print(f"plot_report: no figures of {scene}: {os.path.join(report, scene)} has no trajectory "
                   "(trajectory.csv and trajectory.json, saltus::write_trajectory_files), report.json or "
                   "jump_gains.json", file=sys.stderr)
+    if scenes is not SCENES and not sections:  # the user named scenes and none could be drawn
+        raise SystemExit("plot_report: none of the scenes named by --scene could be drawn (above)")
     write_index(report, sections, missing)
     made = [name for _, figures, _ in sections for name, _ in figures]
     problems = check_report(report, expected_figures(report, scenes), scenes, made)
