@@ -9,6 +9,7 @@
 #include <cmath>
 #include <exception>
 #include <iomanip>
+#include <initializer_list>
 #include <istream>
 #include <limits>
 #include <nlohmann/json.hpp>
@@ -293,6 +294,15 @@ struct TrajectoryJsonReader {
     SALTUS_REQUIRE(v.is_string(), "trajectory JSON: ", where, ".", key, " is not a string");
     return v.get<std::string>();
   }
+  /// The one of `values` whose to_string is `name`; otherwise InvalidArgument "<what_key> '<name>'
+  /// is not <expected>" (the names are those to_json writes).
+  template <class E>
+  static E named(const std::string& name, std::initializer_list<E> values, const std::string& what_key,
+                 const char* expected) {
+    for (E v : values)
+      if (name == to_string(v)) return v;
+    throw InvalidArgument(concat("trajectory JSON: ", what_key, " '", name, "' is not ", expected));
+  }
   template <int NC>
   static Mode<NC> mode(const nlohmann::json& j, const char* key, const std::string& where) {
     const nlohmann::json& a = array(j, key, where);
@@ -301,15 +311,8 @@ struct TrajectoryJsonReader {
     Mode<NC> m;
     for (int i = 0; i < NC; ++i) {
       const std::string w = concat(where, ".", key, "[", i, "]");
-      const std::string name = string(a[static_cast<std::size_t>(i)], "mode", w);
-      if (name == "open")
-        m[i].mode = ContactMode::Open;
-      else if (name == "stick")
-        m[i].mode = ContactMode::Stick;
-      else if (name == "slip")
-        m[i].mode = ContactMode::Slip;
-      else
-        throw InvalidArgument(concat("trajectory JSON: ", w, ".mode '", name, "' is not open, stick or slip"));
+      m[i].mode = named(string(a[static_cast<std::size_t>(i)], "mode", w),
+                        {ContactMode::Open, ContactMode::Stick, ContactMode::Slip}, w + ".mode", "open, stick or slip");
       m[i].slip_direction = vector<2>(a[static_cast<std::size_t>(i)], "slip_direction", w);
     }
     return m;
@@ -321,14 +324,11 @@ struct TrajectoryJsonReader {
     return i;
   }
   static GuardKind guard_kind(const std::string& s, const std::string& where) {
-    for (GuardKind k : {GuardKind::Touchdown, GuardKind::Release, GuardKind::Stop, GuardKind::SlipOnset})
-      if (s == to_string(k)) return k;
-    throw InvalidArgument(concat("trajectory JSON: ", where, ".kind '", s, "' is not a guard kind"));
+    return named(s, {GuardKind::Touchdown, GuardKind::Release, GuardKind::Stop, GuardKind::SlipOnset}, where + ".kind",
+                 "a guard kind");
   }
   static ImpulseRole impulse_role(const std::string& s, const std::string& where) {
-    for (ImpulseRole r : {ImpulseRole::None, ImpulseRole::Stick, ImpulseRole::Slip})
-      if (s == to_string(r)) return r;
-    throw InvalidArgument(concat("trajectory JSON: ", where, ".role '", s, "' is not an impulse role"));
+    return named(s, {ImpulseRole::None, ImpulseRole::Stick, ImpulseRole::Slip}, where + ".role", "an impulse role");
   }
 };
 }  // namespace detail
@@ -354,15 +354,9 @@ HybridTrajectory<S> trajectory_from_json(const nlohmann::json& j, const S& scene
                  "trajectory JSON: not written complete (to_json with TrajectoryJsonOptions::complete, "
                  "Trajectory.to_json(complete=True) in Python): it holds no dense output to rebuild the segments from");
   HybridTrajectory<S> traj;
-  const std::string status = R::string(j, "status", "the trajectory");
-  if (status == "completed")
-    traj.status = SimulationStatus::Completed;
-  else if (status == "zeno")
-    traj.status = SimulationStatus::Zeno;
-  else if (status == "max-events")
-    traj.status = SimulationStatus::MaxEvents;
-  else
-    throw InvalidArgument(detail::concat("trajectory JSON: status '", status, "' is not completed, zeno or max-events"));
+  traj.status = R::named(R::string(j, "status", "the trajectory"),
+                         {SimulationStatus::Completed, SimulationStatus::Zeno, SimulationStatus::MaxEvents}, "status",
+                         "completed, zeno or max-events");
   const nlohmann::json& segments = R::array(j, "segments", "the trajectory");
   for (std::size_t i = 0; i < segments.size(); ++i) {
     const nlohmann::json& js = segments[i];
