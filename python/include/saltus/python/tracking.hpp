@@ -235,9 +235,9 @@ py::dict analyse(const std::shared_ptr<PyTrajectory<S>>& reference, const std::o
     SALTUS_REQUIRE(qr.rank() == E.cols(), "initial_subspace must have full column rank ", E.cols(), ", has rank ",
                    qr.rank());
     o.stability.initial_subspace = E;
-    // The batch perturbs inside range(E), as the check bounds: each draw projected orthogonally.
-    const Eigen::MatrixXd basis = Eigen::HouseholderQR<Eigen::MatrixXd>(E).householderQ() *
-                                  Eigen::MatrixXd::Identity(nx, E.cols());
+    // The batch perturbs inside range(E), as the check bounds: each draw projected orthogonally
+    // (the first r columns of the rank check's Q span range(E): E Pi = Q R with Pi a permutation).
+    const Eigen::MatrixXd basis = qr.householderQ() * Eigen::MatrixXd::Identity(nx, E.cols());
     const Mat<nx, nx> P = basis * basis.transpose();
     mc.project = [P](const Vec<nx>& d) { return Vec<nx>(P * d); };
   }
