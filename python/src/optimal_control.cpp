@@ -22,12 +22,29 @@
 #include <saltus/timefreezing/drivers/optimal_control.hpp>
 #include <saltus/timefreezing/refinement/refinement_io.hpp>
 
+#include <memory>
 #include <optional>
 #include <ostream>
 
 namespace saltus::python {
 
 namespace {
+
+/// A refined reference handed to Python: its scene, the simulation options it is re-simulated and
+/// analysed with, breakpoints at the refinement's element times (the optimal input is piecewise
+/// smooth, with jumps at the element boundaries), and its name.
+template <Scene S>
+std::shared_ptr<PyTrajectory<S>> refined_reference(const S& scene, SimulationOptions options,
+                                                    const std::vector<double>& element_times, std::string name,
+                                                    HybridTrajectory<S> trajectory) {
+  auto reference = std::make_shared<PyTrajectory<S>>();
+  reference->scene = std::make_shared<const S>(scene);
+  reference->options = std::move(options);
+  reference->options.breakpoints = element_times;
+  reference->name = std::move(name);
+  reference->trajectory = std::move(trajectory);
+  return reference;
+}
 
 py::dict point_mass_to_the_target(py::object progress) {
   using namespace timefreezing;
@@ -72,13 +89,8 @@ py::dict point_mass_to_the_target(py::object progress) {
     result["phase_resim_max_error"] = refined->phase_resim_max_error;
     result["refinement_seconds"] = refined->seconds;
     result["refinement_json"] = j.dump();
-    auto reference = std::make_shared<PyTrajectory<scenes::PointMass>>();
-    reference->scene = std::make_shared<const scenes::PointMass>(mass);
-    reference->options = precise_simulation();
-    reference->options.breakpoints = refined->element_times;  // the optimal input is piecewise constant
-    reference->name = "point mass to the target (refined)";
-    reference->trajectory = refined->trajectory;
-    result["reference"] = reference;
+    result["reference"] = refined_reference(mass, precise_simulation(), refined->element_times,
+                                            "point mass to the target (refined)", refined->trajectory);
   } else {
     result["converged"] = false;
   }
@@ -136,13 +148,8 @@ py::dict plank_box_flat_landing(py::object progress, int max_edits, int runs) {
     result["refinement_json"] = j.dump();
   }
   if (refined && refined->converged) {
-    auto reference = std::make_shared<PyTrajectory<scenes::PlankBox>>();
-    reference->scene = std::make_shared<const scenes::PlankBox>(scene);
-    reference->options = SimulationOptions{};
-    reference->options.breakpoints = refined->element_times;  // the optimal input is piecewise constant
-    reference->name = "plank-box flat landing (refined)";
-    reference->trajectory = refined->trajectory;
-    result["reference"] = reference;
+    result["reference"] = refined_reference(scene, SimulationOptions{}, refined->element_times,
+                                            "plank-box flat landing (refined)", refined->trajectory);
   }
   if (analysis) result["analysis"] = py::module_::import("json").attr("loads")(analysis->dump());
   return result;
@@ -175,14 +182,10 @@ py::dict hopper_chain(scenes::HopperTask task, py::object progress, const std::s
   result["task"] = task == scenes::HopperTask::OneHole ? "one hole" : "three holes";
   if (chain->refined) result["event_times"] = chain->refined->event_times;
   if (chain->refined && chain->refined->converged) {
-    auto reference = std::make_shared<PyTrajectory<scenes::Hopper>>();
-    reference->scene = std::make_shared<const scenes::Hopper>();
-    reference->options = scenes::hopper_monte_carlo_simulation();  // the analysis' simulation options
-    reference->options.breakpoints = chain->refined->element_times;  // the optimal input is piecewise smooth
-    reference->name = std::string("hopper over ") + (task == scenes::HopperTask::OneHole ? "one hole" : "three holes") +
-                      " (refined)";
-    reference->trajectory = std::move(chain->refined->trajectory);
-    result["reference"] = reference;
+    result["reference"] = refined_reference(  // simulated with the analysis' options
+        scenes::Hopper{}, scenes::hopper_monte_carlo_simulation(), chain->refined->element_times,
+        std::string("hopper over ") + (task == scenes::HopperTask::OneHole ? "one hole" : "three holes") + " (refined)",
+        std::move(chain->refined->trajectory));
   }
   return result;
 }
