@@ -72,11 +72,12 @@
       const saltus::Vec<S::nq>&, const saltus::Vec<S::nq>&, const saltus::timefreezing::FesdOptions&,             \
       const saltus::timefreezing::MpccSolverOptions&);
 
-#define SALTUS_TIME_FREEZING_SIMULATION_DRIVER_TEMPLATES(prefix, S, Law)                                          \
-  prefix template saltus::timefreezing::TimeFreezingSimulation<S> saltus::timefreezing::simulate_time_freezing<   \
-      S, Law>(const saltus::timefreezing::TimeFreezingSystem<S>&, const saltus::Vec<S::nq>&,                      \
-              const saltus::Vec<S::nq>&, saltus::timefreezing::FesdOptions, const Law&,                           \
-              const saltus::timefreezing::MpccSolverOptions&, saltus::timefreezing::SimulationSplit);
+#define SALTUS_TIME_FREEZING_SIMULATION_DRIVER_TEMPLATES(prefix, S, Law)                                        \
+  prefix template saltus::timefreezing::TimeFreezingSimulation<S> saltus::timefreezing::simulate_time_freezing< \
+      S, Law>(const saltus::timefreezing::TimeFreezingSystem<S>&, const saltus::Vec<S::nq>&,                    \
+              const saltus::Vec<S::nq>&, saltus::timefreezing::FesdOptions, const Law&,                         \
+              const saltus::timefreezing::MpccSolverOptions&,                                                   \
+              const saltus::timefreezing::TimeFreezingSimulationOptions&);
 
 #define SALTUS_SCHEDULE_REFINEMENT_SCENE_TEMPLATES(prefix, S)                                              \
   prefix template std::vector<saltus::timefreezing::PhaseResimulation>                                      \

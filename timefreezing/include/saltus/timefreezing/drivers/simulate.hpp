@@ -19,12 +19,21 @@ struct TimeFreezingSimulation {
   using Point = typename FesdMpcc<S>::Point;
   std::vector<Point> points;  ///< the initial point and every stage point, in numerical time
   std::vector<double> element_lengths;        ///< h of every element, in order
+  /// The runs of frozen elements (impacts), in order; FrozenPhase::cut marks a run that ended before
+  /// its impact did (its x_plus is then not the impact's outcome; the trajectory's event's is).
   std::vector<FrozenPhase<nx>> frozen_phases;
   std::vector<SwitchPoint> switch_points;
   /// In physical time, recovered directly (recover_trajectory); also when not converged(), then
   /// only a reading of the unconverged points, not a motion of the scene.
   HybridTrajectory<S> trajectory;
   MpccSolution solution;  ///< the homotopy's result: converged, complementarity, steps, times
+  int fallbacks = 0;       ///< control intervals solved by the fallback (SimulationFallback)
+  /// One line per control interval that failed its first attempt: which attempt solved it, or that
+  /// none did (e.g. "interval 3: solved on 8 finite elements, contact-side selection off").
+  std::vector<std::string> fallback_log;
+  /// The finite elements of every control interval as solved (fesd.grid.finite_elements unless the
+  /// fallback refined it); one entry for SimulationSplit::WholeHorizon.
+  std::vector<int> finite_elements;
   bool converged() const { return solution.converged; }
   /// The state (q, v, t, L, g) at the end of the horizon.
   const auto& final_state() const { return points.back().y; }
@@ -35,6 +44,44 @@ struct TimeFreezingSimulation {
 enum class SimulationSplit {
   PerControlInterval,  ///< one MPCC per control interval, each from the previous one's end (NOSNOC's integrator)
   WholeHorizon,        ///< one MPCC over all control intervals
+};
+
+/// What simulate_time_freezing does when a control interval fails (PerControlInterval): its
+/// homotopy did not converge, or its converged motion penetrates a contact by more than
+/// penetration_tolerance. The interval is solved again from the same start state, in this order,
+/// and the first attempt that succeeds is kept (else the first attempt, converged() false):
+///  1. on finer grids, finite_elements times 2, 4, ... (max_refinements doublings);
+///  2. with the contact-side selection toggled (FesdOptions::regularisation.contact_side: off where
+///     it was on; contact_side_weight where it was off), on the interval's grid and the same finer
+///     grids; an interval solved so makes the toggle stay for the rest of the run (as solve_mpcc
+///     keeps a slower kappa once a step needed it: the failure says how this motion is solved).
+/// The finer grid is the failed interval's only. TimeFreezingSimulation::fallback_log says which
+/// attempt solved which interval.
+/// Why (bench/time_freezing_battery, docs/time_freezing.md, "Robustness on easy problems"):
+///  1. FESD places every switch on an element boundary and a control interval holds one active set
+///     per element, so an interval in which the motion passes through more modes than it has
+///     elements (a touchdown, the impact's frozen phase and the rest after it, inside one interval
+///     of two elements) has no complementary solution: the homotopy stalls at sigma ~ 1e-2 with
+///     Ipopt's Infeasible_Problem_Detected (a point mass dropped from 0.8 m with a_n = 100 on
+///     NOSNOC's bouncing-ball grid). More elements give the switches room.
+///  2. Where the gap is exactly zero (a frozen phase, a rest, a slide) its step function is free,
+///     and without the contact-side selection a converged homotopy can let the gap drift to
+///     -1e-5 (the frozen-phase drift); with the selection, the rod landing flat from 0.8 m stalls in
+///     its touchdown interval on every grid, and solves without it.
+struct SimulationFallback {
+  bool enabled = true;  ///< false: a failed interval is kept as it is and the run goes on
+  int max_refinements = 2;  ///< doublings of the interval's finite elements per attempt, >= 0
+  /// m (the unit of the scene's gaps), >= 0: a converged interval whose stage points put a gap below
+  /// -penetration_tolerance has drifted and is solved again.
+  double penetration_tolerance = 1e-8;
+  /// The contact-side weight of attempt 2 where the user's was 0 (> 0; 1e-2: docs/time_freezing.md).
+  double contact_side_weight = 1e-2;
+};
+
+/// Settings of simulate_time_freezing beyond the FESD grid and the MPCC solver.
+struct TimeFreezingSimulationOptions {
+  SimulationSplit split = SimulationSplit::PerControlInterval;
+  SimulationFallback fallback;
 };
 
 /// Simulates the time-freezing system of `system` from (q0, v0) at physical time
@@ -56,6 +103,6 @@ template <Scene S, class InputLaw = NoObjective>
 TimeFreezingSimulation<S> simulate_time_freezing(const TimeFreezingSystem<S>& system, const Vec<S::nq>& q0,
                                                  const Vec<S::nq>& v0, FesdOptions fesd, const InputLaw& law = {},
                                                  const MpccSolverOptions& solver = {},
-                                                 SimulationSplit split = SimulationSplit::PerControlInterval);
+                                                 const TimeFreezingSimulationOptions& options = {});
 
 }  // namespace saltus::timefreezing

@@ -13,16 +13,131 @@
 
 namespace saltus::timefreezing {
 
+namespace detail {
+
+/// One control interval's MPCC solved from (q, v), and its points.
+template <Scene S, class InputLaw>
+struct SolvedInterval {
+  MpccSolution solution;
+  std::vector<typename FesdMpcc<S>::Point> points;
+  int finite_elements = 0;
+  double contact_side = 0.0;  ///< the contact-side weight it was solved with
+};
+
+template <Scene S, class InputLaw>
+SolvedInterval<S, InputLaw> solve_interval(const TimeFreezingSystem<S>& system, const InputLaw& law, const Vec<S::nq>& q,
+                                           const Vec<S::nq>& v, const FesdOptions& piece, const MpccSolverOptions& solver) {
+  const FesdMpcc<S, InputLaw> problem(system, law, q, v, piece);
+  SolvedInterval<S, InputLaw> out;
+  out.solution = solve_mpcc(problem, solver);
+  out.points = problem.points(out.solution.x);
+  out.finite_elements = piece.grid.finite_elements;
+  out.contact_side = piece.regularisation.contact_side;
+  return out;
+}
+
+/// The deepest penetration of a contact over the points (>= 0) [the unit of the gaps].
+template <Scene S, class Point>
+double deepest_penetration(const TimeFreezingSystem<S>& system, const std::vector<Point>& points) {
+  double deepest = 0.0;
+  for (const Point& p : points)
+    for (int i = 0; i < S::nc; ++i)
+      deepest = std::max(deepest, -system.scene().template gap<double>(i, p.y.template head<S::nq>()));
+  return deepest;
+}
+
+/// Whether at x = (q, v) a contact still approaches: gap <= 1e-4 m and J_n v < -1e-4 m/s
+/// (recover_trajectory's default tolerances; FrozenPhase::cut).
+template <Scene S>
+bool impact_unfinished(const TimeFreezingSystem<S>& system, const Vec<2 * S::nq>& x) {
+  const Vec<S::nq> q = x.template head<S::nq>(), v = x.template tail<S::nq>();
+  const auto c = system.template switching_functions<double>(q, v);
+  for (int i = 0; i < S::nc; ++i)
+    if (c[3 * i] <= 1e-4 && c[3 * i + 1] < -1e-4) return true;
+  return false;
+}
+
+/// The attempts of the fallback after the first (SimulationFallback): finer grids, then the
+/// contact-side selection toggled on the interval's grid and the finer ones.
+inline std::vector<FesdOptions> fallback_attempts(const FesdOptions& piece, const SimulationFallback& fallback) {
+  std::vector<FesdOptions> attempts;
+  FesdOptions toggled = piece;
+  toggled.regularisation.contact_side = piece.regularisation.contact_side > 0.0 ? 0.0 : fallback.contact_side_weight;
+  for (int toggle = 0; toggle < 2; ++toggle)
+    for (int r = toggle == 0 ? 1 : 0; r <= fallback.max_refinements; ++r) {  // not the first attempt itself
+      FesdOptions attempt = toggle == 0 ? piece : toggled;
+      attempt.grid.finite_elements <<= r;
+      attempts.push_back(attempt);
+    }
+  return attempts;
+}
+
+/// solve_interval, and where it fails (no convergence, or a penetration) the fallback's attempts
+/// in order: the first that succeeds, else the first attempt. `log` gets a line when the first
+/// attempt failed.
+template <Scene S, class InputLaw>
+SolvedInterval<S, InputLaw> solve_interval_with_fallback(const TimeFreezingSystem<S>& system, const InputLaw& law,
+                                                         const Vec<S::nq>& q, const Vec<S::nq>& v, const FesdOptions& piece,
+                                                         const MpccSolverOptions& solver, const SimulationFallback& fallback,
+                                                         int interval, std::vector<std::string>& log) {
+  const auto failure = [&](const SolvedInterval<S, InputLaw>& s) -> std::string {
+    if (!s.solution.converged) return "not converged";
+    const double depth = deepest_penetration(system, s.points);
+    if (depth > fallback.penetration_tolerance) return "a contact penetrated by " + std::to_string(depth);
+    return "";
+  };
+  SolvedInterval<S, InputLaw> first = solve_interval(system, law, q, v, piece, solver);
+  const std::string first_failure = failure(first);
+  if (first_failure.empty() || !fallback.enabled) return first;
+  double seconds = first.solution.seconds;
+  int iterations = first.solution.ipopt_iterations;
+  const auto describe = [](const FesdOptions& o) {
+    return std::to_string(o.grid.finite_elements) + " finite elements, contact-side selection " +
+           (o.regularisation.contact_side > 0.0 ? "on" : "off");
+  };
+  for (const FesdOptions& attempt : fallback_attempts(piece, fallback)) {
+    if (solver.progress)
+      *solver.progress << "simulate_time_freezing: fallback (" << first_failure << "): the interval again on "
+                       << describe(attempt) << "\n";
+    SolvedInterval<S, InputLaw> again = solve_interval(system, law, q, v, attempt, solver);
+    seconds += again.solution.seconds;
+    iterations += again.solution.ipopt_iterations;
+    if (failure(again).empty()) {
+      again.solution.seconds = seconds;  // the interval's cost, the failed attempts included
+      again.solution.ipopt_iterations = iterations;
+      log.push_back("interval " + std::to_string(interval) + " (" + first_failure + "): solved on " + describe(attempt));
+      return again;
+    }
+  }
+  first.solution.seconds = seconds;
+  first.solution.ipopt_iterations = iterations;
+  first.solution.converged = false;  // a penetrating interval is not a solution either
+  first.solution.message = first_failure + "; the fallback's attempts failed too: " + first.solution.message;
+  log.push_back("interval " + std::to_string(interval) + " (" + first_failure + "): no attempt of the fallback succeeded");
+  return first;
+}
+
+}  // namespace detail
+
 template <Scene S, class InputLaw>
 TimeFreezingSimulation<S> simulate_time_freezing(const TimeFreezingSystem<S>& system, const Vec<S::nq>& q0,
                                                  const Vec<S::nq>& v0, FesdOptions fesd, const InputLaw& law,
                                                  const MpccSolverOptions& solver,
-                                                 SimulationSplit split) {
+                                                 const TimeFreezingSimulationOptions& options) {
+  const SimulationSplit split = options.split;
   constexpr int nq = S::nq;
   // Checked here too: the split below divides by them before FesdMpcc would see them.
   SALTUS_REQUIRE(fesd.grid.control_intervals >= 1, "FESD: control_intervals must be >= 1, got ", fesd.grid.control_intervals);
   SALTUS_REQUIRE(std::isfinite(fesd.grid.horizon) && fesd.grid.horizon > 0.0, "FESD: the numerical horizon must be > 0, got ",
                  fesd.grid.horizon);
+  SALTUS_REQUIRE(options.fallback.max_refinements >= 0 && options.fallback.max_refinements <= 6,
+                 "simulate_time_freezing: fallback.max_refinements must be in 0..6, got ", options.fallback.max_refinements);
+  SALTUS_REQUIRE(options.fallback.penetration_tolerance >= 0.0,
+                 "simulate_time_freezing: fallback.penetration_tolerance must be >= 0, got ",
+                 options.fallback.penetration_tolerance);
+  SALTUS_REQUIRE(std::isfinite(options.fallback.contact_side_weight) && options.fallback.contact_side_weight > 0.0,
+                 "simulate_time_freezing: fallback.contact_side_weight must be finite and > 0, got ",
+                 options.fallback.contact_side_weight);
   fesd.clock.constraint = ClockConstraint::None;
   fesd.clock.speed_of_time_max = 1.0;
   fesd.regularisation.speed_of_time = 0.0;
@@ -42,9 +157,17 @@ TimeFreezingSimulation<S> simulate_time_freezing(const TimeFreezingSystem<S>& sy
     // Which MPCC the progress lines that follow belong to (each restarts at step 0).
     if (solver.progress && pieces > 1)
       *solver.progress << "simulate_time_freezing: control interval " << k + 1 << " of " << pieces << "\n";
-    const FesdMpcc<S, InputLaw> problem(system, law, q, v, piece);
-    MpccSolution sol = solve_mpcc(problem, solver);
-    auto pts = problem.points(sol.x);
+    const std::size_t logged = out.fallback_log.size();
+    auto solved = pieces > 1 ? detail::solve_interval_with_fallback(system, law, q, v, piece, solver, options.fallback, k,
+                                                                    out.fallback_log)
+                             : detail::solve_interval(system, law, q, v, piece, solver);
+    out.fallbacks += out.fallback_log.size() > logged && solved.solution.converged;
+    // A toggled contact-side selection that solved the interval is kept for the rest of the run
+    // (the failure says how this motion needs to be solved; SimulationFallback, attempt 2).
+    piece.regularisation.contact_side = solved.contact_side;
+    out.finite_elements.push_back(solved.finite_elements);
+    MpccSolution& sol = solved.solution;
+    auto& pts = solved.points;
     for (auto& p : pts) {
       p.tau += tau0;
       p.interval += k;
@@ -79,6 +202,7 @@ TimeFreezingSimulation<S> simulate_time_freezing(const TimeFreezingSystem<S>& sy
   if (out.solution.converged) out.solution.message = "every homotopy converged";
   detail::read_events<FesdMpcc<S>::ny, FesdMpcc<S>::nsw, S::nu, 2 * S::nq>(out.points, fesd.grid.stages, out.element_lengths,
                                                                           out.frozen_phases, out.switch_points);
+  for (FrozenPhase<2 * nq>& f : out.frozen_phases) f.cut = detail::impact_unfinished(system, f.x_plus);
   out.trajectory = recover_trajectory<S>(system, out.points, fesd.grid.stages);
   return out;
 }

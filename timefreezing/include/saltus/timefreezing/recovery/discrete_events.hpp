@@ -29,6 +29,12 @@ struct FrozenPhase {
   /// crept while the impact acted (rate below detail::impact_clock_rate). x_plus is then that much
   /// later than the jump, not the post-impact state at `time`.
   double clock_advance = 0.0;
+  /// True when the run of frozen elements ended before its impact did: at x_plus a contact still
+  /// approaches (gap <= 1e-4 m and J_n v < -1e-4 m/s, recover_trajectory's tolerances), so x_plus
+  /// is not the impact's outcome. The impact then goes on in the next, flowing element (the
+  /// recovered trajectory's impact event reads x+ where it ends: recover_trajectory) or past the
+  /// horizon's end. Set by simulate_time_freezing (read_events leaves it false: it has no scene).
+  bool cut = false;
 };
 
 /// An element boundary where switching function m changes its active set (alpha rounded to

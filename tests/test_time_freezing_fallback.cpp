@@ -1,0 +1,216 @@
+// The time-freezing simulation engine on easy problems (simulate_time_freezing's fallback,
+// SimulationFallback; the whole battery: bench/time_freezing_battery): NOSNOC's bouncing-ball grid
+// with a stiff auxiliary dynamics, a slide whose gap drifts without the contact-side selection, a
+// rod landing flat while sliding (two contacts at once) against the event-driven simulator, and a
+// frozen phase cut by the horizon's end. Each against its closed form.
+#include "scenes/point_mass.hpp"
+#include "scenes/rod.hpp"
+#include "scenes/time_freezing_examples.hpp"
+
+#include <saltus/hybrid/simulation/simulator.hpp>
+#include <saltus/timefreezing/drivers/simulate.hpp>
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+
+namespace saltus::timefreezing {
+namespace {
+
+using scenes::PointMass;
+
+constexpr double g = 9.81;
+
+/// NOSNOC's bouncing-ball grid: 10 control intervals of 0.3, 2 elements each, n_s = 2.
+FesdOptions bouncing_ball_grid() {
+  FesdOptions o;
+  o.grid.stages = 2;
+  o.grid.control_intervals = 10;
+  o.grid.finite_elements = 2;
+  o.grid.horizon = 3.0;
+  return o;
+}
+
+/// The physical time at numerical time T of a point mass that lands at t1 with normal speed v1 and
+/// then rests: the frozen phase takes v1 / a_n of numerical time, the rest runs the clock at
+/// a_n / (a_n + g) (the Filippov combination theta (-g) + (1 - theta) a_n = 0).
+double time_at_rest(double T, double t1, double v1, double a_n) { return t1 + (T - t1 - v1 / a_n) * a_n / (a_n + g); }
+
+// The point mass dropped from rest at 0.8 m with a_n = 100 on NOSNOC's bouncing-ball grid: the
+// touchdown (t = 0.404), the frozen phase (0.040 of numerical time) and the rest after it fall in
+// control interval 1, three modes for two elements; its homotopy stalls (Infeasible_Problem_Detected
+// at sigma ~ 0.026). The fallback solves that interval again on 4 elements.
+TEST(TimeFreezingFallback, BouncingBallGridWithAStiffAuxiliaryDynamics) {
+  const TimeFreezingSystem<PointMass> system(PointMass(), 100.0);
+  const Vec<2> q0(0.0, 0.8), v0 = Vec<2>::Zero();
+  const double t1 = std::sqrt(2.0 * 0.8 / g), v1 = std::sqrt(2.0 * g * 0.8);
+  TimeFreezingSimulationOptions without;
+  without.fallback.enabled = false;
+  const auto failed = simulate_time_freezing(system, q0, v0, bouncing_ball_grid(), NoObjective{}, {}, without);
+  EXPECT_FALSE(failed.converged());
+  EXPECT_NE(failed.solution.message.find("control interval 1"), std::string::npos) << failed.solution.message;
+  EXPECT_TRUE(failed.fallback_log.empty());
+
+  for (double contact_side : {0.0, 1e-2}) {
+    FesdOptions grid = bouncing_ball_grid();
+    grid.regularisation.contact_side = contact_side;
+    const auto sim = simulate_time_freezing(system, q0, v0, grid);
+    ASSERT_TRUE(sim.converged()) << sim.solution.message;
+    ASSERT_EQ(sim.fallback_log.size(), 1u) << contact_side;
+    EXPECT_EQ(sim.fallbacks, 1);
+    EXPECT_NE(sim.fallback_log[0].find("interval 1 (not converged): solved on 4 finite elements"), std::string::npos)
+        << sim.fallback_log[0];
+    ASSERT_EQ(sim.finite_elements.size(), 10u);
+    EXPECT_EQ(sim.finite_elements[1], 4);
+    EXPECT_EQ(sim.finite_elements[0], 2);
+    const auto& y = sim.final_state();
+    EXPECT_NEAR(y[1], 0.0, 1e-9);
+    EXPECT_NEAR(y[3], 0.0, 1e-9);
+    EXPECT_NEAR(y[4], time_at_rest(3.0, t1, v1, 100.0), 1e-9);  // measured 1e-14
+    ASSERT_EQ(sim.frozen_phases.size(), 1u);
+    EXPECT_FALSE(sim.frozen_phases[0].cut);
+    EXPECT_NEAR(sim.frozen_phases[0].time, t1, 1e-9);
+    EXPECT_NEAR(sim.frozen_phases[0].x_plus[3], 0.0, 1e-9);
+    ASSERT_EQ(sim.trajectory.events.size(), 1u);
+    EXPECT_TRUE(sim.trajectory.events[0].impact());
+    EXPECT_NEAR(sim.trajectory.events[0].t, t1, 1e-9);
+    EXPECT_NEAR(sim.trajectory.events[0].x_plus[3], 0.0, 1e-9);
+  }
+}
+
+// NOSNOC's frictional landing without the contact-side selection: every homotopy converges, but
+// the gap drifts to -1.0e-5 while the mass slides (its step function is free where the gap is
+// exactly zero), and the stop is 1.0e-5 off. The fallback sees the penetration and solves those
+// intervals again with the selection.
+TEST(TimeFreezingFallback, ADriftingGapIsSolvedAgainWithTheContactSideSelection) {
+  using Landing = scenes::FrictionalLanding;
+  FesdOptions grid = Landing::grid();
+  grid.regularisation.contact_side = 0.0;
+  TimeFreezingSimulationOptions without;
+  without.fallback.enabled = false;
+  const auto drifted = simulate_time_freezing(Landing::system(), Landing::q0(), Landing::v0(), grid, NoObjective{}, {}, without);
+  ASSERT_TRUE(drifted.converged());
+  EXPECT_LT(drifted.final_state()[1], -1e-6);  // measured -1.0e-5
+  const auto sim = simulate_time_freezing(Landing::system(), Landing::q0(), Landing::v0(), grid);
+  ASSERT_TRUE(sim.converged()) << sim.solution.message;
+  ASSERT_FALSE(sim.fallback_log.empty());
+  EXPECT_NE(sim.fallback_log[0].find("a contact penetrated by"), std::string::npos) << sim.fallback_log[0];
+  EXPECT_NE(sim.fallback_log[0].find("contact-side selection on"), std::string::npos) << sim.fallback_log[0];
+  EXPECT_NEAR(sim.final_state()[0], Landing::stop, 1e-9);
+  EXPECT_GT(sim.final_state()[1], -1e-8);
+}
+
+// A horizon that ends during the impact's frozen phase: the mass from 0.8 m with a_n = 20
+// touches down at tau = 0.404 and its frozen phase would last 0.198 of numerical time; the
+// horizon ends at 0.5. The record is flagged as cut (its x_plus still approaches the table); a
+// horizon past the impact gives an uncut record whose x_plus is the outcome, v2 = 0.
+TEST(TimeFreezingFallback, AFrozenPhaseCutByTheHorizonSaysSo) {
+  const TimeFreezingSystem<PointMass> system(PointMass(), 20.0);
+  FesdOptions grid;
+  grid.grid.stages = 2;
+  grid.grid.control_intervals = 2;
+  grid.grid.finite_elements = 2;
+  grid.grid.horizon = 0.5;
+  grid.regularisation.contact_side = 1e-2;
+  const double v1 = std::sqrt(2.0 * g * 0.8);
+  const auto cut = simulate_time_freezing(system, Vec<2>(0.0, 0.8), Vec<2>::Zero(), grid);
+  ASSERT_TRUE(cut.converged()) << cut.solution.message;
+  ASSERT_EQ(cut.frozen_phases.size(), 1u);
+  EXPECT_TRUE(cut.frozen_phases[0].cut);
+  // The auxiliary dynamics pushed at a_n for 0.5 - 0.404 of numerical time.
+  EXPECT_NEAR(cut.frozen_phases[0].x_plus[3], -v1 + 20.0 * (0.5 - std::sqrt(2.0 * 0.8 / g)), 1e-6);
+  grid.grid.horizon = 1.0;
+  const auto whole = simulate_time_freezing(system, Vec<2>(0.0, 0.8), Vec<2>::Zero(), grid);
+  ASSERT_TRUE(whole.converged()) << whole.solution.message;
+  ASSERT_EQ(whole.frozen_phases.size(), 1u);
+  EXPECT_FALSE(whole.frozen_phases[0].cut);
+  EXPECT_NEAR(whole.frozen_phases[0].x_plus[3], 0.0, 1e-9);
+}
+
+// NOSNOC's falling_rod case, two contacts landing at once: the rod (scenes::Rod, mu = 0.2) dropped
+// flat from 0.3 m while sliding at 1 m/s. Closed form (rod.hpp): touchdown of both ends at
+// t1 = sqrt(2 h / g), v_x+ = 1 - mu sqrt(2 g h), then the slide at mu g to rest; theta stays 0.
+// Against it and against the event-driven simulator of the same scene.
+TEST(TimeFreezingFallback, RodLandsFlatWhileSlidingAsTheEventDrivenSimulatorSays) {
+  using scenes::Rod;
+  const double h = 0.3, v0 = 1.0, mu = 0.2, a_n = 100.0;
+  const TimeFreezingSystem<Rod> system(Rod(), a_n);
+  FesdOptions grid;
+  grid.grid.stages = 2;
+  grid.grid.control_intervals = 5;
+  grid.grid.finite_elements = 2;
+  grid.grid.horizon = 1.0;
+  grid.regularisation.contact_side = 1e-2;
+  const auto sim = simulate_time_freezing(system, Vec<3>(0.0, h, 0.0), Vec<3>(v0, 0.0, 0.0), grid);
+  ASSERT_TRUE(sim.converged()) << sim.solution.message;
+  const double t1 = std::sqrt(2.0 * h / g), v1 = std::sqrt(2.0 * g * h), vt = v0 - mu * v1;
+  const double stop = v0 * t1 + vt * vt / (2.0 * mu * g);
+  const auto& y = sim.final_state();
+  EXPECT_NEAR(y[0], stop, 1e-8);
+  EXPECT_NEAR(y[1], 0.0, 1e-9);
+  EXPECT_NEAR(y[2], 0.0, 1e-9);
+  EXPECT_NEAR(y.segment<3>(3).cwiseAbs().maxCoeff(), 0.0, 1e-9);
+  ASSERT_FALSE(sim.trajectory.events.empty());
+  const auto& impact = sim.trajectory.events[0];
+  EXPECT_TRUE(impact.impact());
+  EXPECT_NEAR(impact.t, t1, 1e-9);
+  EXPECT_NEAR(impact.x_plus[3], vt, 1e-8);                        // v_x+
+  EXPECT_NEAR(impact.x_plus.segment<2>(4).norm(), 0.0, 1e-8);     // v_y+, omega+
+  for (const auto& f : sim.frozen_phases) EXPECT_FALSE(f.cut);
+  // The event-driven simulator of the same motion: the simultaneous impact, the stop.
+  SimulationOptions options;
+  options.integrator.relative_tolerance = 1e-12;
+  options.integrator.absolute_tolerance = 1e-13;
+  const Rod rod;
+  Simulator<Rod> simulator(rod, options);
+  Vec<6> x0;
+  x0 << 0.0, h, 0.0, v0, 0.0, 0.0;
+  const auto exact = simulator.run(x0, 0.0, y[6]);
+  ASSERT_FALSE(exact.events.empty());
+  EXPECT_NEAR(exact.events[0].t, impact.t, 1e-9);
+  EXPECT_NEAR((exact.events[0].x_plus - impact.x_plus).cwiseAbs().maxCoeff(), 0.0, 1e-8);
+  EXPECT_NEAR((exact.final_state() - y.head<6>()).cwiseAbs().maxCoeff(), 0.0, 1e-8);
+}
+
+// The impact that straddles a control interval's end: the mass from 0.8 m with a_n = 20 on the
+// bouncing-ball grid touches down at tau = 0.404 and its frozen phase would end at 0.602, past the
+// interval's end at 0.6; the next interval's first element finishes the impact while its clock
+// runs. The frozen run's record ends at 0.6 with v2 = -0.039 and says so (cut); the recovered
+// impact event's x+ is the outcome, v2 = 0, at the touchdown's time.
+TEST(TimeFreezingFallback, AnImpactAcrossAControlIntervalsEndIsCutInItsRecordOnly) {
+  const TimeFreezingSystem<PointMass> system(PointMass(), 20.0);
+  const double t1 = std::sqrt(2.0 * 0.8 / g), v1 = std::sqrt(2.0 * g * 0.8);
+  const auto sim = simulate_time_freezing(system, Vec<2>(0.0, 0.8), Vec<2>::Zero(), bouncing_ball_grid());
+  ASSERT_TRUE(sim.converged()) << sim.solution.message;
+  ASSERT_EQ(sim.frozen_phases.size(), 1u);
+  const auto& phase = sim.frozen_phases[0];
+  EXPECT_TRUE(phase.cut);
+  EXPECT_NEAR(phase.tau_end, 0.6, 1e-12);
+  EXPECT_NEAR(phase.x_plus[3], -v1 + 20.0 * (0.6 - t1), 1e-6);  // -0.0389
+  ASSERT_EQ(sim.trajectory.events.size(), 1u);
+  EXPECT_NEAR(sim.trajectory.events[0].t, t1, 1e-9);
+  EXPECT_NEAR(sim.trajectory.events[0].x_plus[3], 0.0, 1e-12);
+  EXPECT_NEAR(sim.final_state()[4], time_at_rest(3.0, t1, v1, 20.0), 1e-9);
+}
+
+TEST(TimeFreezingFallback, RefusesBadFallbackOptions) {
+  const TimeFreezingSystem<PointMass> system(PointMass(), 20.0);
+  const auto refused = [&](auto set, const std::string& what) {
+    TimeFreezingSimulationOptions options;
+    set(options.fallback);
+    try {
+      simulate_time_freezing(system, Vec<2>(0.0, 0.8), Vec<2>::Zero(), bouncing_ball_grid(), NoObjective{}, {}, options);
+      ADD_FAILURE() << what << " was accepted";
+    } catch (const InvalidArgument& e) {
+      EXPECT_NE(std::string(e.what()).find(what), std::string::npos) << e.what();
+    }
+  };
+  refused([](SimulationFallback& f) { f.max_refinements = -1; }, "max_refinements");
+  refused([](SimulationFallback& f) { f.max_refinements = 7; }, "max_refinements");
+  refused([](SimulationFallback& f) { f.penetration_tolerance = -1.0; }, "penetration_tolerance");
+  refused([](SimulationFallback& f) { f.contact_side_weight = 0.0; }, "contact_side_weight");
+}
+
+}  // namespace
+}  // namespace saltus::timefreezing
