@@ -110,7 +110,8 @@ nlohmann::ordered_json vector_json(const VecT<double, N>& x) {
 ///                    contact_modes_after, transitions [{guards [{contact (index), kind}],
 ///                    mode_before, mode_after (contact by contact), x_before, x_after, impact,
 ///                    impulse_mode [{role, slip_direction}], impulse [{normal, tangent [2]}] (every
-///                    contact), selection_solutions, sliding_contact, zeno_completion}]
+///                    contact), selection_solutions, sliding_contact, zeno_completion,
+///                    impact_without_collision (optional when read: false if absent)}]
 ///   zeno_time        the predicted accumulation time in s, null when not finite
 ///   zeno_time_uncertainty  its uncertainty in s (HybridTrajectory), null when not finite
 ///   zeno_completions [{t, uncertainty, last_touchdown, contacts, event}]: the accumulations the run
@@ -197,7 +198,8 @@ nlohmann::ordered_json to_json(const HybridTrajectory<S>& traj, const S& scene, 
                                {"impulse", std::move(impulse)},
                                {"selection_solutions", tr.selection_solutions},
                                {"sliding_contact", tr.sliding_contact},
-                               {"zeno_completion", tr.zeno_completion}});
+                               {"zeno_completion", tr.zeno_completion},
+                               {"impact_without_collision", tr.impact_without_collision}});
       }
       je["transitions"] = std::move(transitions);
     }
@@ -435,6 +437,8 @@ HybridTrajectory<S> trajectory_from_json(const nlohmann::json& j, const S& scene
       tr.selection_solutions = R::integer(jt, "selection_solutions", wt);
       tr.sliding_contact = R::integer(jt, "sliding_contact", wt);
       tr.zeno_completion = R::boolean(jt, "zeno_completion", wt);
+      tr.impact_without_collision =
+          jt.contains("impact_without_collision") && R::boolean(jt, "impact_without_collision", wt);
       ev.transitions.push_back(std::move(tr));
     }
     traj.events.push_back(std::move(ev));
