@@ -10,6 +10,7 @@
 #include "scenes/references.hpp"
 
 #include <saltus/hybrid/header_only.hpp>
+#include <saltus/hybrid/vocabulary/trajectory_io.hpp>
 
 #include <cmath>
 #include <numbers>
@@ -672,6 +673,12 @@ TEST(ImpactWithoutCollision, ThePainleveRodContinuesAfterTheClosedFormImpulse) {
     // The jump map of the recorded impulse mode (stick) gives the same velocity jump.
     TransitionResolver<PainleveRod> resolver(rod, resolving_painleve());
     EXPECT_LT((resolver.replay(tr, ev.x_minus) - ev.x_plus).cwiseAbs().maxCoeff(), 1e-12);
+    // The flag and the count survive the complete JSON.
+    std::stringstream text;
+    write_json(text, traj, rod, TrajectoryJsonOptions{true});
+    const auto back = read_json(text, rod);
+    EXPECT_TRUE(back.events.front().transitions.front().impact_without_collision);
+    EXPECT_EQ(back.statistics.impacts_without_collision, 1);
     std::printf("start: P = (%.17g, %.17g) N s, closed form (3/8, 5/8); |x+ - closed form| = %.3g; kinetic energy "
                 "%.17g -> %.17g J; then %s\n",
                 tr.impulse[0].normal, tr.impulse[0].tangent[0], (ev.x_plus - x_plus).cwiseAbs().maxCoeff(),
@@ -699,6 +706,31 @@ TEST(ImpactWithoutCollision, SeveralClosedContactsAreRefusedNamingThem) {
     const std::string what = e.what();
     EXPECT_NE(what.find("2 closed contacts ('left', 'right')"), std::string::npos) << what;
     EXPECT_NE(what.find("implemented for one closed contact"), std::string::npos) << what;
+  }
+}
+
+// The rod's end as a spatial-friction contact (its second tangent does not move in the plane): the
+// same inconsistent slip, refused with the option, naming the contact and its spatial friction.
+class SpatialEndRod : public PainleveRod {
+ public:
+  explicit SpatialEndRod(double mu) : PainleveRod(mu), end_{"end", Friction::Spatial, mu, 0.0} {}
+  const ContactSpec& contact(int) const { return end_; }
+
+ private:
+  ContactSpec end_;
+};
+
+TEST(ImpactWithoutCollision, ASpatialContactIsRefusedNamingIt) {
+  const SpatialEndRod rod(2.0);
+  const PainleveCase pc;
+  Simulator<SpatialEndRod> sim(rod, resolving_painleve());
+  try {
+    (void)sim.run(pc.x0, 0.0, 0.1);
+    FAIL() << "an inconsistent spatial contact was accepted";
+  } catch (const ContactProblemFailure& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("contact 'end'"), std::string::npos) << what;
+    EXPECT_NE(what.find("spatial friction"), std::string::npos) << what;
   }
 }
 
