@@ -4,6 +4,7 @@
 // between two contacts (Zeno, detected on all touchdowns), the no-penetration invariant over
 // every scene's reference motions, and an inconsistent initial mode (a Painleve rod) refused with
 // the contact named. Each case has its closed-form value.
+#include "painleve_rod.hpp"
 #include "support.hpp"
 
 #include "scenes/all_scenes.hpp"
@@ -82,53 +83,6 @@ class RockingBlock {
  private:
   double w_, h_;
   std::array<ContactSpec, 2> corners_;
-};
-
-// A uniform rod of length 1 m and mass 1 kg, q = (x, y, theta) of its centre, its lower end
-// (centre - (L/2)(cos theta, sin theta)) as a planar-friction contact.
-class PainleveRod {
- public:
-  static constexpr int nq = 3, nu = 0, nc = 1;
-  explicit PainleveRod(double mu) : end_{"end", Friction::Planar, mu, 0.0} {}
-  const ContactSpec& contact(int) const { return end_; }
-  template <class T>
-  MatT<T, nq, nq> mass_matrix(const VecT<T, nq>&) const {
-    MatT<T, nq, nq> M = MatT<T, nq, nq>::Identity();
-    M(2, 2) = T(1.0 / 12.0);
-    return M;
-  }
-  template <class T>
-  VecT<T, nq> bias(const VecT<T, nq>&, const VecT<T, nq>&) const {
-    return VecT<T, nq>(T(0), T(g), T(0));
-  }
-  // No input_matrix: optional for a scene without inputs.
-  template <class T>
-  T gap(int, const VecT<T, nq>& q) const {
-    using std::sin;
-    return q[1] - T(0.5) * sin(q[2]);
-  }
-  template <class T>
-  VecT<T, 2> tangent_position(int, const VecT<T, nq>& q) const {
-    using std::cos;
-    return VecT<T, 2>(q[0] - T(0.5) * cos(q[2]), T(0));
-  }
-
- private:
-  ContactSpec end_;
-};
-
-// The rod of PainleveRod pushed at its centre by a force u = (horizontal, vertical) [N].
-class PushedRod : public PainleveRod {
- public:
-  static constexpr int nu = 2;
-  using PainleveRod::PainleveRod;
-  template <class T>
-  MatT<T, nq, nu> input_matrix(const VecT<T, nq>&) const {
-    MatT<T, nq, nu> B = MatT<T, nq, nu>::Zero();
-    B(0, 0) = T(1);
-    B(1, 1) = T(1);
-    return B;
-  }
 };
 
 InputLaw<RockingBlock> no_input() {
