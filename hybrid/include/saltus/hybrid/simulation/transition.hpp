@@ -188,10 +188,10 @@ class TransitionResolver {
   /// inconsistent_slip; with `at_release`, the release of that contact instead: d < 0 (b reaches
   /// zero from above as the normal force -b/d reaches zero), the sign of b not required.
   int painleve_slip(const State& x, const Input& u, const Mode<nc>& mode, bool at_release);
-  /// Contact i's Delassus matrix W (rows n, t), its free normal acceleration b (under u) and its
-  /// normal and tangential velocities at x (contact i planar).
+  /// Contact i's Delassus matrix W (rows n, t), its free normal acceleration b (under u), its
+  /// normal and tangential velocities and its gap at x (contact i planar).
   void contact_delassus(const State& x, const Input& u, int i, Eigen::Matrix2d& W, double& b, double& v_n,
-                        double& v_t);
+                        double& v_t, double& gap);
 
   const S& scene_;
   SimulationOptions options_;

@@ -300,7 +300,7 @@ void TransitionResolver<S>::apply_impact(ModeSystem<S>& sys, double t, State& x,
 
 template <Scene S>
 void TransitionResolver<S>::contact_delassus(const State& x, const Input& u, int i, Eigen::Matrix2d& W, double& b,
-                                             double& v_n, double& v_t) {
+                                             double& v_n, double& v_t, double& gap) {
   Kinematics<S> kin;
   evaluate_kinematics(scene_, VecT<double, nq>(x.template head<nq>()), VecT<double, nq>(x.template tail<nq>()), kin);
   VecT<double, nq> free_force = -kin.h;
@@ -312,6 +312,7 @@ void TransitionResolver<S>::contact_delassus(const State& x, const Input& u, int
   b = c.wn.dot(a_free) + c.kappa_n;
   v_n = c.zeta_n;
   v_t = c.zeta_t[0];
+  gap = c.gap;
 }
 
 template <Scene S>
@@ -328,13 +329,11 @@ int TransitionResolver<S>::painleve_slip(const State& x, const Input& u, const M
       ++closed;
     }
   if (closed != 1 || scene_.contact(i).tangents() != 1 || mode[i].mode != ContactMode::Slip) return -1;
-  Kinematics<S> kin;
-  evaluate_kinematics(scene_, VecT<double, nq>(x.template head<nq>()), VecT<double, nq>(x.template tail<nq>()), kin);
-  const double gap = kin.contacts[i].gap, gap_tol = options_.impact.gap_tolerance;
-  if (gap > gap_tol || gap < -100 * gap_tol) return -1;
   Eigen::Matrix2d W;
-  double b = 0.0, v_n = 0.0, v_t = 0.0;
-  contact_delassus(x, u, i, W, b, v_n, v_t);
+  double b = 0.0, v_n = 0.0, v_t = 0.0, gap = 0.0;
+  contact_delassus(x, u, i, W, b, v_n, v_t, gap);
+  const double gap_tol = options_.impact.gap_tolerance;
+  if (gap > gap_tol || gap < -100 * gap_tol) return -1;
   const double v_tol = velocity_tolerance(x);
   if (std::abs(v_n) > v_tol || std::abs(v_t) <= v_tol || v_t * mode[i].slip_direction[0] <= 0) return -1;
   const double mu = scene_.contact(i).mu, s = v_t > 0 ? 1.0 : -1.0;
@@ -396,8 +395,8 @@ void TransitionResolver<S>::apply_impact_without_collision(ModeSystem<S>& sys, d
   sys.set_mode(mode);
   const Input u = sys.input(t, x);
   Eigen::Matrix2d W;
-  double b = 0.0, v_n = 0.0, v_t = 0.0;
-  contact_delassus(x, u, i, W, b, v_n, v_t);
+  double b = 0.0, v_n = 0.0, v_t = 0.0, gap = 0.0;
+  contact_delassus(x, u, i, W, b, v_n, v_t, gap);
   const ImpactWithoutCollision r = impact_without_collision(W, scene_.contact(i).mu, v_n, v_t);
   // v+ = v- + M^{-1} (w_n P_n + w_t P_t).
   Kinematics<S> kin;
