@@ -12,8 +12,10 @@
 
 #include <saltus/hybrid/header_only.hpp>
 #include <saltus/hybrid/vocabulary/trajectory_io.hpp>
+#include <saltus/hybrid/vocabulary/trajectory_report.hpp>
 
 #include <cmath>
+#include <cstdio>
 #include <numbers>
 #include <sstream>
 
@@ -743,6 +745,15 @@ TEST(ImpactWithoutCollision, TheReleaseOfAPainleveSlipIsAnImpactWithoutCollision
   EXPECT_EQ(traj.status, SimulationStatus::Completed);
   EXPECT_GT(traj.t_end(), 0.1 - 1e-12);
   EXPECT_GE(traj.events.size(), 2u);  // it lands again
+  // The event report names it.
+  std::FILE* report = std::tmpfile();
+  ASSERT_NE(report, nullptr);
+  print_events(rod, traj, report);
+  std::rewind(report);
+  std::string printed;
+  for (int ch = std::fgetc(report); ch != EOF; ch = std::fgetc(report)) printed += static_cast<char>(ch);
+  std::fclose(report);
+  EXPECT_NE(printed.find("end release, end impact without collision"), std::string::npos) << printed;
   std::printf("release at t = %.12f: P = (%.15f, %.15f) N s, closed form (%.15f, %.15f); |x+ - closed form| = %.3g; "
               "kinetic energy %.6f -> %.6f J\n",
               ev.t, tr.impulse[0].normal, tr.impulse[0].tangent[0], P[0], P[1], (ev.x_plus - x_plus).cwiseAbs().maxCoeff(),
