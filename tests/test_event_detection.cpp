@@ -4,14 +4,18 @@
 // between two contacts (Zeno, detected on all touchdowns), the no-penetration invariant over
 // every scene's reference motions, and an inconsistent initial mode (a Painleve rod) refused with
 // the contact named. Each case has its closed-form value.
+#include "painleve_rod.hpp"
 #include "support.hpp"
 
 #include "scenes/all_scenes.hpp"
 #include "scenes/references.hpp"
 
 #include <saltus/hybrid/header_only.hpp>
+#include <saltus/hybrid/vocabulary/trajectory_io.hpp>
+#include <saltus/hybrid/vocabulary/trajectory_report.hpp>
 
 #include <cmath>
+#include <cstdio>
 #include <numbers>
 #include <sstream>
 
@@ -81,53 +85,6 @@ class RockingBlock {
  private:
   double w_, h_;
   std::array<ContactSpec, 2> corners_;
-};
-
-// A uniform rod of length 1 m and mass 1 kg, q = (x, y, theta) of its centre, its lower end
-// (centre - (L/2)(cos theta, sin theta)) as a planar-friction contact.
-class PainleveRod {
- public:
-  static constexpr int nq = 3, nu = 0, nc = 1;
-  explicit PainleveRod(double mu) : end_{"end", Friction::Planar, mu, 0.0} {}
-  const ContactSpec& contact(int) const { return end_; }
-  template <class T>
-  MatT<T, nq, nq> mass_matrix(const VecT<T, nq>&) const {
-    MatT<T, nq, nq> M = MatT<T, nq, nq>::Identity();
-    M(2, 2) = T(1.0 / 12.0);
-    return M;
-  }
-  template <class T>
-  VecT<T, nq> bias(const VecT<T, nq>&, const VecT<T, nq>&) const {
-    return VecT<T, nq>(T(0), T(g), T(0));
-  }
-  // No input_matrix: optional for a scene without inputs.
-  template <class T>
-  T gap(int, const VecT<T, nq>& q) const {
-    using std::sin;
-    return q[1] - T(0.5) * sin(q[2]);
-  }
-  template <class T>
-  VecT<T, 2> tangent_position(int, const VecT<T, nq>& q) const {
-    using std::cos;
-    return VecT<T, 2>(q[0] - T(0.5) * cos(q[2]), T(0));
-  }
-
- private:
-  ContactSpec end_;
-};
-
-// The rod of PainleveRod pushed at its centre by a force u = (horizontal, vertical) [N].
-class PushedRod : public PainleveRod {
- public:
-  static constexpr int nu = 2;
-  using PainleveRod::PainleveRod;
-  template <class T>
-  MatT<T, nq, nu> input_matrix(const VecT<T, nq>&) const {
-    MatT<T, nq, nu> B = MatT<T, nq, nu>::Zero();
-    B(0, 0) = T(1);
-    B(1, 1) = T(1);
-    return B;
-  }
 };
 
 InputLaw<RockingBlock> no_input() {
@@ -506,6 +463,301 @@ TEST(Simulation, AfterAnImpactIntoStickTheContactStaysWhereLiftOffIsPossibleToo)
   const auto solvers = solver_sim.run(x0, 0.0, 0.05, push);
   ASSERT_GE(solvers.events.size(), 1u);
   EXPECT_FALSE(solvers.events.front().mode_after[0] == ContactState::stick());
+}
+
+
+// ---- Painleve's inconsistent configuration and the impact without collision -------------------
+// (dynamics/impact_without_collision.hpp). The rod of PainleveRod at 45 degrees, its end sliding
+// at v_t = -1 m/s with zero normal velocity, mu = 2: per unit mass the end's Delassus matrix is
+// W = J M^-1 J^T = [1 + 3c^2, -3cs; -3cs, 1 + 3s^2] = [2.5, -1.5; -1.5, 2.5] (c = s = 1/sqrt 2),
+// the slip's normal entry W_nn - mu s W_nt = -1/2 < 0 and the free normal acceleration -g: no
+// nonnegative normal force (InitialMode.PainleveSlipWithNegativeNormalForceIsRefused).
+
+// The rod's state of the case 4 and the closed form of its impact without collision,
+// computed here from the rod's inertia alone (mass 1 kg, length 1 m, I = 1/12 kg m^2).
+struct PainleveCase {
+  double c = std::sqrt(0.5);
+  Vec<6> x0;
+  Eigen::Matrix<double, 2, 3> J;  // rows w_n^T, w_t^T of the rod's end at 45 degrees
+  Eigen::Matrix3d Minv = Eigen::Vector3d(1.0, 1.0, 12.0).asDiagonal();
+  Eigen::Matrix2d W;
+  PainleveCase() {
+    x0 << 0.5 * c, 0.5 * c, M_PI / 4, -1.0, 0.0, 0.0;
+    J = end_jacobian(M_PI / 4);
+    W = J * Minv * J.transpose();
+  }
+  // End: (x - cos(theta)/2, y - sin(theta)/2): w_n = (0, 1, -cos(theta)/2), w_t = (1, 0, sin(theta)/2).
+  static Eigen::Matrix<double, 2, 3> end_jacobian(double theta) {
+    Eigen::Matrix<double, 2, 3> Jt;
+    Jt << 0.0, 1.0, -0.5 * std::cos(theta), 1.0, 0.0, 0.5 * std::sin(theta);
+    return Jt;
+  }
+  // The Darboux-Keller phases, written out: slip (s = sign v_t) until v_t = 0, then stick until
+  // v_n = 0.
+  static Eigen::Vector2d impulse(const Eigen::Matrix2d& W, double mu, double v_n, double v_t) {
+    const double s = v_t > 0 ? 1.0 : -1.0;
+    const double P_n1 = -v_t / (W(1, 0) - mu * s * W(1, 1));
+    const double v_n1 = v_n + (W(0, 0) - mu * s * W(0, 1)) * P_n1;
+    const double P_n2 = -v_n1 / (W(0, 0) - W(0, 1) * W(1, 0) / W(1, 1));
+    return {P_n1 + P_n2, -mu * s * P_n1 - W(1, 0) / W(1, 1) * P_n2};
+  }
+  Eigen::Vector2d impulse(double mu) const { return impulse(W, mu, 0.0, -1.0); }
+  double kinetic_energy(const Vec<6>& x) const {
+    const Eigen::Vector3d v = x.tail<3>();
+    return 0.5 * v.dot(Minv.inverse() * v);
+  }
+};
+
+SimulationOptions resolving_painleve() {
+  SimulationOptions o;
+  o.painleve.resolution = InconsistentContactResolution::ImpactWithoutCollision;
+  return o;
+}
+
+// The scene-free integration: both phases and the total against the fractions of the rod.
+TEST(ImpactWithoutCollision, TheRodsPhasesAreTheClosedForm) {
+  const PainleveCase rod;
+  const ImpactWithoutCollision r = impact_without_collision(rod.W, 2.0, 0.0, -1.0);
+  EXPECT_EQ(r.slip_sign, -1.0);
+  EXPECT_NEAR(r.normal_slip, 2.0 / 7, 1e-14);
+  EXPECT_NEAR(r.tangent_slip, 4.0 / 7, 1e-14);
+  EXPECT_NEAR(r.normal_velocity_after_slip, -1.0 / 7, 1e-14);
+  EXPECT_NEAR(r.normal_stick, 5.0 / 56, 1e-14);
+  EXPECT_NEAR(r.tangent_stick, 3.0 / 56, 1e-14);
+  EXPECT_NEAR(r.normal, 3.0 / 8, 1e-14);
+  EXPECT_NEAR(r.tangent, 5.0 / 8, 1e-14);
+  // The total is the contact's stick impulse -W^-1 (v_n, v_t), inside the cone.
+  const Eigen::Vector2d stick = -rod.W.inverse() * Eigen::Vector2d(0.0, -1.0);
+  EXPECT_NEAR(r.normal, stick[0], 1e-14);
+  EXPECT_NEAR(r.tangent, stick[1], 1e-14);
+  EXPECT_LE(std::abs(r.tangent), 2.0 * r.normal);
+  // A consistent slip (towards +x, s = +1: W_nn - mu s W_nt = 5.5 > 0) calls for no impulse.
+  EXPECT_THROW((void)impact_without_collision(rod.W, 2.0, 0.0, 1.0), InvalidArgument);
+  EXPECT_THROW((void)impact_without_collision(rod.W, 2.0, 0.0, 0.0), InvalidArgument);
+}
+
+// The phases the derivation guarantees for a symmetric positive semidefinite W fail only for
+// another W: a slip that the impulse does not stop, and a stick outside the cone after it (a
+// reverse slip would follow). Both refused, naming the case.
+TEST(ImpactWithoutCollision, PhasesThatCannotHappenAreRefusedNamingTheCase) {
+  Eigen::Matrix2d indefinite;
+  indefinite << 1.0, 2.0, 2.0, 1.0;  // d = 1 - 2 = -1, dv_t/dP_n = 2 - 1 > 0: the slip grows
+  try {
+    (void)impact_without_collision(indefinite, 1.0, 0.0, 1.0);
+    FAIL() << "a slip that does not stop was accepted";
+  } catch (const ContactProblemFailure& e) {
+    EXPECT_NE(std::string(e.what()).find("does not stop the slip"), std::string::npos) << e.what();
+  }
+  Eigen::Matrix2d skew;
+  skew << 1.0, 1.0, -5.0, 1.0;  // d = -1, dv_t/dP_n = -7: stops; |W_tn / W_tt| = 5 > mu = 2
+  try {
+    (void)impact_without_collision(skew, 2.0, 0.0, 1.0);
+    FAIL() << "a stick outside the friction cone was accepted";
+  } catch (const ContactProblemFailure& e) {
+    EXPECT_NE(std::string(e.what()).find("reverse slip"), std::string::npos) << e.what();
+  }
+}
+
+// The default is unchanged: the run from the inconsistent state throws the selection's failure,
+// the given inconsistent slip the initial-mode check's refusal.
+TEST(ImpactWithoutCollision, TheDefaultStillRefusesThePainleveState) {
+  const PainleveRod rod(2.0);
+  const PainleveCase pc;
+  Simulator<PainleveRod> sim(rod, SimulationOptions{});
+  EXPECT_EQ(sim.options().painleve.resolution, InconsistentContactResolution::Refuse);
+  try {
+    (void)sim.run(pc.x0, 0.0, 0.1);
+    FAIL() << "the inconsistent state was accepted";
+  } catch (const ContactProblemFailure& e) {
+    EXPECT_NE(std::string(e.what()).find("no consistent contact mode at the acceleration level (Painleve's paradox"),
+              std::string::npos)
+        << e.what();
+  }
+  auto no_u = [](double, const Vec<6>&, const Mode<1>&) { return Vec<0>(); };
+  try {
+    (void)sim.run(pc.x0, Mode<1>{ContactState::slip_planar(-1)}, 0.0, 0.1, no_u);
+    FAIL() << "the inconsistent initial mode was accepted";
+  } catch (const InvalidArgument& e) {
+    EXPECT_NE(std::string(e.what()).find("a Painleve configuration"), std::string::npos) << e.what();
+  }
+}
+
+// With the option, the run from the inconsistent state starts with the impact without collision:
+// its impulse and the velocity after it are the closed form (to 1e-12), the end leaves it at rest
+// (v_n+ = v_t+ = 0), the kinetic energy falls from 0.5 J to 0.1875 J, and the rod then pivots on
+// its sticking end. The same from the inconsistent slip given as the initial mode.
+TEST(ImpactWithoutCollision, ThePainleveRodContinuesAfterTheClosedFormImpulse) {
+  const PainleveRod rod(2.0);
+  const PainleveCase pc;
+  const Eigen::Vector2d P = pc.impulse(2.0);
+  EXPECT_NEAR(P[0], 3.0 / 8, 1e-14);
+  EXPECT_NEAR(P[1], 5.0 / 8, 1e-14);
+  Vec<6> x_plus = pc.x0;
+  x_plus.tail<3>() += pc.Minv * pc.J.transpose() * P;
+  Simulator<PainleveRod> sim(rod, resolving_painleve());
+  auto no_u = [](double, const Vec<6>&, const Mode<1>&) { return Vec<0>(); };
+  for (const bool given_mode : {false, true}) {
+    SCOPED_TRACE(given_mode ? "from the given slip" : "from the state");
+    const auto traj = given_mode ? sim.run(pc.x0, Mode<1>{ContactState::slip_planar(-1)}, 0.0, 0.2, no_u)
+                                 : sim.run(pc.x0, 0.0, 0.2);
+    ASSERT_GE(traj.events.size(), 1u);
+    const auto& ev = traj.events.front();
+    ASSERT_EQ(ev.transitions.size(), 1u);
+    const auto& tr = ev.transitions.front();
+    EXPECT_EQ(ev.t, 0.0);
+    EXPECT_TRUE(tr.impact_without_collision);
+    EXPECT_TRUE(tr.impact);
+    EXPECT_TRUE(tr.guards.empty());
+    EXPECT_EQ(tr.impulse_mode[0].role, ImpulseRole::Stick);
+    EXPECT_EQ(ev.mode_before, Mode<1>{ContactState::slip_planar(-1)});
+    EXPECT_EQ(ev.mode_after, Mode<1>{ContactState::stick()});
+    EXPECT_NEAR(tr.impulse[0].normal, P[0], 1e-12);
+    EXPECT_NEAR(tr.impulse[0].tangent[0], P[1], 1e-12);
+    EXPECT_LT((ev.x_plus - x_plus).cwiseAbs().maxCoeff(), 1e-12) << ev.x_plus.transpose() << "\n" << x_plus.transpose();
+    const Eigen::Vector2d v_end = pc.J * Eigen::Vector3d(ev.x_plus.tail<3>());
+    EXPECT_NEAR(v_end[0], 0.0, 1e-12);
+    EXPECT_NEAR(v_end[1], 0.0, 1e-12);
+    EXPECT_NEAR(pc.kinetic_energy(pc.x0), 0.5, 1e-15);
+    EXPECT_NEAR(pc.kinetic_energy(ev.x_plus), 0.1875, 1e-12);
+    EXPECT_EQ(traj.statistics.impacts_without_collision, 1);
+    // The run goes on: the end sticks while the rod turns up at 3 sqrt(2)/4 rad/s.
+    EXPECT_EQ(traj.status, SimulationStatus::Completed);
+    ASSERT_GE(traj.segments.size(), 2u);
+    EXPECT_EQ(traj.segments[1].mode, Mode<1>{ContactState::stick()});
+    EXPECT_NEAR(ev.x_plus[5], 3 * std::sqrt(2.0) / 4, 1e-12);
+    EXPECT_GT(traj.t_end(), 0.2 - 1e-12);
+    // The jump map of the recorded impulse mode (stick) gives the same velocity jump.
+    TransitionResolver<PainleveRod> resolver(rod, resolving_painleve());
+    EXPECT_LT((resolver.replay(tr, ev.x_minus) - ev.x_plus).cwiseAbs().maxCoeff(), 1e-12);
+    // The flag and the count survive the complete JSON.
+    std::stringstream text;
+    write_json(text, traj, rod, TrajectoryJsonOptions{true});
+    const auto back = read_json(text, rod);
+    EXPECT_TRUE(back.events.front().transitions.front().impact_without_collision);
+    EXPECT_EQ(back.statistics.impacts_without_collision, 1);
+    std::printf("start: P = (%.17g, %.17g) N s, closed form (3/8, 5/8); |x+ - closed form| = %.3g; kinetic energy "
+                "%.17g -> %.17g J; then %s\n",
+                tr.impulse[0].normal, tr.impulse[0].tangent[0], (ev.x_plus - x_plus).cwiseAbs().maxCoeff(),
+                pc.kinetic_energy(ev.x_minus), pc.kinetic_energy(ev.x_plus), describe(rod, traj.segments[1].mode).c_str());
+  }
+}
+
+// Several closed contacts: a flat unit block sliding at 1 m/s on both corners, mu = 2. Per unit
+// mass and with I = 1/6, the slip's acceleration-level matrix is [5.5, 2.5; -3.5, -0.5] against
+// b = (-g, -g): no combination of the corners' states solves it. The impact without collision is
+// for one contact: refused, naming the contacts and the reason.
+TEST(ImpactWithoutCollision, SeveralClosedContactsAreRefusedNamingThem) {
+  const RockingBlock block(1.0, 1.0, 2.0);
+  Vec<6> x0;
+  x0 << 0.0, 0.5, 0.0, 1.0, 0.0, 0.0;
+  {
+    Simulator<RockingBlock> sim(block, SimulationOptions{});
+    EXPECT_THROW((void)sim.run(x0, 0.0, 0.1, no_input()), ContactProblemFailure);
+  }
+  Simulator<RockingBlock> sim(block, resolving_painleve());
+  try {
+    (void)sim.run(x0, 0.0, 0.1, no_input());
+    FAIL() << "an inconsistent configuration of two contacts was accepted";
+  } catch (const ContactProblemFailure& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("2 closed contacts ('left', 'right')"), std::string::npos) << what;
+    EXPECT_NE(what.find("implemented for one closed contact"), std::string::npos) << what;
+  }
+}
+
+// The rod's end as a spatial-friction contact (its second tangent does not move in the plane): the
+// same inconsistent slip, refused with the option, naming the contact and its spatial friction.
+class SpatialEndRod : public PainleveRod {
+ public:
+  explicit SpatialEndRod(double mu) : PainleveRod(mu), end_{"end", Friction::Spatial, mu, 0.0} {}
+  const ContactSpec& contact(int) const { return end_; }
+
+ private:
+  ContactSpec end_;
+};
+
+TEST(ImpactWithoutCollision, ASpatialContactIsRefusedNamingIt) {
+  const SpatialEndRod rod(2.0);
+  const PainleveCase pc;
+  Simulator<SpatialEndRod> sim(rod, resolving_painleve());
+  try {
+    (void)sim.run(pc.x0, 0.0, 0.1);
+    FAIL() << "an inconsistent spatial contact was accepted";
+  } catch (const ContactProblemFailure& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("contact 'end'"), std::string::npos) << what;
+    EXPECT_NE(what.find("spatial friction"), std::string::npos) << what;
+  }
+}
+
+// Reached during a run: the rod pushed at its centre by u = (0, g + 2 - 100 t) N, from the state
+// above given in slip-. With d = -1/2 the slip is Painleve's indeterminacy while the free normal
+// acceleration b > 0 (lift-off, or the normal force -b/d the persistent choice keeps); b falls with
+// the push, and the release guard fires where the force reaches zero (t = 0.0201 s). Past it no
+// mode is consistent. By default the contact opens and touches down 0.25 ms later, an ordinary
+// impact of the flight's small approach velocity; with the option the release is the impact
+// without collision: the closed form at the release state (computed here from the rod's inertia
+// at its angle then), the end at rest after it, less kinetic energy, and the run goes on (the rod,
+// turning up at 1.08 rad/s and pushed up by nearly its weight, lifts off and lands again).
+TEST(ImpactWithoutCollision, TheReleaseOfAPainleveSlipIsAnImpactWithoutCollision) {
+  const PushedRod rod(2.0);
+  const PainleveCase pc;
+  const InputLaw<PushedRod> push = [](double t, const Vec<6>&, const Mode<1>&) {
+    return Vec<2>(0.0, g + 2.0 - 100.0 * t);
+  };
+  const Mode<1> slip_back{ContactState::slip_planar(-1)};
+  {
+    Simulator<PushedRod> sim(rod, SimulationOptions{});
+    const auto traj = sim.run(pc.x0, slip_back, 0.0, 0.1, push);
+    ASSERT_GE(traj.events.size(), 2u);
+    EXPECT_EQ(traj.events[0].guards().front().kind, GuardKind::Release);
+    EXPECT_EQ(traj.events[0].mode_after, Mode<1>{ContactState::open()});
+    EXPECT_EQ(traj.events[1].guards().front().kind, GuardKind::Touchdown);
+    EXPECT_EQ(traj.statistics.impacts_without_collision, 0);
+  }
+  Simulator<PushedRod> sim(rod, resolving_painleve());
+  const auto traj = sim.run(pc.x0, slip_back, 0.0, 0.1, push);
+  ASSERT_GE(traj.events.size(), 1u);
+  const auto& ev = traj.events.front();
+  ASSERT_EQ(ev.transitions.size(), 1u);
+  const auto& tr = ev.transitions.front();
+  EXPECT_NEAR(ev.t, 0.0201029, 1e-6);
+  ASSERT_EQ(tr.guards.size(), 1u);
+  EXPECT_EQ(tr.guards.front().kind, GuardKind::Release);
+  EXPECT_TRUE(tr.impact_without_collision);
+  EXPECT_EQ(ev.mode_before, slip_back);
+  const auto J = PainleveCase::end_jacobian(ev.x_minus[2]);
+  const Eigen::Matrix2d W = J * pc.Minv * J.transpose();
+  const Eigen::Vector2d v_minus = J * Eigen::Vector3d(ev.x_minus.tail<3>());
+  EXPECT_NEAR(v_minus[0], 0.0, 1e-9);
+  EXPECT_LT(W(0, 0) - 2.0 * (v_minus[1] > 0 ? 1.0 : -1.0) * W(0, 1), 0.0) << "not a Painleve slip";
+  const Eigen::Vector2d P = PainleveCase::impulse(W, 2.0, v_minus[0], v_minus[1]);
+  EXPECT_NEAR(tr.impulse[0].normal, P[0], 1e-12);
+  EXPECT_NEAR(tr.impulse[0].tangent[0], P[1], 1e-12);
+  Vec<6> x_plus = ev.x_minus;
+  x_plus.tail<3>() += pc.Minv * J.transpose() * P;
+  EXPECT_LT((ev.x_plus - x_plus).cwiseAbs().maxCoeff(), 1e-12) << ev.x_plus.transpose() << "\n" << x_plus.transpose();
+  const Eigen::Vector2d v_plus = J * Eigen::Vector3d(ev.x_plus.tail<3>());
+  EXPECT_NEAR(v_plus[0], 0.0, 1e-12);
+  EXPECT_NEAR(v_plus[1], 0.0, 1e-12);
+  EXPECT_LT(pc.kinetic_energy(ev.x_plus), pc.kinetic_energy(ev.x_minus));
+  EXPECT_EQ(traj.statistics.impacts_without_collision, 1);
+  EXPECT_EQ(traj.status, SimulationStatus::Completed);
+  EXPECT_GT(traj.t_end(), 0.1 - 1e-12);
+  EXPECT_GE(traj.events.size(), 2u);  // it lands again
+  // The event report names it.
+  std::FILE* report = std::tmpfile();
+  ASSERT_NE(report, nullptr);
+  print_events(rod, traj, report);
+  std::rewind(report);
+  std::string printed;
+  for (int ch = std::fgetc(report); ch != EOF; ch = std::fgetc(report)) printed += static_cast<char>(ch);
+  std::fclose(report);
+  EXPECT_NE(printed.find("end release, end impact without collision"), std::string::npos) << printed;
+  std::printf("release at t = %.12f: P = (%.15f, %.15f) N s, closed form (%.15f, %.15f); |x+ - closed form| = %.3g; "
+              "kinetic energy %.6f -> %.6f J\n",
+              ev.t, tr.impulse[0].normal, tr.impulse[0].tangent[0], P[0], P[1], (ev.x_plus - x_plus).cwiseAbs().maxCoeff(),
+              pc.kinetic_energy(ev.x_minus), pc.kinetic_energy(ev.x_plus));
 }
 
 }  // namespace

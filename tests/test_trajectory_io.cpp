@@ -67,6 +67,7 @@ void expect_round_trip(const HybridTrajectory<S>& traj, const S& scene) {
     for (std::size_t k = 0; k < a.transitions.size(); ++k) {
       EXPECT_EQ(b.transitions[k].impulse_mode, a.transitions[k].impulse_mode);
       EXPECT_EQ(b.transitions[k].zeno_completion, a.transitions[k].zeno_completion);
+      EXPECT_EQ(b.transitions[k].impact_without_collision, a.transitions[k].impact_without_collision);
       for (int c = 0; c < S::nc; ++c) EXPECT_TRUE(same_bits(b.transitions[k].impulse[c].normal, a.transitions[k].impulse[c].normal));
     }
   }

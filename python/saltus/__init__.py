@@ -57,6 +57,7 @@ from ._saltus import (  # noqa: F401  (the public names)
     Event,
     GrazingEvent,
     Hopper,
+    InconsistentContactResolution,
     IntegratorKind,
     InternalError,
     InvalidArgument,
@@ -88,6 +89,7 @@ from ._saltus import (  # noqa: F401  (the public names)
 
 __all__ = [
     "BouncingBall", "PointMass", "PlankBox", "Hopper", "SpatialBox", "SimulationOptions", "IntegratorKind",
+    "InconsistentContactResolution",
     "simulate", "polish", "read_trajectory", "references", "Segment", "Event",
     "jump_gains", "JumpGain", "conewise_gain", "ConewisePiece",
     "linearise", "lqr_design", "constant_gains", "pd_gain", "tracking", "analyse_reference", "optimal_control",

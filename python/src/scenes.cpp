@@ -102,6 +102,14 @@ void bind_scenes(py::module_& m) {
       .value("CvodeBdf", IntegratorKind::CvodeBdf)
       .value("CvodeAdams", IntegratorKind::CvodeAdams);
 
+  py::enum_<InconsistentContactResolution>(
+      m, "InconsistentContactResolution",
+      "What the simulator does with Painleve's inconsistent configuration (a closed sliding contact with no "
+      "consistent contact mode): Refuse (the default: the run raises ContactProblemFailure) or "
+      "ImpactWithoutCollision (the tangential impulse of Genot & Brogliato 1999, then the run goes on).")
+      .value("Refuse", InconsistentContactResolution::Refuse)
+      .value("ImpactWithoutCollision", InconsistentContactResolution::ImpactWithoutCollision);
+
   py::class_<SimulationOptions>(m, "SimulationOptions",
                                 "Options of the event-driven simulation (C++ saltus::SimulationOptions, flattened: "
                                 "the integrator's fields are attributes here).")
@@ -135,6 +143,11 @@ void bind_scenes(py::module_& m) {
                      "projected limit state at the predicted accumulation time, and recorded in "
                      "Trajectory.zeno_completions (an accumulation predicted at or after t_final ends the run with "
                      "status 'zeno' either way)")
+      .def_property(
+          "painleve_resolution", [](const SimulationOptions& o) { return o.painleve.resolution; },
+          [](SimulationOptions& o, InconsistentContactResolution r) { o.painleve.resolution = r; },
+          "Painleve's inconsistent configuration: Refuse (default) or ImpactWithoutCollision (C++ "
+          "SimulationOptions::painleve.resolution; docs/simulation.md)")
       .def_readwrite("record_dense_output", &SimulationOptions::record_dense_output)
       .def_readwrite("breakpoints", &SimulationOptions::breakpoints,
                      "s: times where the input law is not smooth (the integrator stops there)")
@@ -148,7 +161,8 @@ void bind_scenes(py::module_& m) {
             return py::make_tuple(static_cast<int>(o.integrator.kind), o.integrator.relative_tolerance,
                                   o.integrator.absolute_tolerance, o.integrator.max_step, o.integrator.max_steps,
                                   o.simultaneity, o.max_events, o.rest_velocity, o.zeno_bounces,
-                                  o.record_dense_output, o.breakpoints, o.zeno_completion);
+                                  o.record_dense_output, o.breakpoints, o.zeno_completion,
+                                  static_cast<int>(o.painleve.resolution));
           },
           [](const py::tuple& t) {
             SimulationOptions o;
@@ -164,6 +178,8 @@ void bind_scenes(py::module_& m) {
             o.record_dense_output = t[9].cast<bool>();
             o.breakpoints = t[10].cast<std::vector<double>>();
             if (t.size() > 11) o.zeno_completion = t[11].cast<bool>();  // absent from the 11-field pickles
+            if (t.size() > 12)  // absent from the 12-field pickles
+              o.painleve.resolution = static_cast<InconsistentContactResolution>(t[12].cast<int>());
             return o;
           }));
 

@@ -162,6 +162,10 @@ def test_scenes_and_options_pickle():
     assert back.relative_tolerance == 1e-12 and back.breakpoints == [0.5]
     assert back.zeno_completion is True and back.zeno_bounces == 20
     assert saltus.SimulationOptions().zeno_completion is False  # the C++ default
+    assert saltus.SimulationOptions().painleve_resolution == saltus.InconsistentContactResolution.Refuse
+    o.painleve_resolution = saltus.InconsistentContactResolution.ImpactWithoutCollision
+    back = pickle.loads(pickle.dumps(o))
+    assert back.painleve_resolution == saltus.InconsistentContactResolution.ImpactWithoutCollision
 
 
 def test_bouncing_ball_with_zeno_completion_rests_on_the_ground_past_its_accumulation(ball_trajectory):

@@ -288,11 +288,13 @@ void bind_trajectory(py::module_& m, const std::string& scene_name, const char* 
             d["wall_seconds"] = s.wall_seconds;
             d["ambiguous_selections"] = s.ambiguous_selections;
             d["sliding_events"] = s.sliding_events;
+            d["impacts_without_collision"] = s.impacts_without_collision;
             return d;
           },
           "integrator steps, rejected steps, right-hand side evaluations, the simulation's wall time [s], "
-          "mode selections with several solutions, and events after which a contact slides on its surface "
-          "under the equivalent control of a mode-switching input law")
+          "mode selections with several solutions, events after which a contact slides on its surface "
+          "under the equivalent control of a mode-switching input law, and impacts without collision "
+          "(SimulationOptions.painleve in C++)")
       .def_property_readonly(
           "segments",
           [](const T& t) {

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <saltus/hybrid/dynamics/impact.hpp>
+#include <saltus/hybrid/dynamics/impact_without_collision.hpp>
 #include <saltus/hybrid/dynamics/mode_selection.hpp>
 #include <saltus/hybrid/simulation/integrator.hpp>
 
@@ -10,10 +11,27 @@
 
 namespace saltus {
 
+/// Painleve's inconsistent configuration: a closed planar contact sliding with zero normal
+/// velocity where no nonnegative normal force keeps it on the surface (W_nn - mu s W_nt <= 0 and
+/// a free normal acceleration below zero; dynamics/impact_without_collision.hpp derives it).
+struct PainleveOptions {
+  /// Refuse (the default): the run throws where it meets one, at its start or later (the
+  /// behaviour without this option). ImpactWithoutCollision: the tangential impulse of Genot &
+  /// Brogliato, "New results on Painleve paradoxes", Eur. J. Mech. A/Solids 18 (1999) 653-677 --
+  /// slip until the slip stops, then stick until the normal velocity is zero again -- is applied
+  /// at that instant, recorded as a transition flagged Transition::impact_without_collision (its
+  /// impulse in Transition::impulse, role Stick: the total is the contact's stick impulse), and
+  /// the run continues in the mode the acceleration-level selection finds after it (stick, slip
+  /// from rest or lift-off). Implemented for one closed planar contact: with several closed
+  /// contacts, or spatial friction, the run throws ContactProblemFailure naming the case.
+  InconsistentContactResolution resolution = InconsistentContactResolution::Refuse;
+};
+
 struct SimulationOptions {
   IntegratorOptions integrator;
   ImpactOptions impact;
   ModeSelectionOptions selection;
+  PainleveOptions painleve;
   /// s: guard crossings this close in time form one simultaneous event.
   double simultaneity = 1e-9;
   int max_events = 100000;

@@ -52,6 +52,16 @@
 // (Segment::sliding_contact), statistics.sliding_events counts such events, and the trajectory's
 // input applies the equivalent control there.
 //
+// Painleve's inconsistent configuration. A closed planar contact sliding where no nonnegative
+// normal force keeps it on the surface (dynamics/impact_without_collision.hpp) has no consistent
+// mode: by default the run throws (ContactProblemFailure from the mode selection of a start or
+// an event; InvalidArgument from check_initial_mode where the slip is the given initial mode). With
+// options.painleve.resolution = ImpactWithoutCollision the impact without collision of Genot &
+// Brogliato (1999) is applied there instead, at the start (a given initial slip too) or inside an
+// event's chain: a transition flagged Transition::impact_without_collision, counted in
+// statistics.impacts_without_collision, after which the run continues in the mode selected with
+// the contact at tangential rest. One closed contact only (transition.hpp).
+//
 // Invariants. Every accepted step is scanned for touchdowns that dip and come back, or start at
 // round-off below the surface (guard_scan.hxx); at the end of every segment no open contact is
 // below -gap_tolerance unless it started the segment lower (a contact released below the
@@ -117,7 +127,10 @@ class Simulator {
     return run(x0, t0, t_final, zero_input<S>());
   }
   /// Same, from a given initial mode.
-  /// @throws InvalidArgument if mode0 is inconsistent with x0 (check_initial_mode).
+  /// @throws InvalidArgument if mode0 is inconsistent with x0 (check_initial_mode). With
+  /// options.painleve.resolution = ImpactWithoutCollision, a mode0 whose one closed contact slips
+  /// into Painleve's inconsistent configuration (TransitionResolver::inconsistent_slip) is not
+  /// refused: the run starts with the impact without collision at t0 (file comment).
   HybridTrajectory<S> run(const State& x0, const Mode<nc>& mode0, double t0, double t_final,
                           const InputLaw<S>& input);
 

@@ -119,8 +119,26 @@ HybridTrajectory<S> Simulator<S>::run_impl(const State& x0, std::optional<Mode<n
   Mode<nc> mode;
   if (mode0) {
     sys.set_mode(*mode0);  // a law that switches with the contact mode is judged with the given mode's input
-    check_initial_mode(x0, *mode0, sys.input(t0, x0));
-    mode = *mode0;
+    // A given slip into Painleve's inconsistent configuration: refused by check_initial_mode, or
+    // resolved by the impact without collision (SimulationOptions::painleve).
+    const int inconsistent =
+        options_.painleve.resolution == InconsistentContactResolution::ImpactWithoutCollision
+            ? transitions_.inconsistent_slip(x0, sys.input(t0, x0), *mode0)
+            : -1;
+    if (inconsistent >= 0) {
+      Event<S> ev = transitions_.resolve_inconsistent(sys, t, x, *mode0, inconsistent);
+      for (const auto& tr : ev.transitions) {
+        if (tr.selection_solutions > 1) ++traj.statistics.ambiguous_selections;
+        if (tr.sliding_contact >= 0) ++traj.statistics.sliding_events;
+      }
+      x = ev.x_plus;
+      mode = ev.mode_after;
+      traj.events.push_back(std::move(ev));
+      traj.segments.push_back(Segment<S>{traj.events.back().mode_before, t, t, {}});
+    } else {
+      check_initial_mode(x0, *mode0, sys.input(t0, x0));
+      mode = *mode0;
+    }
   } else {
     auto start = transitions_.start(sys, t, x);
     mode = start.mode;
@@ -240,6 +258,8 @@ HybridTrajectory<S> Simulator<S>::run_impl(const State& x0, std::optional<Mode<n
     }
   }
   traj.set_final_state(x);
+  for (const auto& ev : traj.events)
+    for (const auto& tr : ev.transitions) stats.impacts_without_collision += tr.impact_without_collision ? 1 : 0;
   apply_sliding_to_input(traj);
   stats.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
   return traj;

@@ -41,6 +41,21 @@
 // closed and is pushed in when open, the contact slides on the surface at (almost) zero force
 // under the equivalent control (ModeSystem::set_sliding, Filippov's sliding solution).
 //
+// Painleve's inconsistent configuration (dynamics/impact_without_collision.hpp). Where a selection
+// (at the start, after an impact, at a stop) has no solution because its one closed contact slides
+// into Painleve's inconsistent configuration, the resolver throws by default; with
+// options.painleve.resolution = ImpactWithoutCollision it applies the impact without collision as
+// the next transition of the event (guards empty, flagged Transition::impact_without_collision),
+// selects the mode at the state after it with the contact at tangential rest, and follows the
+// chain from there. The same where a release fires for the one closed contact sliding with
+// d = W_nn - mu s W_nt < 0: its normal force -b/d reaches zero as the free normal acceleration b
+// does, from above, the end of the closed branch of Painleve's indeterminacy (two modes while
+// b > 0: lift-off, or the contact the persistent choice keeps); past it b < 0 and neither mode is
+// consistent (opening drives the contact into the surface at once). Default: the contact opens
+// (and touches down again after it, an ordinary impact); with the option, the transition of the
+// release guard is the impact without collision. Several closed contacts, or a spatial one:
+// ContactProblemFailure naming the case (the several-contact impulse is not implemented).
+//
 // Settled transitions. Contacts whose stick/slip changed at this instant are not changed back at
 // the same instant, and a contact released at this instant is not closed again by its touchdown
 // guard unless it approaches (resolve() says why in its comments).
@@ -49,6 +64,7 @@
 
 #include <saltus/hybrid/dynamics/flow.hpp>
 #include <saltus/hybrid/dynamics/impact.hpp>
+#include <saltus/hybrid/dynamics/impact_without_collision.hpp>
 #include <saltus/hybrid/dynamics/jump_map.hpp>
 #include <saltus/hybrid/dynamics/mode_selection.hpp>
 #include <saltus/hybrid/simulation/mode_system.hpp>
@@ -129,6 +145,21 @@ class TransitionResolver {
                              const std::array<bool, nc>& chosen, const std::array<bool, nc>& candidates,
                              const std::array<bool, nc>& rest, int& solutions, int& sliding);
 
+  /// Painleve's inconsistent configuration in `mode` at x under u (file comment): the one closed
+  /// contact of `mode`, with planar friction, touching (gap within [-100, 1] gap tolerances), at
+  /// zero normal velocity, slipping along its tangential velocity, with d = W_nn - mu s W_nt <= 0
+  /// and free normal acceleration b < 0 (dynamics/impact_without_collision.hpp). Returns that
+  /// contact, -1 when `mode` is not such a configuration.
+  int inconsistent_slip(const State& x, const Input& u, const Mode<nc>& mode);
+
+  /// The event of the impact without collision at (t, x) of contact `contact`, slipping in `mode`
+  /// in Painleve's inconsistent configuration (inconsistent_slip), then the chain at the same
+  /// instant as in resolve(). Used for a start in that configuration.
+  /// @throws InvalidArgument unless options.painleve.resolution is ImpactWithoutCollision;
+  /// ContactProblemFailure from the impulse (impact_without_collision) or the selection after it;
+  /// as resolve().
+  Event<S> resolve_inconsistent(ModeSystem<S>& sys, double t, const State& x, const Mode<nc>& mode, int contact);
+
   /// A velocity below this counts as zero at x: selection.velocity_tolerance * max(1, ||v||_inf).
   double velocity_tolerance(const State& x) const;
 
@@ -141,8 +172,31 @@ class TransitionResolver {
   void apply_impact(ModeSystem<S>& sys, double t, State& x, Mode<nc>& mode, const std::vector<Guard>& guards,
                     Transition<S>& tr);
 
+  /// select_consistent, with Painleve's inconsistent configuration left to the caller (file
+  /// comment): where the selection throws ContactProblemFailure, options.painleve.resolution is
+  /// ImpactWithoutCollision and the one candidate slides into that configuration, sets
+  /// painleve_contact_ to it and returns `base` with the chosen contacts open but that one, slipping
+  /// along its velocity. @throws the selection's failure otherwise (unchanged under Refuse);
+  /// ContactProblemFailure naming the case for several candidates or a spatial contact.
+  Mode<nc> select_or_defer(ModeSystem<S>& sys, double t, const State& x, const Mode<nc>& base,
+                           const std::array<bool, nc>& chosen, const std::array<bool, nc>& candidates,
+                           const std::array<bool, nc>& rest, int& solutions, int& sliding);
+  /// The impact without collision of contact i at (t, x): x gets the velocity jump, mode the mode
+  /// selected after it (the contact at tangential rest), tr the impulse and the flag.
+  void apply_impact_without_collision(ModeSystem<S>& sys, double t, State& x, Mode<nc>& mode, int i,
+                                      Transition<S>& tr);
+  /// inconsistent_slip; with `at_release`, the release of that contact instead: d < 0 (b reaches
+  /// zero from above as the normal force -b/d reaches zero), the sign of b not required.
+  int painleve_slip(const State& x, const Input& u, const Mode<nc>& mode, bool at_release);
+  /// Contact i's Delassus matrix W (rows n, t), its free normal acceleration b (under u), its
+  /// normal and tangential velocities and its gap at x (contact i planar).
+  void contact_delassus(const State& x, const Input& u, int i, Eigen::Matrix2d& W, double& b, double& v_n,
+                        double& v_t, double& gap);
+
   const S& scene_;
   SimulationOptions options_;
+  /// The contact whose impact without collision is the next transition of resolve() (-1: none).
+  int painleve_contact_ = -1;
   /// Open contacts kept out of impact problems: deferred touchdowns of the resolve() under way.
   std::array<bool, nc> deferred_contacts_{};
   std::unique_ptr<ImpactSolver<S>> impact_;  ///< large: on the heap

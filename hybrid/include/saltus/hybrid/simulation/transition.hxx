@@ -41,8 +41,23 @@ auto TransitionResolver<S>::start(ModeSystem<S>& sys, double t0, const State& x0
   std::array<bool, nc> all{};
   all.fill(true);
   sys.set_mode(Mode<nc>{});
-  start.mode = select_consistent(sys, t0, x0, Mode<nc>{}, all, candidates, {}, start.selection_solutions,
-                                 start.sliding_contact);
+  start.mode = select_or_defer(sys, t0, x0, Mode<nc>{}, all, candidates, {}, start.selection_solutions,
+                               start.sliding_contact);
+  if (painleve_contact_ >= 0) {  // Painleve's inconsistent configuration, resolved (file comment)
+    const int i = painleve_contact_;
+    painleve_contact_ = -1;
+    if (!initial_touchdowns.empty())
+      throw ContactProblemFailure(detail::concat(
+          "contact '", scene_.contact(i).name, "' starts in Painleve's inconsistent configuration while contact '",
+          scene_.contact(initial_touchdowns.front().contact).name,
+          "' impacts at t0: the impact without collision (SimulationOptions::painleve) is implemented for one "
+          "contact, not together with an impact of another one"));
+    start.impact = resolve_inconsistent(sys, t0, x0, start.mode, i);
+    start.mode = start.impact->mode_after;
+    start.selection_solutions = start.impact->transitions.back().selection_solutions;
+    start.sliding_contact = start.impact->transitions.back().sliding_contact;
+    return start;
+  }
   if (!initial_touchdowns.empty()) {
     start.impact = resolve(sys, t0, x0, start.mode, initial_touchdowns);
     start.mode = start.impact->mode_after;
@@ -65,6 +80,10 @@ Event<S> TransitionResolver<S>::resolve(ModeSystem<S>& sys, double t, const Stat
     std::array<bool, nc>& flags;
     ~ClearDeferred() { flags = {}; }
   } clear_deferred{deferred_contacts_};
+  struct ClearPainleve {
+    int& contact;
+    ~ClearPainleve() { contact = -1; }
+  } clear_painleve{painleve_contact_};
   Event<S> ev;
   ev.t = t;
   // The event's physics sees the input just after the event (file comment): t is located on the
@@ -93,6 +112,24 @@ Event<S> TransitionResolver<S>::resolve(ModeSystem<S>& sys, double t, const Stat
   std::array<bool, nc> settled_friction{}, released{};
   const double v_tol = velocity_tolerance(x_minus);
   for (int round = 0;; ++round) {
+    if (painleve_contact_ >= 0) {
+      // The impact without collision a selection left to this chain (select_or_defer), or the one
+      // resolve_inconsistent starts with.
+      SALTUS_CHECK_NUMERICS(round < options_.max_chain, "the chain of transitions at t = ", t, " did not settle after ",
+                            options_.max_chain, " transitions (last mode ", describe(scene_, mode), ")");
+      const int i = painleve_contact_;
+      painleve_contact_ = -1;
+      Transition<S> tr;
+      tr.mode_before = mode;
+      tr.x_before = x;
+      apply_impact_without_collision(sys, t_in, x, mode, i, tr);
+      tr.mode_after = mode;
+      tr.x_after = x;
+      ev.transitions.push_back(std::move(tr));
+      settled_friction[i] = true;  // the stick or slip chosen at rest is not undone at this instant
+      pending.clear();
+      continue;
+    }
     if (pending.empty()) {
       sys.set_mode(mode);
       pending = guards_due(sys, t_in, x);
@@ -176,6 +213,13 @@ void TransitionResolver<S>::apply(ModeSystem<S>& sys, double t, State& x, Mode<n
   }
   sys.set_mode(mode);
   const Input u = sys.input(t, x);
+  // The release of a contact sliding with W_nn - mu s W_nt < 0: the end of the closed branch of
+  // Painleve's indeterminacy, where no mode is consistent after it (file comment).
+  if (options_.painleve.resolution == InconsistentContactResolution::ImpactWithoutCollision && guards.size() == 1 &&
+      guards.front().kind == GuardKind::Release && painleve_slip(x, u, mode, true) == guards.front().contact) {
+    apply_impact_without_collision(sys, t, x, mode, guards.front().contact, tr);
+    return;
+  }
   evaluate_flow(scene_, mode, x, u, flow_);
   std::array<bool, nc> at_rest{};
   bool select = false;
@@ -206,7 +250,7 @@ void TransitionResolver<S>::apply(ModeSystem<S>& sys, double t, State& x, Mode<n
   if (select) {
     std::array<bool, nc> candidates{};
     for (int i = 0; i < nc; ++i) candidates[i] = next[i].closed();
-    next = select_consistent(sys, t, x, next, at_rest, candidates, at_rest, tr.selection_solutions, tr.sliding_contact);
+    next = select_or_defer(sys, t, x, next, at_rest, candidates, at_rest, tr.selection_solutions, tr.sliding_contact);
   }
   mode = next;
 }
@@ -251,7 +295,141 @@ void TransitionResolver<S>::apply_impact(ModeSystem<S>& sys, double t, State& x,
   }
   all.fill(true);
   sys.set_mode(after_impact);
-  mode = select_consistent(sys, t, x, after_impact, all, candidates, {}, tr.selection_solutions, tr.sliding_contact);
+  mode = select_or_defer(sys, t, x, after_impact, all, candidates, {}, tr.selection_solutions, tr.sliding_contact);
+}
+
+template <Scene S>
+void TransitionResolver<S>::contact_delassus(const State& x, const Input& u, int i, Eigen::Matrix2d& W, double& b,
+                                             double& v_n, double& v_t, double& gap) {
+  Kinematics<S> kin;
+  evaluate_kinematics(scene_, VecT<double, nq>(x.template head<nq>()), VecT<double, nq>(x.template tail<nq>()), kin);
+  VecT<double, nq> free_force = -kin.h;
+  if constexpr (nu > 0) free_force += kin.S_u * u;
+  const auto& c = kin.contacts[i];
+  const VecT<double, nq> wt = c.Wt.col(0);
+  const VecT<double, nq> a_free = kin.llt.solve(free_force), Minv_wn = kin.llt.solve(c.wn), Minv_wt = kin.llt.solve(wt);
+  W << c.wn.dot(Minv_wn), c.wn.dot(Minv_wt), wt.dot(Minv_wn), wt.dot(Minv_wt);
+  b = c.wn.dot(a_free) + c.kappa_n;
+  v_n = c.zeta_n;
+  v_t = c.zeta_t[0];
+  gap = c.gap;
+}
+
+template <Scene S>
+int TransitionResolver<S>::inconsistent_slip(const State& x, const Input& u, const Mode<nc>& mode) {
+  return painleve_slip(x, u, mode, false);
+}
+
+template <Scene S>
+int TransitionResolver<S>::painleve_slip(const State& x, const Input& u, const Mode<nc>& mode, bool at_release) {
+  int i = -1, closed = 0;
+  for (int k = 0; k < nc; ++k)
+    if (mode[k].closed()) {
+      i = k;
+      ++closed;
+    }
+  if (closed != 1 || scene_.contact(i).tangents() != 1 || mode[i].mode != ContactMode::Slip) return -1;
+  Eigen::Matrix2d W;
+  double b = 0.0, v_n = 0.0, v_t = 0.0, gap = 0.0;
+  contact_delassus(x, u, i, W, b, v_n, v_t, gap);
+  const double gap_tol = options_.impact.gap_tolerance;
+  if (gap > gap_tol || gap < -100 * gap_tol) return -1;
+  const double v_tol = velocity_tolerance(x);
+  if (std::abs(v_n) > v_tol || std::abs(v_t) <= v_tol || v_t * mode[i].slip_direction[0] <= 0) return -1;
+  const double mu = scene_.contact(i).mu, s = v_t > 0 ? 1.0 : -1.0;
+  const double d = W(0, 0) - mu * s * W(0, 1), d_tol = 1e-12 * (std::abs(W(0, 0)) + mu * std::abs(W(0, 1)));
+  // At a release the normal force -b/d reaches zero decreasing: b reaches zero from above when d < 0.
+  return (at_release ? d < -d_tol : d <= d_tol && b < 0) ? i : -1;
+}
+
+template <Scene S>
+auto TransitionResolver<S>::select_or_defer(ModeSystem<S>& sys, double t, const State& x, const Mode<nc>& base,
+                                            const std::array<bool, nc>& chosen, const std::array<bool, nc>& candidates,
+                                            const std::array<bool, nc>& rest, int& solutions, int& sliding)
+    -> Mode<nc> {
+  try {
+    return select_consistent(sys, t, x, base, chosen, candidates, rest, solutions, sliding);
+  } catch (const ContactProblemFailure& failure) {
+    if (options_.painleve.resolution != InconsistentContactResolution::ImpactWithoutCollision) throw;
+    int i = -1, closed = 0;
+    std::string names;
+    for (int k = 0; k < nc; ++k)
+      if (candidates[k]) {
+        i = k;
+        ++closed;
+        names += (names.empty() ? "'" : ", '") + scene_.contact(k).name + "'";
+      }
+    if (closed > 1)
+      throw ContactProblemFailure(detail::concat(
+          "no consistent contact mode at t = ", t, " with ", closed, " closed contacts (", names,
+          "): the impact without collision that SimulationOptions::painleve applies to Painleve's inconsistent "
+          "configuration is implemented for one closed contact, not for several (their joint tangential impulse is "
+          "not); ",
+          failure.what()));
+    if (closed != 1 || rest[i]) throw;
+    if (scene_.contact(i).tangents() == 2)
+      throw ContactProblemFailure(detail::concat(
+          "no consistent contact mode at t = ", t, " with contact '", scene_.contact(i).name,
+          "' sliding: the impact without collision that SimulationOptions::painleve applies to Painleve's "
+          "inconsistent configuration is implemented for planar friction (one tangent), and this contact has spatial "
+          "friction; ",
+          failure.what()));
+    if (scene_.contact(i).tangents() != 1) throw;
+    Kinematics<S> kin;
+    evaluate_kinematics(scene_, VecT<double, nq>(x.template head<nq>()), VecT<double, nq>(x.template tail<nq>()), kin);
+    Mode<nc> slipping = base;
+    for (int k = 0; k < nc; ++k)
+      if (chosen[k]) slipping[k] = ContactState::open();
+    slipping[i] = ContactState::slip_planar(kin.contacts[i].zeta_t[0] > 0 ? 1 : -1);
+    if (inconsistent_slip(x, sys.input_law()(t, x, slipping), slipping) != i) throw;
+    painleve_contact_ = i;
+    solutions = 1;
+    sliding = -1;
+    return slipping;
+  }
+}
+
+template <Scene S>
+void TransitionResolver<S>::apply_impact_without_collision(ModeSystem<S>& sys, double t, State& x, Mode<nc>& mode,
+                                                           int i, Transition<S>& tr) {
+  sys.set_mode(mode);
+  const Input u = sys.input(t, x);
+  Eigen::Matrix2d W;
+  double b = 0.0, v_n = 0.0, v_t = 0.0, gap = 0.0;
+  contact_delassus(x, u, i, W, b, v_n, v_t, gap);
+  const ImpactWithoutCollision r = impact_without_collision(W, scene_.contact(i).mu, v_n, v_t);
+  // v+ = v- + M^{-1} (w_n P_n + w_t P_t).
+  Kinematics<S> kin;
+  evaluate_kinematics(scene_, VecT<double, nq>(x.template head<nq>()), VecT<double, nq>(x.template tail<nq>()), kin);
+  const VecT<double, nq> impulse = kin.contacts[i].wn * r.normal + kin.contacts[i].Wt.col(0) * r.tangent;
+  x.template tail<nq>() += kin.llt.solve(impulse);
+  tr.impact = true;
+  tr.impact_without_collision = true;
+  tr.impulse_mode = ImpactMode<nc>{};
+  tr.impulse_mode[i].role = ImpulseRole::Stick;
+  tr.impulse = {};
+  tr.impulse[i].normal = r.normal;
+  tr.impulse[i].tangent = Eigen::Vector2d(r.tangent, 0.0);
+  // The contact ends at tangential rest with zero normal velocity: the acceleration-level
+  // selection at rest decides stick, slip from rest or lift-off, starting from stick.
+  Mode<nc> after = mode;
+  after[i] = ContactState::stick();
+  std::array<bool, nc> at_contact{};
+  at_contact[i] = true;
+  sys.set_mode(after);
+  mode = select_consistent(sys, t, x, after, at_contact, at_contact, at_contact, tr.selection_solutions,
+                           tr.sliding_contact);
+}
+
+template <Scene S>
+Event<S> TransitionResolver<S>::resolve_inconsistent(ModeSystem<S>& sys, double t, const State& x,
+                                                     const Mode<nc>& mode, int contact) {
+  SALTUS_REQUIRE(options_.painleve.resolution == InconsistentContactResolution::ImpactWithoutCollision,
+                 "resolve_inconsistent: SimulationOptions::painleve.resolution is ",
+                 to_string(options_.painleve.resolution), ", not impact-without-collision");
+  SALTUS_REQUIRE(contact >= 0 && contact < nc, "resolve_inconsistent: contact index ", contact, " out of range");
+  painleve_contact_ = contact;
+  return resolve(sys, t, x, mode, {});
 }
 
 template <Scene S>

@@ -55,6 +55,14 @@ struct Transition {
   /// (guards empty, impact true, impulse_mode empty). Analyses that differentiate an event's jump
   /// refuse it.
   bool zeno_completion = false;
+  /// The transition is an impact without collision (SimulationOptions::painleve,
+  /// dynamics/impact_without_collision.hpp): the tangential impulse that resolves Painleve's
+  /// inconsistent configuration of a closed sliding contact, at zero approach velocity. guards
+  /// empty (a start, or a selection without solution) or the contact's release (the end of the
+  /// closed branch of Painleve's indeterminacy, simulation/transition.hpp), impact true, impulse
+  /// the total (P_n, P_t) of the slip and stick phases, impulse_mode Stick for that contact (the
+  /// jump map of which gives the same velocity jump).
+  bool impact_without_collision = false;
 };
 
 template <Scene S>
@@ -100,6 +108,9 @@ struct SimulationStatistics {
   /// Events after which a contact slides on the surface under the equivalent control of an input
   /// law that switches with the contact mode (Transition::sliding_contact).
   int sliding_events = 0;
+  /// Impacts without collision applied to Painleve's inconsistent configuration
+  /// (SimulationOptions::painleve; Transition::impact_without_collision).
+  int impacts_without_collision = 0;
 };
 
 template <Scene S>

@@ -110,7 +110,8 @@ nlohmann::ordered_json vector_json(const VecT<double, N>& x) {
 ///                    contact_modes_after, transitions [{guards [{contact (index), kind}],
 ///                    mode_before, mode_after (contact by contact), x_before, x_after, impact,
 ///                    impulse_mode [{role, slip_direction}], impulse [{normal, tangent [2]}] (every
-///                    contact), selection_solutions, sliding_contact, zeno_completion}]
+///                    contact), selection_solutions, sliding_contact, zeno_completion,
+///                    impact_without_collision (optional when read: false if absent)}]
 ///   zeno_time        the predicted accumulation time in s, null when not finite
 ///   zeno_time_uncertainty  its uncertainty in s (HybridTrajectory), null when not finite
 ///   zeno_completions [{t, uncertainty, last_touchdown, contacts, event}]: the accumulations the run
@@ -118,8 +119,9 @@ nlohmann::ordered_json vector_json(const VecT<double, N>& x) {
 ///                    finite), the accumulating contacts by scene name, the completion's event index;
 ///                    [complete] contact_indices
 ///   steps, rhs_evaluations, wall_seconds   the simulation's statistics
-///   [complete] complete (true), rejected_steps, ambiguous_selections, sliding_events (the other
-///                    statistics), input_breakpoints [s], final_state (2 nq)
+///   [complete] complete (true), rejected_steps, ambiguous_selections, sliding_events,
+///                    impacts_without_collision (the other statistics; the last optional when read:
+///                    0 if absent), input_breakpoints [s], final_state (2 nq)
 /// Numbers keep their double values (a dump writes the shortest text that reads back exactly);
 /// keys keep this order (nlohmann::ordered_json).
 template <Scene S>
@@ -197,7 +199,8 @@ nlohmann::ordered_json to_json(const HybridTrajectory<S>& traj, const S& scene, 
                                {"impulse", std::move(impulse)},
                                {"selection_solutions", tr.selection_solutions},
                                {"sliding_contact", tr.sliding_contact},
-                               {"zeno_completion", tr.zeno_completion}});
+                               {"zeno_completion", tr.zeno_completion},
+                               {"impact_without_collision", tr.impact_without_collision}});
       }
       je["transitions"] = std::move(transitions);
     }
@@ -230,6 +233,7 @@ nlohmann::ordered_json to_json(const HybridTrajectory<S>& traj, const S& scene, 
     j["rejected_steps"] = traj.statistics.rejected_steps;
     j["ambiguous_selections"] = traj.statistics.ambiguous_selections;
     j["sliding_events"] = traj.statistics.sliding_events;
+    j["impacts_without_collision"] = traj.statistics.impacts_without_collision;
     j["input_breakpoints"] = traj.input_breakpoints;
     j["final_state"] = state(traj.final_state());
   }
@@ -435,6 +439,8 @@ HybridTrajectory<S> trajectory_from_json(const nlohmann::json& j, const S& scene
       tr.selection_solutions = R::integer(jt, "selection_solutions", wt);
       tr.sliding_contact = R::integer(jt, "sliding_contact", wt);
       tr.zeno_completion = R::boolean(jt, "zeno_completion", wt);
+      tr.impact_without_collision =
+          jt.contains("impact_without_collision") && R::boolean(jt, "impact_without_collision", wt);
       ev.transitions.push_back(std::move(tr));
     }
     traj.events.push_back(std::move(ev));
@@ -471,6 +477,8 @@ HybridTrajectory<S> trajectory_from_json(const nlohmann::json& j, const S& scene
   traj.statistics.wall_seconds = R::number(R::at(j, "wall_seconds", "the trajectory"), "wall_seconds");
   traj.statistics.ambiguous_selections = static_cast<int>(count("ambiguous_selections"));
   traj.statistics.sliding_events = static_cast<int>(count("sliding_events"));
+  traj.statistics.impacts_without_collision =
+      j.contains("impacts_without_collision") ? static_cast<int>(count("impacts_without_collision")) : 0;
   const nlohmann::json& breakpoints = R::array(j, "input_breakpoints", "the trajectory");
   for (std::size_t k = 0; k < breakpoints.size(); ++k)
     traj.input_breakpoints.push_back(R::number(breakpoints[k], detail::concat("input_breakpoints[", k, "]")));

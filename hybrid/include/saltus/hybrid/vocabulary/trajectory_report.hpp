@@ -24,7 +24,8 @@ inline std::filesystem::path report_directory() {
 }
 
 /// Prints one line per event to `out`: "t = <s>  <contact> <guard kind>, ...  <mode before> ->
-/// <mode after>" (contacts by their scene names, modes as describe() writes them), then the
+/// <mode after>" (contacts by their scene names, modes as describe() writes them; an impact without
+/// collision, Transition::impact_without_collision, as "<contact> impact without collision"), then the
 /// status, the number of events, the integrator's steps and right-hand-side evaluations and the
 /// wall time; a trajectory no integrator produced (statistics all zero: e.g. one recovered from
 /// a time-freezing solution, timefreezing/drivers/simulate.hpp) says so instead of "0 steps".
@@ -32,8 +33,14 @@ template <Scene S>
 void print_events(const S& scene, const HybridTrajectory<S>& traj, std::FILE* out = stdout) {
   for (const auto& ev : traj.events) {
     std::string guards;
-    for (const Guard& g : ev.guards())
-      guards += std::string(guards.empty() ? "" : ", ") + scene.contact(g.contact).name + " " + to_string(g.kind);
+    for (const auto& tr : ev.transitions) {
+      for (const Guard& g : tr.guards)
+        guards += std::string(guards.empty() ? "" : ", ") + scene.contact(g.contact).name + " " + to_string(g.kind);
+      if (!tr.impact_without_collision) continue;
+      for (int i = 0; i < S::nc; ++i)
+        if (tr.impulse_mode[i].role != ImpulseRole::None)
+          guards += std::string(guards.empty() ? "" : ", ") + scene.contact(i).name + " impact without collision";
+    }
     std::fprintf(out, "  t = %.12f  %-28s %s -> %s\n", ev.t, guards.c_str(), describe(scene, ev.mode_before).c_str(),
                  describe(scene, ev.mode_after).c_str());
   }
