@@ -73,9 +73,10 @@ void expect_round_trip(const HybridTrajectory<S>& traj, const S& scene) {
   }
   EXPECT_EQ(back.status, traj.status);
   EXPECT_TRUE(same_bits(back.zeno_time, traj.zeno_time) || (std::isnan(back.zeno_time) && std::isnan(traj.zeno_time)));
-  for (auto [read, written] : {std::pair{back.zeno_time_uncertainty, traj.zeno_time_uncertainty},
-                                std::pair{back.zeno_time_extrapolation_uncertainty, traj.zeno_time_extrapolation_uncertainty},
-                                std::pair{back.zeno_time_integration_uncertainty, traj.zeno_time_integration_uncertainty}})
+  for (auto [read, written] :
+       {std::pair{back.zeno_time_uncertainty, traj.zeno_time_uncertainty},
+        std::pair{back.zeno_time_extrapolation_uncertainty, traj.zeno_time_extrapolation_uncertainty},
+        std::pair{back.zeno_time_integration_uncertainty, traj.zeno_time_integration_uncertainty}})
     EXPECT_TRUE(same_bits(read, written) || (std::isnan(read) && std::isnan(written)));
   ASSERT_EQ(back.zeno_completions.size(), traj.zeno_completions.size());
   for (std::size_t k = 0; k < traj.zeno_completions.size(); ++k) {

@@ -371,10 +371,9 @@ void Simulator<S>::extrapolate_accumulation(int period, double ratio, HybridTraj
   traj.zeno_time = a.t;
   traj.zeno_time_extrapolation_uncertainty = a.extrapolation_uncertainty;
   const IntegratorOptions& io = options_.integrator;
-  traj.zeno_time_integration_uncertainty =
-      touchdown_integration_uncertainty(a, touchdown_times_, io.relative_tolerance, io.absolute_tolerance,
-                                        touchdown_state_scale_, io.root_tolerance, accumulation_start_,
-                                        carried_uncertainty_);
+  traj.zeno_time_integration_uncertainty = touchdown_integration_uncertainty(
+      a, touchdown_times_, io.relative_tolerance, io.absolute_tolerance, touchdown_state_scale_, io.root_tolerance,
+      accumulation_start_, carried_uncertainty_);
   traj.zeno_time_uncertainty = traj.zeno_time_extrapolation_uncertainty + traj.zeno_time_integration_uncertainty;
 }
 
