@@ -37,7 +37,9 @@
 // It does not cover: motions that amplify a state error over the run by more than the measured
 // factors (chaotic motion, a long wait near an unstable equilibrium): there the touchdown times
 // are not determined to rho T by the data, and no bound from the tolerances alone holds; and the
-// CVODE backends, whose global error under the same tolerances was not measured here.
+// CVODE backends (BDF, Adams), whose touchdown times under the same tolerances were measured 500
+// to 3000 rho T off (the same closed forms): their accumulation time can be off by more than it
+// states (a rocking block at the default tolerances: 1.7e-7 s against 2.6e-8 s).
 #pragma once
 
 #include <algorithm>
