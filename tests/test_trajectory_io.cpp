@@ -14,6 +14,7 @@
 #include <cstring>
 #include <sstream>
 #include <string>
+#include <utility>
 
 namespace saltus {
 namespace {
@@ -73,8 +74,11 @@ void expect_round_trip(const HybridTrajectory<S>& traj, const S& scene) {
   }
   EXPECT_EQ(back.status, traj.status);
   EXPECT_TRUE(same_bits(back.zeno_time, traj.zeno_time) || (std::isnan(back.zeno_time) && std::isnan(traj.zeno_time)));
-  EXPECT_TRUE(same_bits(back.zeno_time_uncertainty, traj.zeno_time_uncertainty) ||
-              (std::isnan(back.zeno_time_uncertainty) && std::isnan(traj.zeno_time_uncertainty)));
+  for (auto [read, written] :
+       {std::pair{back.zeno_time_uncertainty, traj.zeno_time_uncertainty},
+        std::pair{back.zeno_time_extrapolation_uncertainty, traj.zeno_time_extrapolation_uncertainty},
+        std::pair{back.zeno_time_integration_uncertainty, traj.zeno_time_integration_uncertainty}})
+    EXPECT_TRUE(same_bits(read, written) || (std::isnan(read) && std::isnan(written)));
   ASSERT_EQ(back.zeno_completions.size(), traj.zeno_completions.size());
   for (std::size_t k = 0; k < traj.zeno_completions.size(); ++k) {
     EXPECT_EQ(back.zeno_completions[k].contacts, traj.zeno_completions[k].contacts);
@@ -142,6 +146,13 @@ TEST(TrajectoryJson, BouncingBallZenoCompletionAndNoDenseOutputRoundTrip) {
   EXPECT_TRUE(to_json(guess, ball).at("zeno_time_uncertainty").is_null());  // the summary's null
   EXPECT_EQ(trajectory_from_json(nlohmann::json::parse(j.dump()), ball).zeno_time_uncertainty,
             std::numeric_limits<double>::infinity());
+  // A JSON written before the uncertainty had its two parts reads them as NaN.
+  nlohmann::json earlier = nlohmann::json::parse(j.dump());
+  earlier.erase("zeno_time_extrapolation_uncertainty");
+  earlier.erase("zeno_time_integration_uncertainty");
+  const auto old = trajectory_from_json(earlier, ball);
+  EXPECT_EQ(old.zeno_time_uncertainty, std::numeric_limits<double>::infinity());
+  EXPECT_TRUE(std::isnan(old.zeno_time_extrapolation_uncertainty) && std::isnan(old.zeno_time_integration_uncertainty));
 }
 
 TEST(TrajectoryJson, RefusesWhatItCannotRebuild) {

@@ -247,9 +247,20 @@ void bind_trajectory(py::module_& m, const std::string& scene_name, const char* 
                              "s: the predicted accumulation time (status 'zeno', or the last accumulation the run was continued "
                              "past, see zeno_completions; NaN otherwise)")
       .def_property_readonly("zeno_time_uncertainty", [](const T& t) { return t.trajectory.zeno_time_uncertainty; },
-                             "s: how far zeno_time may be from the accumulation time (the change of its "
-                             "extrapolation between the last two orders; inf: too few touchdowns, zeno_time is "
-                             "the geometric estimate; NaN without an accumulation)")
+                             "s: how far zeno_time may be from the accumulation time: the extrapolation's part "
+                             "plus the integration's (zeno_time_extrapolation_uncertainty + "
+                             "zeno_time_integration_uncertainty); inf: too few touchdowns, zeno_time is the "
+                             "geometric estimate; NaN without an accumulation")
+      .def_property_readonly(
+          "zeno_time_extrapolation_uncertainty",
+          [](const T& t) { return t.trajectory.zeno_time_extrapolation_uncertainty; },
+          "s: the extrapolation's part of zeno_time_uncertainty (twice the change of its second order over the "
+          "last period; inf with the geometric estimate)")
+      .def_property_readonly(
+          "zeno_time_integration_uncertainty",
+          [](const T& t) { return t.trajectory.zeno_time_integration_uncertainty; },
+          "s: the integration's part of zeno_time_uncertainty: the touchdown times' error from the integration "
+          "(4 times the relative tolerance times the time integrated, and the event location's resolution)")
       .def_property_readonly(
           "zeno_completions",
           [](const T& t) {

@@ -19,13 +19,19 @@
 // (s_j - 2 s_{j-1} + s_{j-2}), is exact for a geometric tail and converges faster than s_j when
 // the ratio converges (Brezinski & Redivo Zaglia, Extrapolation Methods, North-Holland 1991,
 // ch. 2.1); applied again to the last three a_j (the iterated process) it gives zeno_time. Its
-// stated uncertainty (zeno_time_uncertainty) is twice the change of that second order over the
+// stated uncertainty (zeno_time_uncertainty) has two parts. The extrapolation's
+// (zeno_time_extrapolation_uncertainty) is twice the change of that second order over the
 // last period (from 5p + 1 touchdowns on; with 4p + 1, the change between the two orders, a
 // larger estimate). Measured on balls on springs (tests/test_accumulation.cpp): errors 2.5e-7 s
 // (one contact) and 2.4e-4 s (two alternating contacts) against uncertainties 1.0e-6 and 8.8e-4,
 // where the geometric sum was off by 7.6e-3 and 3.8e-2 s. An uncertainty that is too large for
 // the use: raise zeno_bounces (detection later, on a ratio closer to its limit). With fewer than
-// 4p + 1 touchdowns, zeno_time is the geometric estimate and the uncertainty infinite.
+// 4p + 1 touchdowns, zeno_time is the geometric estimate and the uncertainty infinite. The
+// integration's (zeno_time_integration_uncertainty) is the touchdown times' own error, which the
+// extrapolation passes into zeno_time: 4 (relative tolerance) times the time integrated, plus the
+// event location's resolution through the extrapolation's sensitivities (accumulation_time.hpp
+// derives it and gives its measured margins); where it dominates, tighten the integrator's
+// tolerances.
 // Where the intervals shrink fast (e_n = 0.3: by 0.3^12 = 5e-7 over the default 12 bounces), they
 // reach the time resolution of the event location before zeno_bounces ratios are recorded, and
 // the touchdowns would merge into events at one instant ("events stall"): once the last interval
@@ -76,6 +82,7 @@
 // simulator again.
 #pragma once
 
+#include <saltus/hybrid/simulation/accumulation_time.hpp>
 #include <saltus/hybrid/simulation/integrator_cvode.hpp>
 #include <saltus/hybrid/simulation/integrator_dopri.hpp>
 #include <saltus/hybrid/simulation/simulation_options.hpp>
@@ -180,6 +187,10 @@ class Simulator {
   std::vector<std::array<bool, nc>> touchdown_contacts_;  ///< per touchdown time: the contacts touching down
   std::vector<double> touchdown_speeds_;                  ///< per touchdown time: the fastest approach, m/s
   int zeno_window_ = 0;  ///< touchdown times the last detection used
+  double touchdown_state_scale_ = 0.0;  ///< the largest |x_i| at the touchdowns (accumulation_time.hpp)
+  /// s: where the touchdowns' integration error starts accumulating (the run's start, or the last
+  /// accumulation the run was continued past), and that accumulation time's uncertainty.
+  double accumulation_start_ = 0.0, carried_uncertainty_ = 0.0;
   ConstraintProjection<S> projection_;
   bool rest_impact_seen_ = false;
   int same_instant_events_ = 0;  ///< consecutive events at one instant (stall check)

@@ -111,6 +111,9 @@ HybridTrajectory<S> Simulator<S>::run_impl(const State& x0, std::optional<Mode<n
   touchdown_times_.clear();
   touchdown_contacts_.clear();
   touchdown_speeds_.clear();
+  touchdown_state_scale_ = 0.0;
+  accumulation_start_ = t0;
+  carried_uncertainty_ = 0.0;
   rest_impact_seen_ = false;
   same_instant_events_ = 0;
 
@@ -233,7 +236,10 @@ HybridTrajectory<S> Simulator<S>::run_impl(const State& x0, std::optional<Mode<n
       if (options_.rest_velocity > 0 && -kin_minus.contacts[g.contact].zeta_n < options_.rest_velocity)
         slower_than_rest = true;
     }
-    if (touchdown) zeno = record_touchdown(t, touched, speed, slower_than_rest, traj);
+    if (touchdown) {
+      touchdown_state_scale_ = std::max(touchdown_state_scale_, x.cwiseAbs().maxCoeff());
+      zeno = record_touchdown(t, touched, speed, slower_than_rest, traj);
+    }
     // Events that follow each other at one instant without the motion advancing: a cycle of
     // transitions the chain check did not catch (e.g. a contact that the mode selection opens but
     // the flow drives into the surface). Stop with the cause rather than spin to max_events.
@@ -372,43 +378,23 @@ void Simulator<S>::complete_accumulation(ModeSystem<S>& sys, double& t, State& x
   touchdown_times_.clear();
   touchdown_contacts_.clear();
   touchdown_speeds_.clear();
+  // The touchdowns after it carry this accumulation time's error one to one (accumulation_time.hpp).
+  accumulation_start_ = t;
+  carried_uncertainty_ = traj.zeno_completions.back().uncertainty;
   rest_impact_seen_ = false;
   same_instant_events_ = 0;
 }
 
 template <Scene S>
 void Simulator<S>::extrapolate_accumulation(int period, double ratio, HybridTrajectory<S>& traj) const {
-  const auto& times = touchdown_times_;
-  const int m = static_cast<int>(times.size());
-  // The geometric estimate: the remaining intervals continue the last period with the ratio r.
-  double last = 0.0;
-  for (int k = 0; k < period; ++k) last += times[m - 1 - k] - times[m - 2 - k];
-  traj.zeno_time = times.back() + last * ratio / (1.0 - ratio);
-  traj.zeno_time_uncertainty = std::numeric_limits<double>::infinity();
-  if (m < 4 * period + 1) return;  // too few touchdowns for two orders of Aitken's process
-  // The touchdowns `period` apart, s(0) the last: s(j) = times[m - 1 - period j].
-  auto s = [&](int back) { return times[m - 1 - period * back]; };
-  // Aitken's delta-squared from s(back + 2), s(back + 1), s(back): exact for a geometric tail.
-  auto aitken = [](double s2, double s1, double s0) {
-    const double d1 = s0 - s1, d0 = s1 - s2;
-    return d1 == d0 ? s0 : s0 - d1 * d1 / (d1 - d0);
-  };
-  const double a0 = aitken(s(2), s(1), s(0)), a1 = aitken(s(3), s(2), s(1)), a2 = aitken(s(4), s(3), s(2));
-  const double iterated = aitken(a2, a1, a0);  // the second order
-  if (!std::isfinite(a0) || !std::isfinite(iterated) || a0 < times.back() || iterated < times.back()) return;
-  traj.zeno_time = iterated;
-  // Twice the change of the second order over the last period where a period more was recorded
-  // (it converges at least geometrically: the change bounds its error; measured on balls on springs,
-  // tests/test_accumulation.cpp: error 0.5 and 0.55 of the change), else the change between the
-  // orders (an estimate of the first order's error, larger than the second's).
-  if (m >= 5 * period + 1) {
-    const double a3 = aitken(s(5), s(4), s(3)), previous = aitken(a3, a2, a1);
-    if (std::isfinite(previous)) {
-      traj.zeno_time_uncertainty = 2.0 * std::abs(iterated - previous);
-      return;
-    }
-  }
-  traj.zeno_time_uncertainty = std::abs(iterated - a0);
+  const AccumulationTime a = extrapolate_accumulation_time(touchdown_times_, period, ratio);
+  traj.zeno_time = a.t;
+  traj.zeno_time_extrapolation_uncertainty = a.extrapolation_uncertainty;
+  const IntegratorOptions& io = options_.integrator;
+  traj.zeno_time_integration_uncertainty = touchdown_integration_uncertainty(
+      a, touchdown_times_, io.relative_tolerance, io.absolute_tolerance, touchdown_state_scale_, io.root_tolerance,
+      accumulation_start_, carried_uncertainty_);
+  traj.zeno_time_uncertainty = traj.zeno_time_extrapolation_uncertainty + traj.zeno_time_integration_uncertainty;
 }
 
 template <Scene S>

@@ -16,6 +16,7 @@
 #include <ostream>
 #include <saltus/hybrid/vocabulary/trajectory.hpp>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace saltus {
@@ -114,6 +115,8 @@ nlohmann::ordered_json vector_json(const VecT<double, N>& x) {
 ///                    impact_without_collision (optional when read: false if absent)}]
 ///   zeno_time        the predicted accumulation time in s, null when not finite
 ///   zeno_time_uncertainty  its uncertainty in s (HybridTrajectory), null when not finite
+///   zeno_time_extrapolation_uncertainty, zeno_time_integration_uncertainty  its two parts in s,
+///                    null when not finite (a JSON without them reads as NaN for both)
 ///   zeno_completions [{t, uncertainty, last_touchdown, contacts, event}]: the accumulations the run
 ///                    was continued past (ZenoCompletion): times in s (uncertainty null when not
 ///                    finite), the accumulating contacts by scene name, the completion's event index;
@@ -212,6 +215,8 @@ nlohmann::ordered_json to_json(const HybridTrajectory<S>& traj, const S& scene, 
   j["events"] = std::move(events);
   j["zeno_time"] = json_number(traj.zeno_time, complete);
   j["zeno_time_uncertainty"] = json_number(traj.zeno_time_uncertainty, complete);
+  j["zeno_time_extrapolation_uncertainty"] = json_number(traj.zeno_time_extrapolation_uncertainty, complete);
+  j["zeno_time_integration_uncertainty"] = json_number(traj.zeno_time_integration_uncertainty, complete);
   auto completions = nlohmann::ordered_json::array();
   for (const ZenoCompletion& z : traj.zeno_completions) {
     auto contacts = nlohmann::ordered_json::array();
@@ -447,6 +452,9 @@ HybridTrajectory<S> trajectory_from_json(const nlohmann::json& j, const S& scene
   }
   traj.zeno_time = R::number(R::at(j, "zeno_time", "the trajectory"), "zeno_time");
   traj.zeno_time_uncertainty = R::number(R::at(j, "zeno_time_uncertainty", "the trajectory"), "zeno_time_uncertainty");
+  for (auto [key, part] : {std::pair{"zeno_time_extrapolation_uncertainty", &traj.zeno_time_extrapolation_uncertainty},
+                           std::pair{"zeno_time_integration_uncertainty", &traj.zeno_time_integration_uncertainty}})
+    if (j.contains(key)) *part = R::number(j.at(key), key);  // absent from the JSON of earlier versions
   const nlohmann::json& completions = R::array(j, "zeno_completions", "the trajectory");
   for (std::size_t k = 0; k < completions.size(); ++k) {
     const nlohmann::json& jz = completions[k];

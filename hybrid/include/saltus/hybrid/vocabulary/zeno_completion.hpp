@@ -11,7 +11,8 @@ struct ZenoCompletion {
   /// touchdown times, HybridTrajectory::zeno_time at the detection).
   double t = 0.0;
   /// s: how far t may be from the accumulation time (HybridTrajectory::zeno_time_uncertainty at
-  /// the detection; infinite when t is the geometric estimate).
+  /// the detection, the extrapolation's and the integration's parts; infinite when t is the
+  /// geometric estimate). The touchdowns after the completion carry it into a later accumulation.
   double uncertainty = 0.0;
   /// s: the last touchdown resolved before the accumulation; the motion between it and t (the
   /// unresolved tail of the accumulation) is recorded as the constant state after that touchdown.
