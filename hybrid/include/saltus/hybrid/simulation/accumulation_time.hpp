@@ -39,8 +39,8 @@
 // are not determined to rho T by the data, and no bound from the tolerances alone holds; and the
 // CVODE backends (BDF, Adams), whose touchdown times under the same tolerances were measured up to
 // 3200 rho T off (the same closed forms; CVODE's error does not shrink in proportion to its
-// tolerances): their accumulation time can be off by more than it states (a rocking block at the
-// default tolerances: 1.7e-7 s against 2.6e-8 s).
+// tolerances): the bound would not hold there (a rocking block at the default tolerances: 1.7e-7 s
+// off against 2.6e-8 s), so the simulator states an infinite integration part for them.
 #pragma once
 
 #include <algorithm>

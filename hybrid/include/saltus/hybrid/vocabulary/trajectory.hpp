@@ -143,8 +143,9 @@ class HybridTrajectory {
   /// it, and at least 1/17 of it where the error is above the event location's resolution (100
   /// root tolerances of the time); where it is round-off (flights that the integrator follows
   /// exactly: a ball or a box in free fall) the statement, made from the tolerances, is far larger
-  /// than the error. The CVODE backends' touchdown times err by more than the integration part
-  /// allows (accumulation_time.hpp): their zeno_time can be off by more than this. Infinite when
+  /// than the error. Infinite with the CVODE backends, whose touchdown times err by more than
+  /// the integration part allows and not in proportion to their tolerances (accumulation_time.hpp):
+  /// no bound is stated for their zeno_time (use Dormand-Prince where it matters). Infinite when
   /// too few touchdowns were recorded to extrapolate (zeno_time is then the geometric estimate, a
   /// guess); NaN without a Zeno status.
   double zeno_time_uncertainty = std::numeric_limits<double>::quiet_NaN();
