@@ -6,8 +6,8 @@
 // impact events) ends at the impact's outcome, zero normal velocity (a converged homotopy on a wrong motion, or a record cut
 // in the middle of its impact, is a failure here).
 //
-//   time_freezing_battery [--json] [--only SUBSTRING] [--no-fallback] [--refinements N] [--kappa K]
-//                         [--sigma0 S] [--progress]
+//   time_freezing_battery [--json] [--only SUBSTRING] [--no-fallback] [--refinements N]
+//                         [--penetration-tolerance M] [--kappa K] [--sigma0 S] [--penalty] [--progress]
 //
 // Cases (closed forms in the comments of each family below):
 //   ball     NOSNOC's bouncing ball without restitution: the point mass dropped from rest at
@@ -20,12 +20,16 @@
 //   rod      a rod dropped flat onto the table while sliding (scenes::Rod: two contacts landing
 //            at once, NOSNOC's falling_rod): h in {0.3, 0.8}, v0 in {1, 3}, a_n = 100, plain and
 //            with the contact-side selection: 8 cases.
-//   guiding  the paper's Example 3 (tests/test_time_freezing.cpp) with n_s = 2, 2 elements per
-//            control interval, plain and with the contact-side selection: 2 cases.
+//   guiding  the paper's Example 3 (tests/test_time_freezing.cpp) with n_s = 2, 4 elements per
+//            control interval (56 in all), plain and with the contact-side selection: 2 cases.
+//   painleve Painleve's inconsistent configuration (the rod of tests/painleve_rod.hpp), whose frozen
+//            phase should be the impact without collision: a_n in {10, 100}, plain and with the
+//            contact-side selection: 4 cases, scored on the first frozen phase's x_plus.
 // --only keeps the cases whose name contains SUBSTRING; --no-fallback turns off the engine's
 // fallback for failed control intervals (TimeFreezingSimulationOptions), to measure it;
-// --refinements sets its SimulationFallback::max_refinements; --kappa and --sigma0 set the
-// homotopy's MpccSolverOptions::Homotopy::kappa and sigma_0 for every case.
+// --refinements and --penetration-tolerance set its SimulationFallback::max_refinements and
+// penetration_tolerance; --kappa, --sigma0 and --penalty set the homotopy's kappa, sigma_0 and the
+// Penalty relaxation (MpccSolverOptions::Homotopy) for every case.
 // --json prints one object {"cases": [{"name", "family", "solved", "converged", "final_error",
 // "ipopt_iterations", "seconds", "fallbacks", "impact_outcome_error", "frozen_phases", "impacts",
 // "cut_phases", "straddling_phases", "final_state", "exact_final_state", "message"}...], "solved": k, "total": n}; without it
@@ -34,7 +38,11 @@
 #include "scenes/rod.hpp"
 #include "scenes/time_freezing_examples.hpp"
 
+#include <saltus/hybrid/dynamics/impact_without_collision.hpp>
 #include <saltus/timefreezing/drivers/simulate.hpp>
+#include <saltus/timefreezing/header_only.hpp>
+
+#include "painleve_rod.hpp"  // tests/: the rod of Painleve's paradox, compiled here header-only
 
 #include <nlohmann/json.hpp>
 
@@ -43,6 +51,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <functional>
+#include <limits>
 #include <iostream>
 #include <string>
 #include <vector>
@@ -221,6 +230,51 @@ Case rod_case(double h, double v0, bool side) {
           }};
 }
 
+/// Painleve's inconsistent configuration (tests/painleve_rod.hpp): the rod at 45 degrees, mu = 2,
+/// its lower end on the ground sliding at -1 m/s, where no normal force keeps the end on the
+/// ground. The auxiliary dynamics should integrate the impact without collision in frozen time
+/// (Genot and Brogliato 1999; closed form: dynamics/impact_without_collision.hpp): P = (3/8, 5/8)
+/// N s, v+ = (-3/8, 3/8, 3 sqrt(2) / 4). Scored on the first frozen phase's x_plus (the final
+/// state is not known in closed form): N = 4, N_fe = 2, horizon 0.2, a_n in {10, 100}.
+Case painleve_case(double a_n, bool side) {
+  char name[64];
+  std::snprintf(name, sizeof name, "painleve a_n=%g%s", a_n, side ? " side" : "");
+  return {name, "painleve", [=](const SimulationFallback& fallback, const MpccSolverOptions& solver) {
+            using saltus::testing::PainleveRod;
+            const double mu = 2.0, c = std::sqrt(0.5);
+            const PainleveRod rod(mu);
+            const Vec<3> q0(0.5 * c, 0.5 * c, M_PI / 4), v0(-1.0, 0.0, 0.0);
+            Eigen::Matrix<double, 2, 3> J;  // rows w_n, w_t of the lower end
+            J << 0.0, 1.0, -0.5 * c, 1.0, 0.0, 0.5 * c;
+            const Eigen::Matrix3d Minv = Eigen::Vector3d(1.0, 1.0, 12.0).asDiagonal();
+            const ImpactWithoutCollision iwc = impact_without_collision(J * Minv * J.transpose(), mu, 0.0, (J * v0)[1]);
+            const Vec<3> v_plus = v0 + Minv * J.transpose() * Eigen::Vector2d(iwc.normal, iwc.tangent);
+            const TimeFreezingSystem<PainleveRod> system(rod, a_n);
+            FesdOptions o;
+            o.grid.stages = 2;
+            o.grid.control_intervals = 4;
+            o.grid.finite_elements = 2;
+            o.grid.horizon = 0.2;
+            if (side) o.regularisation.contact_side = 1e-2;
+            TimeFreezingSimulationOptions options;
+            options.fallback = fallback;
+            TimeFreezingSimulation<PainleveRod> sim;
+            const double s = timed([&] { sim = simulate_time_freezing(system, q0, v0, o, NoObjective{}, solver, options); });
+            Outcome out;
+            out.converged = sim.converged();
+            out.frozen_phases = static_cast<int>(sim.frozen_phases.size());
+            out.final_error = sim.frozen_phases.empty()
+                                  ? std::numeric_limits<double>::infinity()
+                                  : (sim.frozen_phases[0].x_plus.tail<3>() - v_plus).cwiseAbs().maxCoeff();
+            out.solved = out.converged && out.final_error <= 1e-6;
+            out.seconds = s;
+            out.iterations = sim.solution.ipopt_iterations;
+            out.fallbacks = sim.fallbacks;
+            out.message = sim.solution.message;
+            return out;
+          }};
+}
+
 /// Example 3 (closed form: scenes::Example3::final_state, derived in bench/fesd_accuracy.cpp).
 Case guiding_case(bool side) {
   return {side ? "guiding side" : "guiding", "guiding", [=](const SimulationFallback& fallback, const MpccSolverOptions& solver) {
@@ -228,7 +282,7 @@ Case guiding_case(bool side) {
             FesdOptions o;
             o.grid.stages = 2;
             o.grid.control_intervals = 14;
-            o.grid.finite_elements = 2;
+            o.grid.finite_elements = 4;
             o.grid.horizon = scenes::Example3::horizon;
             if (side) o.regularisation.contact_side = 1e-2;
             TimeFreezingSimulationOptions options;
@@ -253,6 +307,8 @@ std::vector<Case> battery() {
     for (double h : {0.3, 0.8})
       for (double v0 : {1.0, 3.0}) cases.push_back(rod_case(h, v0, side));
   for (bool side : {false, true}) cases.push_back(guiding_case(side));
+  for (bool side : {false, true})
+    for (double a_n : {10.0, 100.0}) cases.push_back(painleve_case(a_n, side));
   return cases;
 }
 
@@ -277,12 +333,14 @@ int main(int argc, char** argv) {
       solver.homotopy.relaxation = MpccSolverOptions::Relaxation::Penalty;
     } else if (std::strcmp(argv[i], "--sigma0") == 0 && i + 1 < argc) {
       solver.homotopy.sigma_0 = std::atof(argv[++i]);
+    } else if (std::strcmp(argv[i], "--penetration-tolerance") == 0 && i + 1 < argc) {
+      fallback.penetration_tolerance = std::atof(argv[++i]);
     } else if (std::strcmp(argv[i], "--refinements") == 0 && i + 1 < argc) {
       fallback.max_refinements = std::atoi(argv[++i]);
     } else if (std::strcmp(argv[i], "--no-fallback") == 0) {
       fallback.enabled = false;
     } else {
-      std::cerr << "usage: time_freezing_battery [--json] [--only SUBSTRING] [--no-fallback] [--refinements N] [--kappa K] [--sigma0 S] [--progress]\n";
+      std::cerr << "usage: time_freezing_battery [--json] [--only SUBSTRING] [--no-fallback] [--refinements N] [--penetration-tolerance M] [--kappa K] [--sigma0 S] [--penalty] [--progress]\n";
       return 2;
     }
   }
