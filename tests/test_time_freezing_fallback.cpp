@@ -22,15 +22,18 @@ using scenes::PointMass;
 
 constexpr double g = 9.81;
 
-/// NOSNOC's bouncing-ball grid: 10 control intervals of 0.3, 2 elements each, n_s = 2.
-FesdOptions bouncing_ball_grid() {
+/// N control intervals of N_fe elements with n_s = 2 over the numerical horizon T.
+FesdOptions grid_of(int N, int N_fe, double T) {
   FesdOptions o;
   o.grid.stages = 2;
-  o.grid.control_intervals = 10;
-  o.grid.finite_elements = 2;
-  o.grid.horizon = 3.0;
+  o.grid.control_intervals = N;
+  o.grid.finite_elements = N_fe;
+  o.grid.horizon = T;
   return o;
 }
+
+/// NOSNOC's bouncing-ball grid: 10 control intervals of 0.3, 2 elements each, n_s = 2.
+FesdOptions bouncing_ball_grid() { return grid_of(10, 2, 3.0); }
 
 /// The physical time at numerical time T of a point mass that lands at t1 with normal speed v1 and
 /// then rests: the frozen phase takes v1 / a_n of numerical time, the rest runs the clock at
@@ -42,6 +45,10 @@ double time_at_rest(double T, double t1, double v1, double a_n) { return t1 + (T
 // control interval 1, three modes for two elements; its homotopy stalls (Infeasible_Problem_Detected
 // at sigma ~ 0.026). The fallback solves that interval again on 4 elements.
 TEST(TimeFreezingFallback, BouncingBallGridWithAStiffAuxiliaryDynamics) {
+#if defined(SALTUS_TESTS_UNDER_SANITIZERS)
+  GTEST_SKIP() << "18 s in Release, several minutes under the sanitizers: release stage only (the driver's "
+                  "code paths run in this file's other tests there)";
+#endif
   const TimeFreezingSystem<PointMass> system(PointMass(), 100.0);
   const Vec<2> q0(0.0, 0.8), v0 = Vec<2>::Zero();
   const double t1 = std::sqrt(2.0 * 0.8 / g), v1 = std::sqrt(2.0 * g * 0.8);
@@ -84,6 +91,10 @@ TEST(TimeFreezingFallback, BouncingBallGridWithAStiffAuxiliaryDynamics) {
 // exactly zero), and the stop is 1.0e-5 off. The fallback sees the penetration and solves those
 // intervals again with the selection.
 TEST(TimeFreezingFallback, ADriftingGapIsSolvedAgainWithTheContactSideSelection) {
+#if defined(SALTUS_TESTS_UNDER_SANITIZERS)
+  GTEST_SKIP() << "11 s in Release, several minutes under the sanitizers: release stage only (the driver's "
+                  "code paths run in this file's other tests there)";
+#endif
   using Landing = scenes::FrictionalLanding;
   FesdOptions grid = Landing::grid();
   grid.regularisation.contact_side = 0.0;
@@ -107,11 +118,7 @@ TEST(TimeFreezingFallback, ADriftingGapIsSolvedAgainWithTheContactSideSelection)
 // horizon past the impact gives an uncut record whose x_plus is the outcome, v2 = 0.
 TEST(TimeFreezingFallback, AFrozenPhaseCutByTheHorizonSaysSo) {
   const TimeFreezingSystem<PointMass> system(PointMass(), 20.0);
-  FesdOptions grid;
-  grid.grid.stages = 2;
-  grid.grid.control_intervals = 2;
-  grid.grid.finite_elements = 2;
-  grid.grid.horizon = 0.5;
+  FesdOptions grid = grid_of(2, 2, 0.5);
   grid.regularisation.contact_side = 1e-2;
   const double v1 = std::sqrt(2.0 * g * 0.8);
   const auto cut = simulate_time_freezing(system, Vec<2>(0.0, 0.8), Vec<2>::Zero(), grid);
@@ -133,14 +140,14 @@ TEST(TimeFreezingFallback, AFrozenPhaseCutByTheHorizonSaysSo) {
 // t1 = sqrt(2 h / g), v_x+ = 1 - mu sqrt(2 g h), then the slide at mu g to rest; theta stays 0.
 // Against it and against the event-driven simulator of the same scene.
 TEST(TimeFreezingFallback, RodLandsFlatWhileSlidingAsTheEventDrivenSimulatorSays) {
+#if defined(SALTUS_TESTS_UNDER_SANITIZERS)
+  GTEST_SKIP() << "20-70 s in Release, several minutes under the sanitizers: release stage only (the driver's "
+                  "code paths run in this file's other tests there)";
+#endif
   using scenes::Rod;
   const double h = 0.3, v0 = 1.0, mu = 0.2, a_n = 100.0;
   const TimeFreezingSystem<Rod> system(Rod(), a_n);
-  FesdOptions grid;
-  grid.grid.stages = 2;
-  grid.grid.control_intervals = 5;
-  grid.grid.finite_elements = 2;
-  grid.grid.horizon = 1.0;
+  FesdOptions grid = grid_of(5, 2, 1.0);
   grid.regularisation.contact_side = 1e-2;
   const auto sim = simulate_time_freezing(system, Vec<3>(0.0, h, 0.0), Vec<3>(v0, 0.0, 0.0), grid);
   ASSERT_TRUE(sim.converged()) << sim.solution.message;
