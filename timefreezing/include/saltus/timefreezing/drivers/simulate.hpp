@@ -50,11 +50,15 @@ enum class SimulationSplit {
 /// homotopy did not converge, or its converged motion penetrates a contact by more than
 /// penetration_tolerance. The interval is solved again from the same start state, in this order,
 /// and the first attempt that succeeds is kept (else the first attempt, converged() false):
-///  1. on finer grids, finite_elements times 2, 4, ... (max_refinements doublings);
+///  1. on finer grids, finite_elements times 2, 4, ... (max_refinements doublings); skipped for a
+///     penetration without the selection (finer grids without it converged to wrong motions there:
+///     Example 3's interval at tau = 0.5, q1 6.9e-4 off);
 ///  2. with the contact-side selection toggled (FesdOptions::regularisation.contact_side: off where
 ///     it was on; contact_side_weight where it was off), on the interval's grid and the same finer
-///     grids; an interval solved so makes the toggle stay for the rest of the run (as solve_mpcc
-///     keeps a slower kappa once a step needed it: the failure says how this motion is solved).
+///     grids. A selection turned on that solved an interval stays on for the rest of the run (as
+///     solve_mpcc keeps a slower kappa once a step needed it: the drift it cured would come back
+///     in every later interval in contact); one turned off rescues its interval only (without the
+///     selection a rod resting on both ends leaves its clock's speed undetermined).
 /// The finer grid is the failed interval's only. TimeFreezingSimulation::fallback_log says which
 /// attempt solved which interval.
 /// Why (bench/time_freezing_battery, docs/time_freezing.md, "Robustness on easy problems"):
