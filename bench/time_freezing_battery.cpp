@@ -19,7 +19,9 @@
 //            from height 1, plain and with the contact-side selection: 6 cases.
 //   rod      a rod dropped flat onto the table while sliding (scenes::Rod: two contacts landing
 //            at once, NOSNOC's falling_rod): h in {0.3, 0.8}, v0 in {1, 3}, a_n = 100, plain and
-//            with the contact-side selection: 8 cases.
+//            with the contact-side selection: 8 cases. Scored at the run's own final physical time,
+//            and on the touchdown's time (the frozen phase's numerical duration is not unique for
+//            two contacts landing at once: rod_case).
 //   guiding  the paper's Example 3 (tests/test_time_freezing.cpp) with n_s = 2, 4 elements per
 //            control interval (56 in all), plain and with the contact-side selection: 2 cases.
 //   painleve Painleve's inconsistent configuration (the rod of tests/painleve_rod.hpp), whose frozen
@@ -46,6 +48,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
@@ -194,6 +197,14 @@ Case slide_case(double v0, bool side) {
 /// point mass's motion (rod.hpp: both ends land at once and theta stays 0), touchdown at
 /// t1 = sqrt(2 h / g) with v1 = sqrt(2 g h), v_x+ = v0 - mu v1, then the slide at mu g to rest.
 /// N = 10, N_fe = 2, n_s = 2, horizon 2, with the contact-side selection or without.
+/// Scored on the state at the run's own final physical time, and on the touchdown's time: the
+/// numerical time the frozen phase takes is not unique here. Both ends sit on gap = 0 while the
+/// positions are frozen, where their gaps' step functions are free; the Filippov sliding on both
+/// gaps needs only Theta = prod_i (1 - beta_i) = 0, so one end pushes at the full a_n and the other
+/// at any beta in [0, 1] (measured: omega reaches 3.1 rad/s inside the frozen phase and returns to
+/// 0, the outcome the same). The impact's outcome is unique, its duration in numerical time is
+/// not, and with it the physical time reached at the horizon's end; the message gives that time's
+/// offset from the symmetric push's.
 Case rod_case(double h, double v0, bool side) {
   char name[64];
   std::snprintf(name, sizeof name, "rod h=%g v0=%g%s", h, v0, side ? " side" : "");
@@ -213,20 +224,30 @@ Case rod_case(double h, double v0, bool side) {
               sim = simulate_time_freezing(system, Vec<3>(0.0, h, 0.0), Vec<3>(v0, 0.0, 0.0), o, NoObjective{}, solver, options);
             });
             const double t1 = std::sqrt(2.0 * h / g), v1 = std::sqrt(2.0 * g * h), vt = std::max(0.0, v0 - mu * v1);
-            // Both ends push together in the frozen phase (v_y' = 2 a_n: m = 1, the rotations of the
-            // two pushes cancel), v1 / (2 a_n) of numerical time. On the table the clock runs at
-            // Theta = (1 - beta)^2 (the product of the two ends' free weights, equal by the torque
-            // balance), where the vertical balance Theta g = 2 a_n beta holds:
+            // The symmetric push (both ends at a_n): v1 / (2 a_n) of numerical time. On the table the
+            // clock runs at Theta = (1 - beta)^2 (the product of the two ends' free weights, equal by
+            // the torque balance), where the vertical balance Theta g = 2 a_n beta holds:
             // g beta^2 - 2 (g + a_n) beta + g = 0, the root in (0, 1).
             const double beta = ((g + a_n) - std::sqrt((g + a_n) * (g + a_n) - g * g)) / g;
             const double clock_speed = (1.0 - beta) * (1.0 - beta);
-            const double t = t1 + (T - t1 - v1 / (2.0 * a_n)) * clock_speed;
-            const double slide = std::min(t - t1, vt / (mu * g));
+            const double t_symmetric = t1 + (T - t1 - v1 / (2.0 * a_n)) * clock_speed;
+            const double t = sim.final_state()[6];
+            const double slide = std::clamp(t - t1, 0.0, vt / (mu * g));
             Eigen::VectorXd exact(7);
             exact << v0 * t1 + vt * slide - 0.5 * mu * g * slide * slide, 0.0, 0.0, vt - mu * g * slide, 0.0, 0.0, t;
             // The ends' normal velocities v_y -+ (l/2) omega (l = 1).
-            return score(sim, exact, s, 1e-6,
-                         [](const auto& x) { return std::max(std::abs(x[4] - 0.5 * x[5]), std::abs(x[4] + 0.5 * x[5])); });
+            Outcome out = score(sim, exact, s, 1e-6,
+                                [](const auto& x) { return std::max(std::abs(x[4] - 0.5 * x[5]), std::abs(x[4] + 0.5 * x[5])); });
+            double touchdown_error = sim.trajectory.events.empty() ? std::numeric_limits<double>::infinity() : 0.0;
+            for (const auto& e : sim.trajectory.events)
+              if (e.impact()) touchdown_error = std::max(touchdown_error, std::abs(e.t - t1));
+            out.final_error = std::max(out.final_error, touchdown_error);
+            out.solved = out.solved && touchdown_error <= 1e-6;
+            char note[128];
+            std::snprintf(note, sizeof note, "; touchdown %.2e s off, final time %.2e s from the symmetric push's",
+                          touchdown_error, t - t_symmetric);
+            out.message += note;
+            return out;
           }};
 }
 

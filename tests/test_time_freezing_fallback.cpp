@@ -2,13 +2,19 @@
 // SimulationFallback; the whole battery: bench/time_freezing_battery): NOSNOC's bouncing-ball grid
 // with a stiff auxiliary dynamics, a slide whose gap drifts without the contact-side selection, a
 // rod landing flat while sliding (two contacts at once) against the event-driven simulator, and a
-// frozen phase cut by the horizon's end. Each against its closed form.
+// frozen phase cut by the horizon's end, Painleve's rod taking its impact without collision in frozen
+// time. Each against its closed form.
 #include "scenes/point_mass.hpp"
 #include "scenes/rod.hpp"
 #include "scenes/time_freezing_examples.hpp"
 
 #include <saltus/hybrid/simulation/simulator.hpp>
 #include <saltus/timefreezing/drivers/simulate.hpp>
+#if !defined(SALTUS_TESTS_UNDER_SANITIZERS)
+#include <saltus/timefreezing/header_only.hpp>  // the time-freezing machinery of PainleveRod
+
+#include "painleve_rod.hpp"
+#endif
 
 #include <gtest/gtest.h>
 
@@ -200,6 +206,63 @@ TEST(TimeFreezingFallback, AnImpactAcrossAControlIntervalsEndIsCutInItsRecordOnl
   EXPECT_NEAR(sim.trajectory.events[0].x_plus[3], 0.0, 1e-12);
   EXPECT_NEAR(sim.final_state()[4], time_at_rest(3.0, t1, v1, 20.0), 1e-9);
 }
+
+#if !defined(SALTUS_TESTS_UNDER_SANITIZERS)
+// Painleve's inconsistent configuration: the rod of tests/painleve_rod.hpp (mu = 2) at 45 degrees,
+// its lower end on the table sliding at -1 m/s, where no normal force keeps the end on the table.
+// The auxiliary dynamics integrate the impact without collision in frozen time (slip under
+// a_n (J_n + mu J_t) until the slip stops, then the Filippov sliding on v_t = 0 until the normal
+// velocity is zero again); its closed form (Genot and Brogliato 1999,
+// dynamics/impact_without_collision.hpp): P = (3/8, 5/8) N s, v+ = (-3/8, 3/8, 3 sqrt(2) / 4).
+// The first control interval holds the slip, the stick and the rest that follows: the fallback
+// solves it on a finer grid. Against the closed form, and against the event-driven simulator's
+// resolution of the same state on scenes::Rod with mu = 2 (the same rod; its upper end stays
+// 0.7 m above the table). Not scenes::Rod for time-freezing as well: its upper end's normal
+// velocity starts on its switching surface too (J_n v = 0 at rest), and FESD's switch detection
+// of that open contact's velocity functions stalls the homotopy on 4 and 8 elements (measured).
+// The TF machinery of the test-local rod is compiled here (header-only) in the release build
+// only, where the test runs.
+TEST(TimeFreezingFallback, PainlevesRodTakesTheImpactWithoutCollisionInFrozenTime) {
+  using saltus::testing::PainleveRod;
+  const double mu = 2.0, c = std::sqrt(0.5);
+  const PainleveRod rod(mu);
+  const Vec<3> q0(0.5 * c, 0.5 * c, M_PI / 4), v0(-1.0, 0.0, 0.0);
+  ASSERT_NEAR(rod.gap<double>(0, q0), 0.0, 1e-15);
+  const TimeFreezingSystem<PainleveRod> system(rod, 100.0);
+  FesdOptions grid = grid_of(4, 2, 0.2);
+  grid.regularisation.contact_side = 1e-2;
+  const auto sim = simulate_time_freezing(system, q0, v0, grid);
+  ASSERT_TRUE(sim.converged()) << sim.solution.message;
+  ASSERT_FALSE(sim.fallback_log.empty());
+  EXPECT_NE(sim.fallback_log[0].find("interval 0 (not converged): solved on 8 finite elements"), std::string::npos)
+      << sim.fallback_log[0];
+  const Vec<3> v_plus(-0.375, 0.375, 3.0 * std::sqrt(2.0) / 4.0);
+  ASSERT_FALSE(sim.frozen_phases.empty());
+  const auto& phase = sim.frozen_phases[0];
+  EXPECT_FALSE(phase.cut);
+  EXPECT_NEAR(phase.time, 0.0, 1e-12);
+  EXPECT_NEAR((phase.x_plus.tail<3>() - v_plus).cwiseAbs().maxCoeff(), 0.0, 1e-8);  // measured 5.8e-10
+  // The event-driven simulator, Painleve's resolution turned on, to the run's own final time.
+  SimulationOptions options;
+  options.integrator.relative_tolerance = 1e-12;
+  options.integrator.absolute_tolerance = 1e-13;
+  options.painleve.resolution = InconsistentContactResolution::ImpactWithoutCollision;
+  scenes::RodParameters p;
+  p.mu = mu;
+  const scenes::Rod same_rod(p);
+  Simulator<scenes::Rod> simulator(same_rod, options);
+  Vec<6> x0;
+  x0 << q0, v0;
+  const auto& y = sim.final_state();
+  const auto exact = simulator.run(x0, 0.0, y[6]);
+  ASSERT_FALSE(exact.events.empty());
+  EXPECT_NEAR(exact.events[0].t, 0.0, 1e-12);
+  EXPECT_NEAR((exact.events[0].x_plus.tail<3>() - phase.x_plus.tail<3>()).cwiseAbs().maxCoeff(), 0.0, 1e-8);
+  // The collocation's error over the rest of the horizon (the end sticking while the rod turns).
+  EXPECT_NEAR((exact.final_state() - y.head<6>()).cwiseAbs().maxCoeff(), 0.0, 1e-5)  // measured 1.8e-6
+      << "final state " << (exact.final_state() - y.head<6>()).cwiseAbs().maxCoeff();
+}
+#endif
 
 TEST(TimeFreezingFallback, RefusesBadFallbackOptions) {
   const TimeFreezingSystem<PointMass> system(PointMass(), 20.0);

@@ -49,16 +49,19 @@ enum class SimulationSplit {
 /// What simulate_time_freezing does when a control interval fails (PerControlInterval): its
 /// homotopy did not converge, or its converged motion penetrates a contact by more than
 /// penetration_tolerance. The interval is solved again from the same start state, in this order,
-/// and the first attempt that succeeds is kept (else the first attempt, converged() false):
+/// and the first attempt that succeeds is kept:
 ///  1. on finer grids, finite_elements times 2, 4, ... (max_refinements doublings); skipped for a
 ///     penetration without the selection (finer grids without it converged to wrong motions there:
 ///     Example 3's interval at tau = 0.5, q1 6.9e-4 off);
 ///  2. with the contact-side selection toggled (FesdOptions::regularisation.contact_side: off where
 ///     it was on; contact_side_weight where it was off), on the interval's grid and the same finer
-///     grids. A selection turned on that solved an interval stays on for the rest of the run (as
-///     solve_mpcc keeps a slower kappa once a step needed it: the drift it cured would come back
-///     in every later interval in contact); one turned off rescues its interval only (without the
-///     selection a rod resting on both ends leaves its clock's speed undetermined).
+///     grids; skipped for a penetration with the selection. A selection turned on that solved an
+///     interval stays on for the rest of the run (as solve_mpcc keeps a slower kappa once a step
+///     needed it: the drift it cured would come back in every later interval in contact); one
+///     turned off rescues its interval only (without the selection a rod resting on both ends
+///     leaves its clock's speed undetermined).
+/// When no attempt succeeds the run goes on from the least bad one (converged with the shallowest
+/// penetration, else the first attempt), and converged() is false.
 /// The finer grid is the failed interval's only. TimeFreezingSimulation::fallback_log says which
 /// attempt solved which interval.
 /// Why (bench/time_freezing_battery, docs/time_freezing.md, "Robustness on easy problems"):
@@ -74,9 +77,16 @@ enum class SimulationSplit {
 ///     its touchdown interval on every grid, and solves without it.
 struct SimulationFallback {
   bool enabled = true;  ///< false: a failed interval is kept as it is and the run goes on
-  int max_refinements = 2;  ///< doublings of the interval's finite elements per attempt, >= 0
-  /// m (the unit of the scene's gaps), >= 0: a converged interval whose stage points put a gap below
-  /// -penetration_tolerance has drifted and is solved again.
+  /// Doublings of the interval's finite elements, 0..6 (3: up to 8 times the elements; Painleve's
+  /// rod with a_n = 10 converges on 16 elements of its interval and not on 8 or fewer).
+  int max_refinements = 3;
+  /// m (the unit of the scene's gaps), >= 0: a converged interval whose integrated gaps
+  /// (TimeFreezingSystem) descend more than this below zero, or below their start where that is
+  /// below zero, has drifted and is solved again. The integrated gap, not gap(q): it stays put
+  /// wherever the collocation holds J_n v = 0 (a frozen phase, a rest), so it shows the drift of
+  /// the complementarity (1e-5: the frictional landing, Example 3) and not the collocation's own
+  /// error of a gap nonlinear in q while a body turns on its contact (Painleve's rod sticking after
+  /// its impact without collision: gap(q) 1.0e-7 below zero on 8 elements, its integrated gap 4.7e-13).
   double penetration_tolerance = 1e-8;
   /// The contact-side weight of attempt 2 where the user's was 0 (> 0; 1e-2: docs/time_freezing.md).
   double contact_side_weight = 1e-2;
