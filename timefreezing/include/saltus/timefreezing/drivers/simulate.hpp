@@ -48,7 +48,10 @@ enum class SimulationSplit {
 
 /// What simulate_time_freezing does when a control interval fails (PerControlInterval): its
 /// homotopy did not converge, or its converged motion penetrates a contact by more than
-/// penetration_tolerance. The interval is solved again from the same start state, in this order,
+/// penetration_tolerance, or its physical clock runs back between two points by more than
+/// clock_reversal_tolerance (a collocation element that holds two modes: the rod landing flat from
+/// 0.3 m without the selection, the impact's end and the rest in one element, its clock 1.4e-3 s
+/// back and its stop 1.7e-5 off). The interval is solved again from the same start state, in this order,
 /// and the first attempt that succeeds is kept:
 ///  1. on finer grids, finite_elements times 2, 4, ... (max_refinements doublings); skipped for a
 ///     penetration without the selection (finer grids without it converged to wrong motions there:
@@ -60,8 +63,8 @@ enum class SimulationSplit {
 ///     needed it: the drift it cured would come back in every later interval in contact); one
 ///     turned off rescues its interval only (without the selection a rod resting on both ends
 ///     leaves its clock's speed undetermined).
-/// When no attempt succeeds the run goes on from the least bad one (converged with the shallowest
-/// penetration, else the first attempt), and converged() is false.
+/// When no attempt succeeds the run goes on from the least bad one (converged with the smallest of
+/// penetration and clock reversal, else the first attempt), and converged() is false.
 /// The finer grid is the failed interval's only. TimeFreezingSimulation::fallback_log says which
 /// attempt solved which interval.
 /// Why (bench/time_freezing_battery, docs/time_freezing.md, "Robustness on easy problems"):
@@ -88,6 +91,9 @@ struct SimulationFallback {
   /// error of a gap nonlinear in q while a body turns on its contact (Painleve's rod sticking after
   /// its impact without collision: gap(q) 1.0e-7 below zero on 8 elements, its integrated gap 4.7e-13).
   double penetration_tolerance = 1e-8;
+  /// s: the exact clock never runs back (t' = Theta >= 0); a converged homotopy's frozen stages
+  /// leave Theta ~ sigma, far below this.
+  static constexpr double clock_reversal_tolerance = 1e-8;
   /// The contact-side weight of attempt 2 where the user's was 0 (> 0; 1e-2: docs/time_freezing.md).
   double contact_side_weight = 1e-2;
 };
