@@ -435,6 +435,11 @@ TEST(ScheduleDiscovery, GuidingExampleSettlesAfterTwoStepsAndRefinesToTheOptimum
 /// validity <= 1e-9, the event-driven re-simulation <= 1e-8; the time-freezing reference's own
 /// re-simulation is 1.4e-4 away).
 TEST(ScheduleRefinement, GuidingExampleOcpIsExactAfterItsTimeFreezingSolution) {
+#if defined(SALTUS_TESTS_UNDER_SANITIZERS)
+  GTEST_SKIP() << "16 s under ASan: release stage only (there its solve is TimeFreezingOcp.PointMassReachesTheTargetOnTheTable's, "
+                  "same call; extract_schedule and refine_schedule of this OCP run in "
+                  "ScheduleDiscovery.GuidingExampleSettlesAfterTwoStepsAndRefinesToTheOptimum)";
+#endif
   const auto relaxed = solve_time_freezing_ocp(Case::system(), Case{}, Case::q0(), Case::v0(), Case::grid(), Case::solver());
   ASSERT_TRUE(relaxed.converged());
   const PointMass mass = frictional_mass();

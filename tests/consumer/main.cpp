@@ -2,15 +2,17 @@
 // which must be sqrt(2 h / g). Includes no definition of the simulator: it links falling_mass.cpp.
 //
 // Then a derivative check of the contact kinematics built with the consumer's own flags (CMake's
-// default Release flags, -O3; check.cmake insists): those templates are compiled in the user's
-// translation units, not in Saltus' library, so only their code and the options saltus::hybrid
-// exports (-fno-ipa-modref for GCC >= 12: hybrid/CMakeLists.txt) protect them. GCC 12.2 -O3 once
-// miscompiled evaluate_contact (the tangential terms read back as zero: kinematics.hxx,
-// tests/test_dual.cpp GccModrefNullBaseLoop). Checked: the contact of FallingMass (compiled in
-// falling_mass.cpp) and a curved frictional contact, a box corner over a tilted plank, whose
-// kinematics this file compiles (one kernel, a few seconds): the normal and tangent Jacobians,
-// velocities and curvature terms against central differences. With the old evaluate_contact and
-// without -fno-ipa-modref this check failed at -O3 (W_t of the corner read back as 0).
+// default Release flags, -O3; CMakeLists.txt keeps this file at -O3 when the test builds the rest
+// lower, check.cmake): those templates are compiled in the user's translation units, not in
+// Saltus' library, so only their code and the options saltus::hybrid exports (-fno-ipa-modref
+// for GCC >= 12: hybrid/CMakeLists.txt) protect them. GCC 12.2 -O3 once miscompiled
+// evaluate_contact (the tangential terms read back as zero: kinematics.hxx, tests/test_dual.cpp
+// GccModrefNullBaseLoop). Checked: the contact of FallingMass (compiled in falling_mass.cpp, at
+// the project's Release flags) and a curved frictional contact, a box corner over a tilted plank,
+// whose kinematics this file compiles (one kernel, a few seconds): the normal and tangent
+// Jacobians, velocities and curvature terms against central differences. With the old
+// evaluate_contact and without -fno-ipa-modref this check failed at -O3 (W_t of the corner read
+// back as 0).
 #include "falling_mass.hpp"
 
 #include <saltus/hybrid/dynamics/kinematics.hxx>  // evaluate_contact for the corner, here
