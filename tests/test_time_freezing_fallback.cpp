@@ -265,6 +265,36 @@ TEST(TimeFreezingFallback, PainlevesRodTakesTheImpactWithoutCollisionInFrozenTim
 }
 #endif
 
+// When no attempt succeeds: the bouncing-ball grid's touchdown interval (three modes in two
+// elements) with the selection on and no finer grid allowed (max_refinements = 0) has one attempt
+// left, the selection turned off on the same two elements, which fails as well. The run goes on
+// from the least bad attempt, says so in the log and the message, and is not converged. The same
+// interval as the whole horizon (one control interval) gets the fallback too.
+TEST(TimeFreezingFallback, WhenNoAttemptSucceedsTheRunSaysSoAndGoesOn) {
+  const TimeFreezingSystem<PointMass> system(PointMass(), 100.0);
+  const double t0 = 0.3;  // the bouncing-ball grid's interval 1: from the free fall's state at tau = 0.3
+  FesdOptions grid = grid_of(1, 2, 0.3);
+  grid.regularisation.contact_side = 1e-2;
+  grid.clock.initial_time = t0;
+  const Vec<2> q0(0.0, 0.8 - 0.5 * g * t0 * t0), v0(0.0, -g * t0);
+  TimeFreezingSimulationOptions options;
+  options.fallback.max_refinements = 0;
+  const auto failed = simulate_time_freezing(system, q0, v0, grid, NoObjective{}, {}, options);
+  EXPECT_FALSE(failed.converged());
+  ASSERT_EQ(failed.fallback_log.size(), 1u);
+  EXPECT_NE(failed.fallback_log[0].find("interval 0 (not converged): no attempt of the fallback succeeded; kept "),
+            std::string::npos)
+      << failed.fallback_log[0];
+  EXPECT_NE(failed.solution.message.find("the run goes on from"), std::string::npos) << failed.solution.message;
+  EXPECT_EQ(failed.fallbacks, 0);
+  options.fallback.max_refinements = 2;
+  const auto solved = simulate_time_freezing(system, q0, v0, grid, NoObjective{}, {}, options);
+  ASSERT_TRUE(solved.converged()) << solved.solution.message;
+  EXPECT_EQ(solved.fallbacks, 1);
+  EXPECT_NEAR(solved.final_state()[3], 0.0, 1e-9);  // at rest on the table after the impact
+  EXPECT_NEAR(solved.final_state()[1], 0.0, 1e-9);
+}
+
 TEST(TimeFreezingFallback, RefusesBadFallbackOptions) {
   const TimeFreezingSystem<PointMass> system(PointMass(), 20.0);
   const auto refused = [&](auto set, const std::string& what) {

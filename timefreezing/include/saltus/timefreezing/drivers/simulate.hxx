@@ -84,18 +84,19 @@ bool impact_unfinished(const TimeFreezingSystem<S>& system, const Vec<2 * S::nq>
 
 /// The attempts of the fallback after the first (SimulationFallback). An interval that did not
 /// converge: finer grids, then the contact-side selection toggled on the interval's grid and the
-/// finer ones. One that converged with a penetration (the gap's drift): without the selection, the
-/// selection turned on, on the interval's grid and the finer ones, only (without it a finer grid
-/// converged to wrong motions: Example 3's interval at tau = 0.5, q1 6.9e-4 off); with it, the
-/// finer grids. Measured and not kept: the toggled selection before the finer grids (the rod
-/// landing flat from 0.3 m then converged without the selection to an impact 8e-3 off in v_x+).
+/// finer ones. One that converged with a flaw (a penetration: the gap's drift; or a clock
+/// reversal): without the selection, the selection turned on, on the interval's grid and the finer
+/// ones, only (without it a finer grid converged to wrong motions: the guiding example's interval
+/// at tau = 0.5, q1 6.9e-4 off); with it, the finer grids. Rejected: the toggled selection before
+/// the finer grids (the rod landing flat from 0.3 m then converged without the selection to an
+/// impact 8e-3 off in v_x+).
 inline std::vector<FesdOptions> fallback_attempts(const FesdOptions& piece, const SimulationFallback& fallback,
-                                                  bool penetrated) {
+                                                  bool converged_with_flaw) {
   std::vector<FesdOptions> attempts;
   FesdOptions toggled = piece;
   toggled.regularisation.contact_side = piece.regularisation.contact_side > 0.0 ? 0.0 : fallback.contact_side_weight;
-  const bool drift = penetrated && piece.regularisation.contact_side == 0.0;
-  for (int toggle = drift ? 1 : 0; toggle < (penetrated && !drift ? 1 : 2); ++toggle)
+  const bool drift = converged_with_flaw && piece.regularisation.contact_side == 0.0;
+  for (int toggle = drift ? 1 : 0; toggle < (converged_with_flaw && !drift ? 1 : 2); ++toggle)
     for (int r = toggle == 0 ? 1 : 0; r <= fallback.max_refinements; ++r) {  // not the first attempt itself
       FesdOptions attempt = toggle == 0 ? piece : toggled;
       attempt.grid.finite_elements <<= r;
@@ -104,24 +105,31 @@ inline std::vector<FesdOptions> fallback_attempts(const FesdOptions& piece, cons
   return attempts;
 }
 
-/// solve_interval, and where it fails (no convergence, or a penetration) the fallback's attempts
-/// in order: the first that succeeds; else the least bad (a converged attempt with the shallowest
-/// penetration, else the first attempt), marked not converged. `log` gets a line when the first
-/// attempt failed.
+/// solve_interval, and where it fails (no convergence, a penetration or a clock reversal) the
+/// fallback's attempts in order: the first that succeeds; else the least bad (the converged attempt
+/// whose flaws exceed their tolerances the least, else the first attempt), marked not converged.
+/// `log` gets a line when the first attempt failed.
 template <Scene S, class InputLaw>
 SolvedInterval<S, InputLaw> solve_interval_with_fallback(const TimeFreezingSystem<S>& system, const InputLaw& law,
                                                          const Vec<S::nq>& q, const Vec<S::nq>& v, const FesdOptions& piece,
                                                          const MpccSolverOptions& solver, const SimulationFallback& fallback,
                                                          int interval, std::vector<std::string>& log) {
-  // A converged attempt's penetration [m] and clock reversal [s]; infinite for one that did not
-  // converge. Their larger ranks the attempts when none succeeds.
+  // A converged attempt's penetration [m] and clock reversal [s] (depth infinite for one that did
+  // not converge, or whose points are not finite). The larger of their ratios to their tolerances
+  // ranks the attempts when none succeeds.
   struct Flaws {
     double depth, reversal;
-    double worst() const { return std::max(depth, reversal); }
   };
   const auto flaws_of = [&](const SolvedInterval<S, InputLaw>& s) {
-    if (!s.solution.converged) return Flaws{std::numeric_limits<double>::infinity(), 0.0};
+    constexpr double inf = std::numeric_limits<double>::infinity();
+    if (!s.solution.converged) return Flaws{inf, 0.0};
+    for (const auto& p : s.points)
+      if (!p.y.allFinite()) return Flaws{inf, 0.0};
     return Flaws{deepest_penetration<S>(s.points), clock_reversal<S>(s.points)};
+  };
+  const auto worst = [&](const Flaws& f) {
+    return std::max(f.depth / std::max(fallback.penetration_tolerance, 1e-300),
+                    f.reversal / SimulationFallback::clock_reversal_tolerance);
   };
   const auto failure = [&](const Flaws& f) -> std::string {
     std::ostringstream text;
@@ -145,9 +153,10 @@ SolvedInterval<S, InputLaw> solve_interval_with_fallback(const TimeFreezingSyste
            (o.regularisation.contact_side > 0.0 ? "on" : "off");
   };
   SolvedInterval<S, InputLaw> best = first;
-  double best_worst = first_flaws.worst();
-  std::string best_attempt = "the first attempt";
-  for (const FesdOptions& attempt : fallback_attempts(piece, fallback, first.solution.converged)) {
+  double best_worst = worst(first_flaws);
+  std::string best_attempt = "the first attempt", best_failure = first_failure;
+  const std::vector<FesdOptions> attempts = fallback_attempts(piece, fallback, first.solution.converged);
+  for (const FesdOptions& attempt : attempts) {
     if (solver.progress)
       *solver.progress << "simulate_time_freezing: fallback (" << first_failure << "): the interval again on "
                        << describe(attempt) << "\n";
@@ -161,19 +170,22 @@ SolvedInterval<S, InputLaw> solve_interval_with_fallback(const TimeFreezingSyste
       log.push_back("interval " + std::to_string(interval) + " (" + first_failure + "): solved on " + describe(attempt));
       return again;
     }
-    if (flaws.worst() < best_worst) {
+    if (worst(flaws) < best_worst) {
       best = std::move(again);
-      best_worst = flaws.worst();
-      best_attempt = describe(attempt) + " (" + failure(flaws) + ")";
+      best_worst = worst(flaws);
+      best_failure = failure(flaws);
+      best_attempt = describe(attempt) + " (" + best_failure + ")";
     }
   }
   best.solution.seconds = seconds;
   best.solution.ipopt_iterations = iterations;
-  best.solution.converged = false;  // a penetrating interval is not a solution either
-  best.solution.message = first_failure + "; the fallback's attempts failed too, the run goes on from " + best_attempt +
-                          ": " + best.solution.message;
-  log.push_back("interval " + std::to_string(interval) + " (" + first_failure +
-                "): no attempt of the fallback succeeded; kept " + best_attempt);
+  // A converged interval with a flaw is not a solution either; its own message would say converged.
+  const std::string detail = best.solution.converged ? best_failure : best.solution.message;
+  best.solution.converged = false;
+  const std::string outcome = attempts.empty() ? "the fallback has no attempt for it (max_refinements = 0, selection on)"
+                                               : "no attempt of the fallback succeeded";
+  best.solution.message = first_failure + "; " + outcome + ", the run goes on from " + best_attempt + ": " + detail;
+  log.push_back("interval " + std::to_string(interval) + " (" + first_failure + "): " + outcome + "; kept " + best_attempt);
   return best;
 }
 
@@ -218,14 +230,16 @@ TimeFreezingSimulation<S> simulate_time_freezing(const TimeFreezingSystem<S>& sy
     if (solver.progress && pieces > 1)
       *solver.progress << "simulate_time_freezing: control interval " << k + 1 << " of " << pieces << "\n";
     const std::size_t logged = out.fallback_log.size();
-    auto solved = pieces > 1 ? detail::solve_interval_with_fallback(system, law, q, v, piece, solver, options.fallback, k,
-                                                                    out.fallback_log)
-                             : detail::solve_interval(system, law, q, v, piece, solver);
+    auto solved = split == SimulationSplit::PerControlInterval
+                      ? detail::solve_interval_with_fallback(system, law, q, v, piece, solver, options.fallback, k,
+                                                             out.fallback_log)
+                      : detail::solve_interval(system, law, q, v, piece, solver);
     out.fallbacks += out.fallback_log.size() > logged && solved.solution.converged;
-    // A contact-side selection that the fallback turned on is kept for the rest of the run (the
-    // drift it cured comes back in every later interval in contact); one it turned off rescued
-    // that interval only (SimulationFallback, attempt 2).
-    piece.regularisation.contact_side = std::max(piece.regularisation.contact_side, solved.contact_side);
+    // A contact-side selection that the fallback turned on and that solved the interval is kept for
+    // the rest of the run (the drift it cured comes back in every later interval in contact); one
+    // it turned off rescued that interval only (SimulationFallback, attempt 2).
+    if (solved.solution.converged)
+      piece.regularisation.contact_side = std::max(piece.regularisation.contact_side, solved.contact_side);
     out.finite_elements.push_back(solved.finite_elements);
     MpccSolution& sol = solved.solution;
     auto& pts = solved.points;
