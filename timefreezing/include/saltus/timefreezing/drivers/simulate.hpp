@@ -30,7 +30,8 @@ struct TimeFreezingSimulation {
   int fallbacks = 0;       ///< control intervals solved by the fallback (SimulationFallback)
   /// One line per control interval that failed its first attempt (the fallback enabled): which
   /// attempt solved it, or that none did (e.g. "interval 3 (not converged): solved on 8 finite
-  /// elements, contact-side selection off"). Intervals are counted from 0 here and in the
+  /// elements, contact-side selection off (as given)"; "turned on" or "turned off" where the
+  /// fallback toggled it). Intervals are counted from 0 here and in the
   /// message, from 1 in the progress lines.
   std::vector<std::string> fallback_log;
   /// The finite elements of every control interval as solved (fesd.grid.finite_elements unless the

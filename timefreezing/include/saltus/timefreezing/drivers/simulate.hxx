@@ -148,9 +148,11 @@ SolvedInterval<S, InputLaw> solve_interval_with_fallback(const TimeFreezingSyste
   if (first_failure.empty() || !fallback.enabled) return first;
   double seconds = first.solution.seconds;
   int iterations = first.solution.ipopt_iterations;
-  const auto describe = [](const FesdOptions& o) {
-    return std::to_string(o.grid.finite_elements) + " finite elements, contact-side selection " +
-           (o.regularisation.contact_side > 0.0 ? "on" : "off");
+  const auto describe = [&](const FesdOptions& o) {
+    const bool on = o.regularisation.contact_side > 0.0;
+    const bool as_given = on == (piece.regularisation.contact_side > 0.0);
+    return std::to_string(o.grid.finite_elements) + " finite elements, contact-side selection " + (on ? "on" : "off") +
+           (as_given ? " (as given)" : on ? " (turned on)" : " (turned off)");
   };
   SolvedInterval<S, InputLaw> best = first;
   double best_worst = worst(first_flaws);
