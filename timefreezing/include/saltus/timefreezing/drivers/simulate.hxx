@@ -18,7 +18,7 @@ namespace saltus::timefreezing {
 namespace detail {
 
 /// One control interval's MPCC solved from (q, v), and its points.
-template <Scene S, class InputLaw>
+template <Scene S>
 struct SolvedInterval {
   MpccSolution solution;
   std::vector<typename FesdMpcc<S>::Point> points;
@@ -27,10 +27,10 @@ struct SolvedInterval {
 };
 
 template <Scene S, class InputLaw>
-SolvedInterval<S, InputLaw> solve_interval(const TimeFreezingSystem<S>& system, const InputLaw& law, const Vec<S::nq>& q,
+SolvedInterval<S> solve_interval(const TimeFreezingSystem<S>& system, const InputLaw& law, const Vec<S::nq>& q,
                                            const Vec<S::nq>& v, const FesdOptions& piece, const MpccSolverOptions& solver) {
   const FesdMpcc<S, InputLaw> problem(system, law, q, v, piece);
-  SolvedInterval<S, InputLaw> out;
+  SolvedInterval<S> out;
   out.solution = solve_mpcc(problem, solver);
   out.points = problem.points(out.solution.x);
   out.finite_elements = piece.grid.finite_elements;
@@ -110,7 +110,7 @@ inline std::vector<FesdOptions> fallback_attempts(const FesdOptions& piece, cons
 /// whose flaws exceed their tolerances the least, else the first attempt), marked not converged.
 /// `log` gets a line when the first attempt failed.
 template <Scene S, class InputLaw>
-SolvedInterval<S, InputLaw> solve_interval_with_fallback(const TimeFreezingSystem<S>& system, const InputLaw& law,
+SolvedInterval<S> solve_interval_with_fallback(const TimeFreezingSystem<S>& system, const InputLaw& law,
                                                          const Vec<S::nq>& q, const Vec<S::nq>& v, const FesdOptions& piece,
                                                          const MpccSolverOptions& solver, const SimulationFallback& fallback,
                                                          int interval, std::vector<std::string>& log) {
@@ -120,7 +120,7 @@ SolvedInterval<S, InputLaw> solve_interval_with_fallback(const TimeFreezingSyste
   struct Flaws {
     double depth, reversal;
   };
-  const auto flaws_of = [&](const SolvedInterval<S, InputLaw>& s) {
+  const auto flaws_of = [&](const SolvedInterval<S>& s) {
     constexpr double inf = std::numeric_limits<double>::infinity();
     if (!s.solution.converged) return Flaws{inf, 0.0};
     for (const auto& p : s.points)
@@ -142,7 +142,7 @@ SolvedInterval<S, InputLaw> solve_interval_with_fallback(const TimeFreezingSyste
       text << "the clock ran back by " << f.reversal << " s";
     return text.str();
   };
-  SolvedInterval<S, InputLaw> first = solve_interval(system, law, q, v, piece, solver);
+  SolvedInterval<S> first = solve_interval(system, law, q, v, piece, solver);
   const Flaws first_flaws = flaws_of(first);
   const std::string first_failure = failure(first_flaws);
   if (first_failure.empty() || !fallback.enabled) return first;
@@ -154,7 +154,7 @@ SolvedInterval<S, InputLaw> solve_interval_with_fallback(const TimeFreezingSyste
     return std::to_string(o.grid.finite_elements) + " finite elements, contact-side selection " + (on ? "on" : "off") +
            (as_given ? " (as given)" : on ? " (turned on)" : " (turned off)");
   };
-  SolvedInterval<S, InputLaw> best = first;
+  SolvedInterval<S> best = first;
   double best_worst = worst(first_flaws);
   std::string best_attempt = "the first attempt", best_failure = first_failure;
   const std::vector<FesdOptions> attempts = fallback_attempts(piece, fallback, first.solution.converged);
@@ -162,7 +162,7 @@ SolvedInterval<S, InputLaw> solve_interval_with_fallback(const TimeFreezingSyste
     if (solver.progress)
       *solver.progress << "simulate_time_freezing: fallback (" << first_failure << "): the interval again on "
                        << describe(attempt) << "\n";
-    SolvedInterval<S, InputLaw> again = solve_interval(system, law, q, v, attempt, solver);
+    SolvedInterval<S> again = solve_interval(system, law, q, v, attempt, solver);
     seconds += again.solution.seconds;
     iterations += again.solution.ipopt_iterations;
     const Flaws flaws = flaws_of(again);
